@@ -1,0 +1,16 @@
+#pragma once
+// Registration of the rfd subcommands. Each command is thin: it parses its arguments,
+// calls the libraries, and prints. No science lives in cli/.
+
+#include <CLI/CLI.hpp>
+
+namespace rfd::cli {
+
+/// Options every command shares.
+struct GlobalOptions {
+    bool quiet = false;  ///< no progress on stderr
+};
+
+void add_optics_commands(CLI::App& app, const GlobalOptions& global);
+
+}  // namespace rfd::cli

@@ -1,0 +1,30 @@
+// rfd: design, predict, print and build passive reflectance-field displays.
+
+#include <cstdio>
+#include <exception>
+
+#include "cli/commands.hpp"
+#include "core/error.hpp"
+#include "core/progress.hpp"
+
+int main(int argc, char** argv) {
+    CLI::App app{"rfd: design, predict, print and build passive reflectance-field displays"};
+    app.set_version_flag("--version", std::string("rfd ") + RFD_VERSION);
+    app.require_subcommand(1);
+    rfd::cli::GlobalOptions global;
+    app.add_flag("--quiet,-q", global.quiet, "No progress output on stderr");
+    app.parse_complete_callback([&] { rfd::Progress::set_quiet(global.quiet); });
+    rfd::cli::add_optics_commands(app, global);
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& error) {
+        return app.exit(error);
+    } catch (const rfd::Error& error) {
+        std::fprintf(stderr, "rfd: error: %s\n", error.what());
+        return error.exit_code();
+    } catch (const std::exception& error) {
+        std::fprintf(stderr, "rfd: error: %s\n", error.what());
+        return 1;
+    }
+    return 0;
+}

@@ -1,0 +1,25 @@
+# Warning and sanitizer flags live in INTERFACE targets that every target of ours links.
+add_library(rfd_warnings INTERFACE)
+target_compile_options(rfd_warnings INTERFACE -Wall -Wextra -Wpedantic -Wshadow
+                       -Wnon-virtual-dtor -Wconversion -Wno-sign-conversion
+                       # Value types with defaulted fields are meant to be partly initialised.
+                       -Wno-missing-field-initializers)
+# GCC 12 reports false -Wrestrict warnings inside std::string concatenation at -O3
+# (GCC bug 105329); they are not ours to fix.
+if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU" AND CMAKE_CXX_COMPILER_VERSION VERSION_LESS 13)
+  target_compile_options(rfd_warnings INTERFACE -Wno-restrict)
+endif()
+if(RFD_WERROR)
+  target_compile_options(rfd_warnings INTERFACE -Werror)
+endif()
+
+add_library(rfd_sanitizers INTERFACE)
+if(RFD_SANITIZE)
+  target_compile_options(rfd_sanitizers INTERFACE
+                         -fsanitize=address,undefined -fno-omit-frame-pointer
+                         -fno-sanitize-recover=undefined)
+  target_link_options(rfd_sanitizers INTERFACE -fsanitize=address,undefined)
+endif()
+
+add_library(rfd_flags INTERFACE)
+target_link_libraries(rfd_flags INTERFACE rfd_warnings rfd_sanitizers)

@@ -1,0 +1,313 @@
+#include "core/config.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include <toml++/toml.h>
+
+namespace rfd {
+namespace {
+
+// The unit suffixes a key may carry, with what they mean, for "wrong unit" messages.
+struct UnitSuffix {
+    std::string_view suffix;
+    std::string_view meaning;
+};
+constexpr UnitSuffix kKnownSuffixes[] = {
+    {"_mm", "millimetres"}, {"_cm", "centimetres"}, {"_m", "metres"},
+    {"_um", "micrometres"}, {"_in", "inches"},      {"_deg", "degrees"},
+    {"_rad", "radians"},    {"_dpi", "dots per inch"}, {"_dpcm", "dots per centimetre"},
+};
+
+std::string_view stem_of(std::string_view key) {
+    for (const auto& unit : kKnownSuffixes) {
+        if (key.size() > unit.suffix.size() && key.ends_with(unit.suffix))
+            return key.substr(0, key.size() - unit.suffix.size());
+    }
+    return key;
+}
+
+std::string_view unit_meaning(std::string_view key) {
+    for (const auto& unit : kKnownSuffixes)
+        if (key.size() > unit.suffix.size() && key.ends_with(unit.suffix)) return unit.meaning;
+    return "no unit";
+}
+
+std::string format_number(double value) {
+    std::ostringstream out;
+    out << value;
+    return out.str();
+}
+
+std::string type_name(const toml::node& node) {
+    switch (node.type()) {
+        case toml::node_type::table: return "a table";
+        case toml::node_type::array: return "an array";
+        case toml::node_type::string: return "a string";
+        case toml::node_type::integer: return "an integer";
+        case toml::node_type::floating_point: return "a number";
+        case toml::node_type::boolean: return "a boolean";
+        default: return "a date or time";
+    }
+}
+
+std::optional<double> as_number(const toml::node& node) {
+    if (auto v = node.value_exact<double>()) return *v;
+    if (auto v = node.value_exact<int64_t>()) return static_cast<double>(*v);
+    return std::nullopt;
+}
+
+}  // namespace
+
+ConfigTable::ConfigTable(std::shared_ptr<const toml::table> root, const toml::table* table,
+                         std::string file, std::string path)
+    : root_(std::move(root)), table_(table), file_(std::move(file)), path_(std::move(path)) {}
+
+ConfigTable::ConfigTable(ConfigTable&&) noexcept = default;
+ConfigTable& ConfigTable::operator=(ConfigTable&&) noexcept = default;
+ConfigTable::~ConfigTable() = default;
+
+ConfigTable ConfigTable::parse_file(const std::filesystem::path& path) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec))
+        throw IoError(SourceLocation{path.string()}, "cannot open: no such file");
+    try {
+        auto root = std::make_shared<const toml::table>(toml::parse_file(path.string()));
+        return ConfigTable(root, root.get(), path.string(), "");
+    } catch (const toml::parse_error& error) {
+        const auto& begin = error.source().begin;
+        throw InputError(SourceLocation{path.string(), static_cast<int>(begin.line),
+                                        static_cast<int>(begin.column), ""},
+                         std::string("TOML syntax error: ") + std::string(error.description()));
+    }
+}
+
+ConfigTable ConfigTable::parse_string(std::string_view text, const std::string& name) {
+    try {
+        auto root = std::make_shared<const toml::table>(toml::parse(text, name));
+        return ConfigTable(root, root.get(), name, "");
+    } catch (const toml::parse_error& error) {
+        const auto& begin = error.source().begin;
+        throw InputError(SourceLocation{name, static_cast<int>(begin.line),
+                                        static_cast<int>(begin.column), ""},
+                         std::string("TOML syntax error: ") + std::string(error.description()));
+    }
+}
+
+bool ConfigTable::has(const std::string& key) const { return find(key) != nullptr; }
+
+std::vector<std::string> ConfigTable::keys() const {
+    std::vector<std::pair<int, std::string>> ordered;
+    for (const auto& [key, node] : *table_)
+        ordered.emplace_back(static_cast<int>(node.source().begin.line), std::string(key.str()));
+    std::stable_sort(ordered.begin(), ordered.end());
+    std::vector<std::string> names;
+    for (auto& entry : ordered) names.push_back(std::move(entry.second));
+    return names;
+}
+
+const toml::node* ConfigTable::find(const std::string& key) const {
+    return table_->get(key);
+}
+
+std::string ConfigTable::full_key(const std::string& key) const {
+    return path_.empty() ? key : path_ + "." + key;
+}
+
+SourceLocation ConfigTable::location(const std::string& key) const {
+    const toml::node* node = find(key);
+    const auto& source = node ? node->source() : table_->source();
+    return SourceLocation{file_, static_cast<int>(source.begin.line),
+                          static_cast<int>(source.begin.column), full_key(key)};
+}
+
+SourceLocation ConfigTable::location() const {
+    const auto& source = table_->source();
+    return SourceLocation{file_, static_cast<int>(source.begin.line),
+                          static_cast<int>(source.begin.column), path_};
+}
+
+void ConfigTable::fail(const std::string& key, const std::string& message) const {
+    throw InputError(location(key), message);
+}
+
+void ConfigTable::fail_missing(const std::string& key) const {
+    // A key with the same stem but another unit suffix is almost certainly a unit mistake.
+    const std::string_view wanted_stem = stem_of(key);
+    for (const auto& [other, node] : *table_) {
+        const std::string other_key(other.str());
+        if (other_key != key && stem_of(other_key) == wanted_stem && wanted_stem != key) {
+            read_.insert(other_key);
+            throw InputError(location(other_key),
+                             "wrong unit: expected '" + key + "' in " +
+                                 std::string(unit_meaning(key)) + ", found '" + other_key +
+                                 "' (" + std::string(unit_meaning(other_key)) + ")");
+        }
+    }
+    throw InputError(location(), "missing required key '" + full_key(key) + "'");
+}
+
+const toml::node& ConfigTable::require(const std::string& key) {
+    read_.insert(key);
+    const toml::node* node = find(key);
+    if (!node) fail_missing(key);
+    return *node;
+}
+
+double ConfigTable::number(const std::string& key, double min, double max) {
+    const toml::node& node = require(key);
+    const auto value = as_number(node);
+    if (!value) fail(key, "expected a number, found " + type_name(node));
+    if (!std::isfinite(*value)) fail(key, "expected a finite number");
+    if (*value < min || *value > max)
+        fail(key, "value " + format_number(*value) + " is outside the allowed range [" +
+                      format_number(min) + ", " + format_number(max) + "]");
+    return *value;
+}
+
+double ConfigTable::positive(const std::string& key) {
+    const double value = number(key, -HUGE_VAL, HUGE_VAL);
+    if (!(value > 0.0)) fail(key, "expected a positive number, found " + format_number(value));
+    return value;
+}
+
+double ConfigTable::non_negative(const std::string& key) {
+    const double value = number(key, -HUGE_VAL, HUGE_VAL);
+    if (value < 0.0) fail(key, "expected a number >= 0, found " + format_number(value));
+    return value;
+}
+
+std::optional<double> ConfigTable::optional_number(const std::string& key, double min,
+                                                   double max) {
+    if (!has(key)) {
+        read_.insert(key);
+        return std::nullopt;
+    }
+    return number(key, min, max);
+}
+
+long long ConfigTable::integer(const std::string& key, long long min, long long max) {
+    const toml::node& node = require(key);
+    const auto value = node.value_exact<int64_t>();
+    if (!value) fail(key, "expected an integer, found " + type_name(node));
+    if (*value < min || *value > max)
+        fail(key, "value " + std::to_string(*value) + " is outside the allowed range [" +
+                      std::to_string(min) + ", " + std::to_string(max) + "]");
+    return *value;
+}
+
+std::optional<long long> ConfigTable::optional_integer(const std::string& key, long long min,
+                                                       long long max) {
+    if (!has(key)) {
+        read_.insert(key);
+        return std::nullopt;
+    }
+    return integer(key, min, max);
+}
+
+bool ConfigTable::boolean(const std::string& key) {
+    const toml::node& node = require(key);
+    const auto value = node.value_exact<bool>();
+    if (!value) fail(key, "expected true or false, found " + type_name(node));
+    return *value;
+}
+
+std::optional<bool> ConfigTable::optional_boolean(const std::string& key) {
+    if (!has(key)) {
+        read_.insert(key);
+        return std::nullopt;
+    }
+    return boolean(key);
+}
+
+std::string ConfigTable::string(const std::string& key) {
+    const toml::node& node = require(key);
+    const auto value = node.value_exact<std::string>();
+    if (!value) fail(key, "expected a string, found " + type_name(node));
+    return *value;
+}
+
+std::optional<std::string> ConfigTable::optional_string(const std::string& key) {
+    if (!has(key)) {
+        read_.insert(key);
+        return std::nullopt;
+    }
+    return string(key);
+}
+
+std::string ConfigTable::choice(const std::string& key, const std::vector<std::string>& choices) {
+    std::string value = string(key);
+    if (std::find(choices.begin(), choices.end(), value) != choices.end()) return value;
+    std::string list;
+    for (const auto& c : choices) list += (list.empty() ? "'" : ", '") + c + "'";
+    fail(key, "'" + value + "' is not one of " + list);
+}
+
+std::array<double, 2> ConfigTable::positive_pair(const std::string& key) {
+    const toml::node& node = require(key);
+    const toml::array* array = node.as_array();
+    if (!array || array->size() != 2)
+        fail(key, "expected an array of two numbers, e.g. [24.0, 24.0]");
+    std::array<double, 2> result{};
+    for (std::size_t i = 0; i < 2; ++i) {
+        const auto value = as_number(*array->get(i));
+        if (!value || !(*value > 0.0) || !std::isfinite(*value))
+            fail(key, "expected two positive numbers");
+        result[i] = *value;
+    }
+    return result;
+}
+
+std::array<long long, 2> ConfigTable::integer_pair(const std::string& key, long long min,
+                                                   long long max) {
+    const toml::node& node = require(key);
+    const toml::array* array = node.as_array();
+    if (!array || array->size() != 2) fail(key, "expected an array of two integers, e.g. [6, 5]");
+    std::array<long long, 2> result{};
+    for (std::size_t i = 0; i < 2; ++i) {
+        const auto value = array->get(i)->value_exact<int64_t>();
+        if (!value) fail(key, "expected two integers");
+        if (*value < min || *value > max)
+            fail(key, "value " + std::to_string(*value) + " is outside the allowed range [" +
+                          std::to_string(min) + ", " + std::to_string(max) + "]");
+        result[i] = *value;
+    }
+    return result;
+}
+
+ConfigTable ConfigTable::table(const std::string& key) {
+    const toml::node& node = require(key);
+    const toml::table* sub = node.as_table();
+    if (!sub) fail(key, "expected a table, found " + type_name(node));
+    return ConfigTable(root_, sub, file_, full_key(key));
+}
+
+std::optional<ConfigTable> ConfigTable::optional_table(const std::string& key) {
+    if (!has(key)) {
+        read_.insert(key);
+        return std::nullopt;
+    }
+    return table(key);
+}
+
+std::vector<ConfigTable> ConfigTable::table_array(const std::string& key) {
+    const toml::node& node = require(key);
+    const toml::array* array = node.as_array();
+    if (!array || !array->is_array_of_tables() || array->empty())
+        fail(key, "expected one or more [[" + full_key(key) + "]] tables");
+    std::vector<ConfigTable> tables;
+    for (std::size_t i = 0; i < array->size(); ++i)
+        tables.push_back(ConfigTable(root_, array->get(i)->as_table(), file_,
+                                     full_key(key) + "[" + std::to_string(i) + "]"));
+    return tables;
+}
+
+void ConfigTable::finish() const {
+    for (const auto& key : keys()) {
+        if (read_.count(key)) continue;
+        throw InputError(location(key), "unknown key '" + full_key(key) + "'");
+    }
+}
+
+}  // namespace rfd

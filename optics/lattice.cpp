@@ -1,0 +1,126 @@
+#include "optics/lattice.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "core/error.hpp"
+
+namespace rfd::optics {
+namespace {
+constexpr double kSqrt3 = 1.7320508075688772;
+
+int floor_mod2(int j) { return ((j % 2) + 2) % 2; }
+}  // namespace
+
+Lattice Lattice::hexagonal(double pitch, int count_x, int count_y) {
+    return Lattice(LatticeKind::Hexagonal, pitch, pitch * kSqrt3 / 2.0, count_x, count_y);
+}
+
+Lattice Lattice::rectangular(double pitch_x, double pitch_y, int count_x, int count_y) {
+    return Lattice(LatticeKind::Rectangular, pitch_x, pitch_y, count_x, count_y);
+}
+
+Lattice::Lattice(LatticeKind kind, double pitch_x, double pitch_y, int count_x, int count_y)
+    : kind_(kind), pitch_x_(pitch_x), pitch_y_(pitch_y), count_x_(count_x), count_y_(count_y) {
+    RFD_CHECK(pitch_x > 0.0 && pitch_y > 0.0 && count_x > 0 && count_y > 0);
+    // Put the mean of all centres at the origin. In a hexagonal lattice with more than one
+    // row, half the rows are shifted by pitch/2, so the mean shift is about pitch/4.
+    double mean_shift = 0.0;
+    if (kind_ == LatticeKind::Hexagonal) {
+        const int odd_rows = count_y_ / 2;
+        mean_shift = 0.5 * pitch_x_ * odd_rows / count_y_;
+    }
+    origin_ = Eigen::Vector2d(-0.5 * (count_x_ - 1) * pitch_x_ - mean_shift,
+                              -0.5 * (count_y_ - 1) * pitch_y_);
+}
+
+double Lattice::row_shift(int j) const {
+    return kind_ == LatticeKind::Hexagonal && floor_mod2(j) == 1 ? 0.5 * pitch_x_ : 0.0;
+}
+
+double Lattice::cell_area() const { return pitch_x_ * pitch_y_; }
+
+double Lattice::density_per_mm2() const { return 1.0 / cell_area(); }
+
+Eigen::Vector2d Lattice::center(CellIndex cell) const {
+    return {origin_.x() + cell.i * pitch_x_ + row_shift(cell.j), origin_.y() + cell.j * pitch_y_};
+}
+
+CellIndex Lattice::cell_at(const Eigen::Vector2d& point) const {
+    const Eigen::Vector2d local = point - origin_;
+    if (kind_ == LatticeKind::Rectangular) {
+        return {static_cast<int>(std::floor(local.x() / pitch_x_ + 0.5)),
+                static_cast<int>(std::floor(local.y() / pitch_y_ + 0.5))};
+    }
+    // Hexagonal: the nearest centre lies in the nearest row or one of its two neighbours.
+    const int row = static_cast<int>(std::floor(local.y() / pitch_y_ + 0.5));
+    CellIndex best{};
+    double best_distance = std::numeric_limits<double>::infinity();
+    for (int j = row - 1; j <= row + 1; ++j) {
+        const int i = static_cast<int>(std::floor((local.x() - row_shift(j)) / pitch_x_ + 0.5));
+        const CellIndex candidate{i, j};
+        const double distance = (center(candidate) - point).squaredNorm();
+        if (distance < best_distance) {
+            best_distance = distance;
+            best = candidate;
+        }
+    }
+    return best;
+}
+
+bool Lattice::cell_contains(CellIndex cell, const Eigen::Vector2d& point) const {
+    const Eigen::Vector2d offset = point - center(cell);
+    const double half = 0.5 * pitch_x_;
+    if (kind_ == LatticeKind::Rectangular)
+        return std::abs(offset.x()) <= half && std::abs(offset.y()) <= 0.5 * pitch_y_;
+    // Face normals of the hexagon at 0, 60 and 120 degrees.
+    const double s = 0.5 * kSqrt3;
+    return std::abs(offset.x()) <= half && std::abs(0.5 * offset.x() + s * offset.y()) <= half &&
+           std::abs(-0.5 * offset.x() + s * offset.y()) <= half;
+}
+
+std::vector<Eigen::Vector2d> Lattice::cell_corners() const {
+    if (kind_ == LatticeKind::Rectangular) {
+        const double hx = pitch_x_ / 2, hy = pitch_y_ / 2;
+        return {{hx, -hy}, {hx, hy}, {-hx, hy}, {-hx, -hy}};
+    }
+    const double r = circumradius();
+    std::vector<Eigen::Vector2d> corners;
+    for (int k = 0; k < 6; ++k) {
+        const double angle = (30.0 + 60.0 * k) * 3.14159265358979323846 / 180.0;
+        corners.emplace_back(r * std::cos(angle), r * std::sin(angle));
+    }
+    return corners;
+}
+
+double Lattice::circumradius() const {
+    if (kind_ == LatticeKind::Rectangular) return 0.5 * std::hypot(pitch_x_, pitch_y_);
+    return pitch_x_ / kSqrt3;
+}
+
+double Lattice::boundary_distance(const Eigen::Vector2d& dir) const {
+    const Eigen::Vector2d d = dir.normalized();
+    if (kind_ == LatticeKind::Rectangular) {
+        const double tx = std::abs(d.x()) > 0 ? 0.5 * pitch_x_ / std::abs(d.x()) : HUGE_VAL;
+        const double ty = std::abs(d.y()) > 0 ? 0.5 * pitch_y_ / std::abs(d.y()) : HUGE_VAL;
+        return std::min(tx, ty);
+    }
+    // Hexagon with inradius pitch/2 and face normals at 0, 60 and 120 degrees.
+    double best = HUGE_VAL;
+    for (int k = 0; k < 3; ++k) {
+        const double angle = 60.0 * k * 3.14159265358979323846 / 180.0;
+        const double c = std::abs(d.x() * std::cos(angle) + d.y() * std::sin(angle));
+        if (c > 0) best = std::min(best, 0.5 * pitch_x_ / c);
+    }
+    return best;
+}
+
+Eigen::Vector2d Lattice::half_extent() const {
+    if (kind_ == LatticeKind::Rectangular)
+        return {0.5 * count_x_ * pitch_x_, 0.5 * count_y_ * pitch_y_};
+    const double extra_x = count_y_ > 1 ? 0.25 * pitch_x_ : 0.0;
+    return {0.5 * count_x_ * pitch_x_ + extra_x,
+            0.5 * (count_y_ - 1) * pitch_y_ + circumradius()};
+}
+
+}  // namespace rfd::optics

@@ -1,0 +1,89 @@
+#pragma once
+// Lenslet lattices: the arrangement of lenslet centres in a lens array.
+//
+// Frame: the array's own plane, x to the right and y up as seen by the observer, origin at
+// the centre of the array (the mean of all lenslet centres), millimetres.
+//
+// Rectangular: count_x by count_y cells of pitch_x by pitch_y; every cell a rectangle.
+// Hexagonal: rows along x with centre spacing `pitch`, rows spaced pitch*sqrt(3)/2 apart and
+// odd rows shifted by pitch/2. Every cell is a regular hexagon with two flat sides facing
+// +-x (inradius pitch/2 along x, the "flat" direction) and corners at +-y (circumradius
+// pitch/sqrt(3), the "corner" direction). Cell area pitch^2*sqrt(3)/2.
+//
+// Which cell a point belongs to is decided by the nearest centre (the Voronoi cell), so the
+// answer for points on a shared edge is the lower-indexed candidate, deterministically.
+// Centres are always computed from the floating-point lattice, never by accumulation.
+//
+// Example: Lattice::hexagonal(2.358, 40, 40).cell_at({0.3, -1.2})
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace rfd::optics {
+
+enum class LatticeKind : std::uint8_t { Hexagonal, Rectangular };
+
+/// Index of a lattice cell; cells of the array have 0 <= i < count_x and 0 <= j < count_y,
+/// cells outside the array have indices outside that range.
+struct CellIndex {
+    int i = 0;  ///< column
+    int j = 0;  ///< row
+    friend bool operator==(CellIndex, CellIndex) = default;
+};
+
+class Lattice {
+public:
+    static Lattice hexagonal(double pitch, int count_x, int count_y);
+    static Lattice rectangular(double pitch_x, double pitch_y, int count_x, int count_y);
+
+    LatticeKind kind() const { return kind_; }
+    int count_x() const { return count_x_; }
+    int count_y() const { return count_y_; }
+    /// Centre-to-centre distance along x.
+    double pitch_x() const { return pitch_x_; }
+    /// Row spacing along y (pitch*sqrt(3)/2 for hexagonal lattices).
+    double pitch_y() const { return pitch_y_; }
+    /// Lenslets per square millimetre.
+    double density_per_mm2() const;
+    /// Area of one cell in square millimetres.
+    double cell_area() const;
+
+    /// Centre of cell (i, j); defined for cells outside the array too.
+    Eigen::Vector2d center(CellIndex cell) const;
+    /// The cell whose Voronoi region contains `point` (may lie outside the array).
+    CellIndex cell_at(const Eigen::Vector2d& point) const;
+    bool contains(CellIndex cell) const {
+        return cell.i >= 0 && cell.j >= 0 && cell.i < count_x_ && cell.j < count_y_;
+    }
+    /// True when `point` lies in the (closed) region of `cell`; cheaper than cell_at().
+    bool cell_contains(CellIndex cell, const Eigen::Vector2d& point) const;
+    /// Corners of a cell relative to its centre, counter-clockwise (4 or 6 of them).
+    std::vector<Eigen::Vector2d> cell_corners() const;
+    /// Largest distance from a cell's centre to its boundary (the corner distance).
+    double circumradius() const;
+    /// Distance from the centre to the cell boundary along the unit direction `dir`.
+    double boundary_distance(const Eigen::Vector2d& dir) const;
+    /// Half-extent of the whole array (outer cell boundaries) along x and y.
+    Eigen::Vector2d half_extent() const;
+    /// Linear index (j * count_x + i) of a cell inside the array.
+    std::size_t linear_index(CellIndex cell) const {
+        return static_cast<std::size_t>(cell.j) * static_cast<std::size_t>(count_x_) +
+               static_cast<std::size_t>(cell.i);
+    }
+
+private:
+    Lattice(LatticeKind kind, double pitch_x, double pitch_y, int count_x, int count_y);
+    double row_shift(int j) const;  // x shift of row j (hexagonal odd rows)
+
+    LatticeKind kind_;
+    double pitch_x_;
+    double pitch_y_;
+    int count_x_;
+    int count_y_;
+    Eigen::Vector2d origin_;  // centre of cell (0, 0)
+};
+
+}  // namespace rfd::optics

@@ -1,0 +1,36 @@
+#pragma once
+// Spot analysis of a plain lens system at one field angle: where the exact chief ray lands
+// in the paraxial focal plane compared with the paraxial prediction, and the RMS spot.
+
+#include <array>
+#include <cstddef>
+
+#include "optics/exact.hpp"
+#include "optics/system.hpp"
+
+namespace rfd::optics {
+
+struct SpotReport {
+    double field_angle_deg = 0.0;
+    double pupil_semi_diameter = 0.0;  ///< mm, at the first vertex plane
+    std::size_t rays_traced = 0;
+    double focal_plane_z = 0.0;        ///< paraxial rear focal plane, mm
+    double chief_height_exact = 0.0;   ///< y of the exact chief ray in that plane, mm
+    double chief_height_paraxial = 0.0;
+    RayStatus chief_status = RayStatus::Ok;
+    double rms_spot_radius = 0.0;      ///< mm, about the centroid of rays that arrived
+    double centroid_y = 0.0;           ///< mm
+    std::array<std::size_t, kRayStatusCount> status_counts{};
+};
+
+/// Traces a square grid of about `rays` rays clipped to the pupil disc, all at the field
+/// angle (in the y-z plane), from the first vertex plane. `pupil_semi_diameter` <= 0 takes
+/// the first surface's clear aperture. Throws InputError for an afocal system or a first
+/// surface without a circular aperture when no pupil is given.
+SpotReport spot_report(const SequentialSystem& system, double field_angle_deg,
+                       double pupil_semi_diameter, int rays);
+
+/// Propagates a ray in a straight line to the plane z.
+Eigen::Vector3d point_at_z(const Ray& ray, double z);
+
+}  // namespace rfd::optics
