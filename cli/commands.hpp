@@ -12,5 +12,7 @@ struct GlobalOptions {
 };
 
 void add_optics_commands(CLI::App& app, const GlobalOptions& global);
+void add_chart_command(CLI::App& optics, const GlobalOptions& global);
+void add_design_commands(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace rfd::cli

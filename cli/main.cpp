@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
     app.add_flag("--quiet,-q", global.quiet, "No progress output on stderr");
     app.parse_complete_callback([&] { rfd::Progress::set_quiet(global.quiet); });
     rfd::cli::add_optics_commands(app, global);
+    rfd::cli::add_design_commands(app, global);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& error) {

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -51,21 +52,25 @@ void print_system(const optics::SequentialSystem& system, const optics::Cardinal
 
 }  // namespace
 
-void add_optics_commands(CLI::App& app, const GlobalOptions&) {
+void add_optics_commands(CLI::App& app, const GlobalOptions& global) {
     auto* optics_cmd = app.add_subcommand("optics", "Analyse lens systems and design optics");
     optics_cmd->require_subcommand(1);
+    add_chart_command(*optics_cmd, global);
 
     {
         auto* cmd = optics_cmd->add_subcommand(
             "system", "Paraxial properties of a lens system: focal lengths, principal planes, ABCD");
-        static std::string file;
-        static bool json = false;
-        cmd->add_option("LENS", file, "Lens-system TOML file")->required();
-        cmd->add_flag("--json", json, "Machine-readable output");
-        cmd->callback([] {
-            const auto system = optics::load_lens_system(file);
+        struct Options {
+            std::string file;
+            bool json = false;
+        };
+        auto opt = std::make_shared<Options>();
+        cmd->add_option("LENS", opt->file, "Lens-system TOML file")->required();
+        cmd->add_flag("--json", opt->json, "Machine-readable output");
+        cmd->callback([opt] {
+            const auto system = optics::load_lens_system(opt->file);
             const auto points = optics::cardinal_points(system);
-            if (json) {
+            if (opt->json) {
                 nlohmann::json out = to_json(points);
                 out["name"] = system.name;
                 std::printf("%s\n", out.dump(2).c_str());
@@ -77,23 +82,27 @@ void add_optics_commands(CLI::App& app, const GlobalOptions&) {
     {
         auto* cmd = optics_cmd->add_subcommand(
             "trace", "Exact trace of a lens system at a field angle, against the paraxial model");
-        static std::string file;
-        static double angle_deg = 0.0;
-        static double pupil_mm = -1.0;
-        static int rays = 1001;
-        static bool json = false;
-        cmd->add_option("LENS", file, "Lens-system TOML file")->required();
-        cmd->add_option("--angle", angle_deg, "Field angle in degrees (in the y-z plane)")
+        struct Options {
+            std::string file;
+            double angle_deg = 0.0;
+            double pupil_mm = -1.0;
+            int rays = 1001;
+            bool json = false;
+        };
+        auto opt = std::make_shared<Options>();
+        cmd->add_option("LENS", opt->file, "Lens-system TOML file")->required();
+        cmd->add_option("--angle", opt->angle_deg, "Field angle in degrees (in the y-z plane)")
             ->check(CLI::Range(-89.9, 89.9));
-        cmd->add_option("--pupil", pupil_mm,
+        cmd->add_option("--pupil", opt->pupil_mm,
                         "Entrance pupil semi-diameter in mm (default: first surface's)");
-        cmd->add_option("--rays", rays, "Rays across the pupil (a square grid clipped to a disc)")
+        cmd->add_option("--rays", opt->rays, "Rays across the pupil (a square grid clipped to a disc)")
             ->check(CLI::Range(1, 10000000));
-        cmd->add_flag("--json", json, "Machine-readable output");
-        cmd->callback([] {
-            const auto system = optics::load_lens_system(file);
-            const auto report = optics::spot_report(system, angle_deg, pupil_mm, rays);
-            if (json) {
+        cmd->add_flag("--json", opt->json, "Machine-readable output");
+        cmd->callback([opt] {
+            const auto system = optics::load_lens_system(opt->file);
+            const auto report = optics::spot_report(system, opt->angle_deg, opt->pupil_mm, opt->rays);
+            const double angle_deg = opt->angle_deg;
+            if (opt->json) {
                 nlohmann::json out = {
                     {"field_angle_deg", report.field_angle_deg},
                     {"pupil_semi_diameter_mm", report.pupil_semi_diameter},

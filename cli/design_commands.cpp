@@ -1,0 +1,224 @@
+// rfd design show and rfd optics chart: a display design's summary and its
+// speed-versus-accuracy chart (paraxial against exact).
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "cli/commands.hpp"
+#include "core/files.hpp"
+#include "core/plot.hpp"
+#include "core/units.hpp"
+#include "optics/analysis.hpp"
+#include "optics/design.hpp"
+
+namespace rfd::cli {
+namespace {
+
+nlohmann::json to_json(const optics::DesignSummary& s) {
+    auto pairs = [](const auto& list) {
+        nlohmann::json out = nlohmann::json::object();
+        for (const auto& [name, value] : list) out[name] = value;
+        return out;
+    };
+    return {{"name", s.name},
+            {"kind", s.kind},
+            {"lattice", s.lattice},
+            {"pitch_x_mm", s.pitch_x},
+            {"row_spacing_mm", s.pitch_y},
+            {"count", {s.count_x, s.count_y}},
+            {"focal_length_nominal_mm", s.focal_length_nominal},
+            {"focal_length_paraxial_mm", s.focal_length_paraxial},
+            {"printer_dpi", {s.dpi_x, s.dpi_y}},
+            {"print_pixels_per_lenslet", s.directions_per_lenslet},
+            {"angular_step_deg", {s.angular_step_x_deg, s.angular_step_y_deg}},
+            {"wrap_over_paraxial_deg", pairs(s.wrap_over_paraxial_deg)},
+            {"wrap_over_exact_deg", pairs(s.wrap_over_exact_deg)},
+            {"crosstalk_begins_exact_deg", pairs(s.crosstalk_exact_deg)},
+            {"field_of_view_deg", s.field_of_view_deg},
+            {"efficiency_on_axis", s.efficiency_on_axis},
+            {"efficiency_at_half_fov", s.efficiency_at_half_fov},
+            {"spot_rms_on_axis_um", s.spot_rms_on_axis_um},
+            {"spot_rms_at_half_fov_um", s.spot_rms_at_half_fov_um},
+            {"focus_error_mm", s.focus_error_mm},
+            {"warnings", s.warnings}};
+}
+
+std::string summary_text(const optics::DesignSummary& s, bool observer_variant) {
+    std::string out;
+    char line[512];
+    auto add = [&](const char* format, auto... values) {
+        std::snprintf(line, sizeof line, format, values...);
+        out += line;
+    };
+    add("%s  (Design %s)\n", s.name.c_str(), s.kind.c_str());
+    add("  lattice                   %s, %d x %d lenslets\n", s.lattice.c_str(), s.count_x, s.count_y);
+    add("  pitch                     %.4f mm (rows %.4f mm apart)\n", s.pitch_x, s.pitch_y);
+    add("  focal length              %.4f mm paraxial (maker: %.4g mm)\n", s.focal_length_paraxial,
+        s.focal_length_nominal);
+    add("  printer                   %.0f x %.0f dpi\n", s.dpi_x, s.dpi_y);
+    if (observer_variant) {
+        add("  print pixels per meso-pixel %.0f (output directions)\n", s.directions_per_lenslet);
+        add("  incident angle per meso-pixel %.3f deg (x), %.3f deg (y)\n", s.angular_step_x_deg,
+            s.angular_step_y_deg);
+    } else {
+        add("  directions per lenslet    %.0f (print pixels under one cell)\n", s.directions_per_lenslet);
+        add("  angular step (on axis)    %.4f deg per pixel in x, %.4f deg in y\n",
+            s.angular_step_x_deg, s.angular_step_y_deg);
+    }
+    add("  %s (paraxial / exact chief ray):\n",
+        observer_variant ? "edge of the meso-pixel array" : "wrap-over angle");
+    for (std::size_t k = 0; k < s.wrap_over_exact_deg.size(); ++k)
+        add("    along %-12s          %6.2f deg / %6.2f deg\n", s.wrap_over_exact_deg[k].first.c_str(),
+            s.wrap_over_paraxial_deg[k].second, s.wrap_over_exact_deg[k].second);
+    for (const auto& [name, angle] : s.crosstalk_exact_deg)
+        add("  crosstalk begins (exact, full bundle) along %-10s %6.2f deg\n", name.c_str(), angle);
+    add("  field of view             %.2f deg (full cone, exact)\n", s.field_of_view_deg);
+    add("  light efficiency          %.1f %% on axis, %.1f %% at half the field of view\n",
+        100 * s.efficiency_on_axis, 100 * s.efficiency_at_half_fov);
+    add("                            (rays reaching the last surface; Fresnel losses not included)\n");
+    add("  RMS spot on encoding plane %.2f um on axis, %.2f um at half the field of view\n",
+        s.spot_rms_on_axis_um, s.spot_rms_at_half_fov_um);
+    add("  encoding plane vs focus   %+.4f mm\n", s.focus_error_mm);
+    if (s.warnings.empty()) add("  design rules              no warnings\n");
+    for (const auto& warning : s.warnings) add("  warning: %s\n", warning.c_str());
+    return out;
+}
+
+}  // namespace
+
+void add_design_commands(CLI::App& app, const GlobalOptions&) {
+    auto* design_cmd = app.add_subcommand("design", "Display designs (Designs I-IV)");
+    design_cmd->require_subcommand(1);
+    auto* cmd = design_cmd->add_subcommand(
+        "show", "Summary of a display design: pitch, directions, wrap-over, field of view, warnings");
+    struct Options {
+        std::string file;
+        bool json = false;
+    };
+    auto opt = std::make_shared<Options>();
+    cmd->add_option("DESIGN", opt->file, "Design TOML file")->required();
+    cmd->add_flag("--json", opt->json, "Machine-readable output");
+    cmd->callback([opt] {
+        const auto design = optics::load_design(opt->file);
+        const optics::DesignOptics optics(design);
+        const auto summary = optics::summarise(optics);
+        if (opt->json) {
+            std::printf("%s\n", to_json(summary).dump(2).c_str());
+        } else {
+            std::fputs(summary_text(summary, design.kind == optics::DesignKind::III ||
+                                                 design.kind == optics::DesignKind::IV)
+                           .c_str(),
+                       stdout);
+        }
+    });
+}
+
+void add_chart_command(CLI::App& optics_cmd, const GlobalOptions&) {
+    auto* cmd = optics_cmd.add_subcommand(
+        "chart", "Speed-versus-accuracy chart: paraxial error against exact, per incident angle");
+    struct Options {
+        std::string file;
+        std::string out;
+        int steps = 120;
+        double max_angle = 0.0;
+        std::size_t timing_rays = 400000;
+        bool json = false;
+    };
+    auto opt = std::make_shared<Options>();
+    cmd->add_option("DESIGN", opt->file, "Design TOML file")->required();
+    cmd->add_option("--out", opt->out, "Output directory")->required();
+    cmd->add_option("--steps", opt->steps, "Angles per sweep")->check(CLI::Range(4, 100000));
+    cmd->add_option("--max-angle", opt->max_angle,
+                    "Largest incident angle in degrees (default: 1.25 x the exact wrap-over angle)")
+        ->check(CLI::Range(0.0, 89.0));
+    cmd->add_option("--timing-rays", opt->timing_rays, "Rays per model for the rays/s figure")
+        ->check(CLI::Range(1000, 100000000));
+    cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
+    cmd->callback([opt] {
+        const auto design = optics::load_design(opt->file);
+        const optics::DesignOptics optics(design);
+        ensure_directory(opt->out);
+        const auto& lattice = optics.lattice();
+        const bool hex = lattice.kind() == optics::LatticeKind::Hexagonal;
+        struct Sweep {
+            std::string name;
+            std::string file;
+            double phi;
+        };
+        const std::vector<Sweep> sweeps = {{hex ? "flat direction (x)" : "x", "x", 0.0},
+                                           {hex ? "corner direction (y)" : "y", "y", kPi / 2}};
+        double wrap = 90.0;
+        for (const auto& sweep : sweeps)
+            wrap = std::min(wrap, optics::wrap_over_angle(optics, sweep.phi, optics::Model::Exact).value_or(60.0));
+        const double max_angle = opt->max_angle > 0 ? opt->max_angle : std::min(89.0, 1.25 * wrap);
+
+        const double paraxial_rate = optics::measure_rays_per_second(
+            optics, optics::Model::Paraxial, opt->timing_rays, 0.8 * wrap);
+        const double exact_rate = optics::measure_rays_per_second(
+            optics, optics::Model::Exact, opt->timing_rays, 0.8 * wrap);
+
+        nlohmann::json summary = {{"design", design.name},
+                                  {"paraxial_rays_per_second", paraxial_rate},
+                                  {"exact_rays_per_second", exact_rate},
+                                  {"exact_over_paraxial_time", paraxial_rate / exact_rate},
+                                  {"sweeps", nlohmann::json::array()}};
+        const std::filesystem::path dir(opt->out);
+        for (const auto& sweep : sweeps) {
+            const auto chart = optics::accuracy_chart(optics, sweep.phi, sweep.name, max_angle, opt->steps);
+            LineChart plot;
+            char title[400];
+            std::snprintf(title, sizeof title,
+                          "%s\nparaxial against exact along the %s; paraxial %.3g rays/s, exact %.3g rays/s",
+                          design.name.c_str(), sweep.name.c_str(), paraxial_rate, exact_rate);
+            plot.title = title;
+            plot.x_label = "incident angle (degrees)";
+            plot.y_label = "paraxial error on the encoding plane (print pixels)";
+            plot.y2_label = "error (micrometres)";
+            PlotSeries pixels{"error in print pixels", {}, {}, false};
+            PlotSeries microns{"error in micrometres", {}, {}, true};
+            for (const auto& row : chart.rows) {
+                pixels.x.push_back(row.angle_deg);
+                pixels.y.push_back(row.error_pixels);
+                microns.x.push_back(row.angle_deg);
+                microns.y.push_back(row.error_um);
+            }
+            plot.series = {pixels, microns};
+            if (chart.half_pixel_angle_deg)
+                plot.vertical_markers.emplace_back(*chart.half_pixel_angle_deg, "error > 1/2 pixel");
+            plot.vertical_markers.emplace_back(
+                optics::wrap_over_angle(optics, sweep.phi, optics::Model::Exact).value_or(max_angle),
+                "wrap-over");
+            write_line_chart(plot, dir / ("paraxial_error_" + sweep.file));
+            summary["sweeps"].push_back(
+                {{"direction", sweep.name},
+                 {"half_pixel_error_angle_deg",
+                  chart.half_pixel_angle_deg ? nlohmann::json(*chart.half_pixel_angle_deg) : nlohmann::json()},
+                 {"files", "paraxial_error_" + sweep.file + ".{csv,gp,svg,png}"}});
+        }
+        write_text_file(dir / "chart.json", summary.dump(2) + "\n");
+        if (opt->json) {
+            std::printf("%s\n", summary.dump(2).c_str());
+            return;
+        }
+        std::printf("%s\n", design.name.c_str());
+        std::printf("  paraxial: %.3g rays/s, exact: %.3g rays/s (exact takes %.1fx as long)\n",
+                    paraxial_rate, exact_rate, paraxial_rate / exact_rate);
+        for (const auto& sweep : summary["sweeps"]) {
+            const auto& angle = sweep["half_pixel_error_angle_deg"];
+            if (angle.is_null())
+                std::printf("  %s: paraxial error stays below half a print pixel up to %.1f deg\n",
+                            sweep["direction"].get<std::string>().c_str(), max_angle);
+            else
+                std::printf("  %s: paraxial error exceeds half a print pixel from %.2f deg\n",
+                            sweep["direction"].get<std::string>().c_str(), angle.get<double>());
+        }
+        std::printf("  written to %s\n", opt->out.c_str());
+    });
+}
+
+}  // namespace rfd::cli

@@ -1,0 +1,146 @@
+#include "core/plot.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <sstream>
+
+#include <sys/wait.h>
+
+#include "core/error.hpp"
+#include "core/files.hpp"
+
+namespace rfd {
+namespace {
+
+std::string quoted(const std::string& text) {
+    std::string out = "\"";
+    for (char c : text) {
+        if (c == '\n') {
+            out += "\\n";  // gnuplot reads \n in a double-quoted string as a line break
+            continue;
+        }
+        if (c == '"' || c == '\\') out += '\\';
+        out += c;
+    }
+    return out + "\"";
+}
+
+std::string shell_quoted(const std::string& text) {
+    std::string out = "'";
+    for (char c : text) out += (c == '\'') ? std::string("'\\''") : std::string(1, c);
+    return out + "'";
+}
+
+}  // namespace
+
+std::optional<std::filesystem::path> find_gnuplot() {
+#ifdef RFD_GNUPLOT_PATH
+    if (std::filesystem::exists(RFD_GNUPLOT_PATH)) return std::filesystem::path(RFD_GNUPLOT_PATH);
+#endif
+    for (const char* candidate : {"/usr/bin/gnuplot", "/usr/local/bin/gnuplot"})
+        if (std::filesystem::exists(candidate)) return std::filesystem::path(candidate);
+    return std::nullopt;
+}
+
+void write_line_chart(const LineChart& chart, const std::filesystem::path& stem) {
+    namespace fs = std::filesystem;
+    const fs::path csv = fs::path(stem).replace_extension(".csv");
+    const fs::path script = fs::path(stem).replace_extension(".gp");
+    const fs::path svg = fs::path(stem).replace_extension(".svg");
+    const fs::path png = fs::path(stem).replace_extension(".png");
+
+    std::size_t rows = 0;
+    for (const auto& s : chart.series) rows = std::max(rows, s.x.size());
+    write_file_atomically(csv, [&](std::ostream& out) {
+        out.precision(10);
+        for (std::size_t k = 0; k < chart.series.size(); ++k)
+            out << (k ? "," : "") << quoted(chart.series[k].title + " x") << ","
+                << quoted(chart.series[k].title);
+        out << "\n";
+        for (std::size_t r = 0; r < rows; ++r) {
+            for (std::size_t k = 0; k < chart.series.size(); ++k) {
+                const auto& s = chart.series[k];
+                out << (k ? "," : "");
+                if (r < s.x.size()) {
+                    out << s.x[r] << ",";
+                    if (std::isfinite(s.y[r])) out << s.y[r];
+                    else out << "NaN";
+                } else {
+                    out << ",";
+                }
+            }
+            out << "\n";
+        }
+    });
+
+    auto plot_commands = [&](std::ostream& out) {
+        out << "set datafile separator ','\nset datafile missing 'NaN'\n";
+        out << "set key top left box opaque\nset grid\n";
+        out << "set title " << quoted(chart.title) << "\n";
+        out << "set xlabel " << quoted(chart.x_label) << "\n";
+        out << "set ylabel " << quoted(chart.y_label) << "\n";
+        if (!chart.y2_label.empty())
+            out << "set y2label " << quoted(chart.y2_label) << "\nset y2tics\nset ytics nomirror\n";
+        if (chart.log_y) out << "set logscale y\n";
+        int arrow = 1;
+        for (const auto& [x, label] : chart.vertical_markers) {
+            out << "set arrow " << arrow << " from first " << x << ", graph 0 to first " << x
+                << ", graph 1 nohead dashtype 2 linecolor rgb '#c0392b'\n";
+            out << "set label " << arrow << " " << quoted(label) << " at first " << x
+                << ", graph 0.95 left offset 0.5,0 textcolor rgb '#c0392b'\n";
+            ++arrow;
+        }
+        out << "plot ";
+        for (std::size_t k = 0; k < chart.series.size(); ++k) {
+            out << (k ? ", \\\n     " : "") << quoted(csv.filename().string()) << " using "
+                << 2 * k + 1 << ":" << 2 * k + 2 << " skip 1 with linespoints pointsize 0.5"
+                << (chart.series[k].right_axis ? " axes x1y2" : "") << " title "
+                << quoted(chart.series[k].title);
+        }
+        out << "\n";
+    };
+    write_file_atomically(script, [&](std::ostream& out) {
+        out << "# Re-render with: gnuplot -e \"set terminal svg\" " << script.filename().string()
+            << " > chart.svg\n";
+        plot_commands(out);
+    });
+
+    const auto gnuplot = find_gnuplot();
+    if (!gnuplot)
+        throw ToolError(SourceLocation{svg.string()},
+                        "gnuplot is not installed (scripts/install-deps.sh installs it); "
+                        "the CSV and the gnuplot script are written");
+    // Render into temporary files, then move them into place.
+    for (const auto& [target, terminal] :
+         {std::pair{svg, std::string("svg size 900,560 dynamic font 'sans,12'")},
+          std::pair{png, std::string("pngcairo size 900,560 font 'sans,10'")}}) {
+        const fs::path temporary = fs::path(target).concat(".tmp");
+        std::ostringstream commands;
+        commands << "set terminal " << terminal << "\nset output " << quoted(temporary.filename().string())
+                 << "\n";
+        plot_commands(commands);
+        const fs::path commands_file = fs::path(target).concat(".gp.tmp");
+        write_text_file(commands_file, commands.str());
+        const std::string command = "cd " + shell_quoted(fs::absolute(target).parent_path().string()) +
+                                    " && " + shell_quoted(gnuplot->string()) + " " +
+                                    shell_quoted(commands_file.filename().string()) + " 2>&1";
+        FILE* pipe = popen(command.c_str(), "r");
+        std::string output;
+        if (pipe) {
+            char buffer[512];
+            while (fgets(buffer, sizeof buffer, pipe)) output += buffer;
+        }
+        const int status = pipe ? pclose(pipe) : -1;
+        std::error_code ec;
+        fs::remove(commands_file, ec);
+        if (status != 0 || !fs::exists(temporary)) {
+            fs::remove(temporary, ec);
+            throw ToolError(SourceLocation{target.string()}, "gnuplot failed: " + output);
+        }
+        fs::rename(temporary, target, ec);
+        if (ec) throw IoError(SourceLocation{target.string()}, "cannot move the chart into place");
+    }
+}
+
+}  // namespace rfd

@@ -1,0 +1,427 @@
+#include "optics/analysis.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <random>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "core/units.hpp"
+#include "optics/spot.hpp"
+
+namespace rfd::optics {
+
+std::string_view to_string(Model model) {
+    return model == Model::Paraxial ? "paraxial" : "exact";
+}
+
+Eigen::Vector3d incident_direction(double theta, double phi) {
+    return {std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)};
+}
+
+namespace {
+
+bool is_observer_variant(const Design& design) {
+    return design.kind == DesignKind::III || design.kind == DesignKind::IV;
+}
+
+std::string format(double value, int precision = 3) {
+    std::ostringstream out;
+    out.setf(std::ios::fixed);
+    out.precision(precision);
+    out << value;
+    return out.str();
+}
+
+}  // namespace
+
+DesignOptics::DesignOptics(const Design& design) : design_(design), system_(build_system(design)) {
+    const auto& surfaces = system_.surfaces;
+    bool found_array = false;
+    for (std::size_t s = 0; s < surfaces.size(); ++s) {
+        if (std::holds_alternative<LatticeAperture>(surfaces[s].aperture)) {
+            first_arrayed_ = s;
+            found_array = true;
+            break;
+        }
+    }
+    if (!found_array)
+        throw InputError(SourceLocation{design.file}, "the design has no lenslet array");
+    if (is_observer_variant(design)) {
+        // Designs III/IV: the main lens turns direction into position on the meso-pixel
+        // lenslets, the first arrayed surface.
+        encoding_surface_ = first_arrayed_;
+    } else {
+        encoding_surface_ = system_.find(design.pattern_plane().name + " pattern");
+    }
+    entry_z_ = surfaces.front().z;
+    paraxial_b_ = vertex_matrix(system_, 0, encoding_surface_).b;
+    RFD_CHECK_MSG(std::abs(paraxial_b_) > 1e-12, "direction must map to position");
+}
+
+const Lattice& DesignOptics::lattice() const {
+    return std::get<LatticeAperture>(system_.surfaces[first_arrayed_].aperture).lattice;
+}
+
+Eigen::Vector2d DesignOptics::dot_mm() const {
+    return {design_.printer.dpi_x.dot_mm(), design_.printer.dpi_y.dot_mm()};
+}
+
+CellIndex DesignOptics::centre_cell() const { return lattice().cell_at(Eigen::Vector2d::Zero()); }
+
+Ray DesignOptics::chief_ray(const Eigen::Vector3d& direction, CellIndex cell) const {
+    // I/II: through the vertex of the entry lenslet. III/IV: through the main lens centre.
+    const Eigen::Vector2d centre =
+        is_observer_variant(design_) ? Eigen::Vector2d::Zero() : lattice().center(cell);
+    const Eigen::Vector3d through(centre.x(), centre.y(), entry_z_);
+    return Ray{through - (1.0 / direction.z()) * direction, direction};
+}
+
+DesignOptics::Landing DesignOptics::land(const Eigen::Vector3d& direction, CellIndex cell,
+                                         Model model) const {
+    Landing landing;
+    const Eigen::Vector2d reference =
+        is_observer_variant(design_) ? Eigen::Vector2d::Zero() : lattice().center(cell);
+    if (model == Model::Paraxial) {
+        const Ray ray = chief_ray(direction, cell);
+        const ParaxialRay start{reference.x(), reference.y(), direction.x() / direction.z(),
+                                direction.y() / direction.z()};
+        const ParaxialResult result =
+            trace_paraxial(system_, start, entry_z_, 0, encoding_surface_);
+        (void)ray;
+        landing.offset = Eigen::Vector2d(result.ray.x, result.ray.y) - reference;
+        landing.status = result.status;
+        landing.cell = lattice().cell_at({result.ray.x, result.ray.y});
+        return landing;
+    }
+    const TraceResult result = trace(system_, chief_ray(direction, cell), 0, encoding_surface_);
+    landing.offset = result.ray.origin.head<2>() - reference;
+    landing.status = result.status;
+    landing.cell = lattice().cell_at(result.ray.origin.head<2>());
+    return landing;
+}
+
+std::optional<Eigen::Vector3d> DesignOptics::direction_for(const Eigen::Vector2d& offset,
+                                                           CellIndex cell, Model model) const {
+    Eigen::Vector2d slopes = offset / paraxial_b_;
+    auto direction_of = [](const Eigen::Vector2d& s) {
+        return Eigen::Vector3d(s.x(), s.y(), 1.0).normalized();
+    };
+    if (model == Model::Paraxial) return direction_of(slopes);
+    // Newton on the exact forward map, with a finite-difference Jacobian.
+    constexpr double kStep = 1e-7;
+    for (int iteration = 0; iteration < 40; ++iteration) {
+        const Landing at = land(direction_of(slopes), cell, Model::Exact);
+        if (at.status != RayStatus::Ok) return std::nullopt;
+        const Eigen::Vector2d residual = at.offset - offset;
+        if (residual.norm() < 1e-9) return direction_of(slopes);
+        Eigen::Matrix2d jacobian;
+        for (int k = 0; k < 2; ++k) {
+            Eigen::Vector2d shifted = slopes;
+            shifted[k] += kStep;
+            const Landing moved = land(direction_of(shifted), cell, Model::Exact);
+            if (moved.status != RayStatus::Ok) return std::nullopt;
+            jacobian.col(k) = (moved.offset - at.offset) / kStep;
+        }
+        if (std::abs(jacobian.determinant()) < 1e-18) return std::nullopt;
+        slopes -= jacobian.inverse() * residual;
+        if (!slopes.allFinite()) return std::nullopt;
+    }
+    return std::nullopt;
+}
+
+DesignOptics::BundleReport DesignOptics::trace_bundle(const Eigen::Vector3d& direction,
+                                                      CellIndex cell, int rays_per_side) const {
+    BundleReport report;
+    report.lost_per_surface.assign(system_.surfaces.size(), {});
+    const bool variant = is_observer_variant(design_);
+    // The entry aperture: the lenslet cell (I/II) or the main lens disc (III/IV).
+    double half = 0.0;
+    Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+    double disc = 0.0;
+    if (variant) {
+        disc = std::get<CircularAperture>(system_.surfaces.front().aperture).semi_diameter;
+        half = disc;
+    } else {
+        centre = lattice().center(cell);
+        half = lattice().circumradius();
+    }
+    std::vector<Eigen::Vector2d> landed;
+    const std::size_t last = system_.surfaces.size() - 1;
+    for (int iy = 0; iy < rays_per_side; ++iy) {
+        for (int ix = 0; ix < rays_per_side; ++ix) {
+            const double fx = (ix + 0.5) / rays_per_side * 2.0 - 1.0;
+            const double fy = (iy + 0.5) / rays_per_side * 2.0 - 1.0;
+            const Eigen::Vector2d point = centre + half * Eigen::Vector2d(fx, fy);
+            const bool inside = variant ? (point - centre).norm() <= disc
+                                        : lattice().cell_contains(cell, point);
+            if (!inside) continue;
+            const Eigen::Vector3d through(point.x(), point.y(), entry_z_);
+            // Start far enough in front of the vertex plane to clear any sag.
+            const Ray ray{through - (2.0 / direction.z()) * direction, direction};
+            ++report.rays;
+            const TraceResult full = trace(system_, ray, 0, last);
+            if (full.status == RayStatus::Ok) {
+                ++report.arrived;
+            } else {
+                ++report.lost_per_surface[static_cast<std::size_t>(full.surface)]
+                                         [static_cast<std::size_t>(full.status)];
+                if (full.status == RayStatus::CrossedCell) ++report.crossed;
+            }
+            const TraceResult at_encoding = trace(system_, ray, 0, encoding_surface_);
+            if (at_encoding.status == RayStatus::Ok)
+                landed.push_back(at_encoding.ray.origin.head<2>());
+        }
+    }
+    if (!landed.empty()) {
+        Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+        for (const auto& p : landed) mean += p;
+        mean /= static_cast<double>(landed.size());
+        double spread = 0.0;
+        for (const auto& p : landed) spread += (p - mean).squaredNorm();
+        report.rms_spot_radius = std::sqrt(spread / static_cast<double>(landed.size()));
+    } else {
+        report.rms_spot_radius = std::nan("");
+    }
+    return report;
+}
+
+namespace {
+
+// First angle in (0, 89] degrees along phi where `fails` holds, assuming it holds from
+// there on; nullopt if it never does.
+template <typename Predicate>
+std::optional<double> first_failure(Predicate fails) {
+    constexpr double kStep = 0.25;
+    double ok = 0.0;
+    if (fails(0.0)) return 0.0;
+    for (double angle = kStep; angle <= 89.0 + 1e-9; angle += kStep) {
+        if (!fails(angle)) {
+            ok = angle;
+            continue;
+        }
+        double lo = ok, hi = angle;
+        for (int i = 0; i < 40; ++i) {
+            const double mid = 0.5 * (lo + hi);
+            (fails(mid) ? hi : lo) = mid;
+        }
+        return 0.5 * (lo + hi);
+    }
+    return std::nullopt;
+}
+
+}  // namespace
+
+std::optional<double> wrap_over_angle(const DesignOptics& optics, double phi, Model model) {
+    const CellIndex cell = optics.centre_cell();
+    return first_failure([&](double angle_deg) {
+        const auto d = incident_direction(degrees_to_radians(angle_deg), phi);
+        return optics.land(d, cell, model).status != RayStatus::Ok;
+    });
+}
+
+std::optional<double> first_loss_angle(const DesignOptics& optics, double phi, int rays_per_side) {
+    const CellIndex cell = optics.centre_cell();
+    return first_failure([&](double angle_deg) {
+        const auto d = incident_direction(degrees_to_radians(angle_deg), phi);
+        const auto report = optics.trace_bundle(d, cell, rays_per_side);
+        return report.crossed > 0;
+    });
+}
+
+namespace {
+
+struct SweepDirection {
+    std::string name;
+    double phi;
+};
+
+std::vector<SweepDirection> sweep_directions(const Lattice& lattice) {
+    if (lattice.kind() == LatticeKind::Hexagonal)
+        return {{"flat (x)", 0.0}, {"corner (y)", kPi / 2}};
+    return {{"x", 0.0}, {"y", kPi / 2}, {"diagonal", std::atan2(lattice.pitch_y(), lattice.pitch_x())}};
+}
+
+const PlanoConvex* entry_lens(const Design& design) {
+    const Plane& first = design.planes.front();
+    if (!first.part) return nullptr;
+    if (const auto* lens = std::get_if<LensPart>(&*first.part)) return &lens->lens;
+    if (const auto* array = std::get_if<LensletArrayPart>(&*first.part)) return &array->lens;
+    return nullptr;
+}
+
+}  // namespace
+
+DesignSummary summarise(const DesignOptics& optics) {
+    const Design& design = optics.design();
+    const Lattice& lattice = optics.lattice();
+    const SequentialSystem& system = optics.system();
+    const bool variant = is_observer_variant(design);
+    DesignSummary s;
+    s.name = design.name;
+    s.kind = std::string(to_string(design.kind));
+    s.lattice = lattice.kind() == LatticeKind::Hexagonal ? "hexagonal" : "rectangular";
+    s.pitch_x = lattice.pitch_x();
+    s.pitch_y = lattice.pitch_y();
+    s.count_x = lattice.count_x();
+    s.count_y = lattice.count_y();
+    if (const PlanoConvex* lens = entry_lens(design)) s.focal_length_nominal = lens->nominal_focal_length;
+    s.focal_length_paraxial = cardinal_points(system, 0, 1).efl;
+    s.dpi_x = design.printer.dpi_x.value;
+    s.dpi_y = design.printer.dpi_y.value;
+    const Eigen::Vector2d dot = optics.dot_mm();
+    s.directions_per_lenslet = lattice.cell_area() / (dot.x() * dot.y());
+    const double b = std::abs(optics.paraxial_b());
+    if (variant) {
+        // One incident-direction bin per meso-pixel lenslet.
+        s.angular_step_x_deg = radians_to_degrees(std::atan(lattice.pitch_x() / b));
+        s.angular_step_y_deg = radians_to_degrees(std::atan(lattice.pitch_y() / b));
+    } else {
+        s.angular_step_x_deg = radians_to_degrees(std::atan(dot.x() / b));
+        s.angular_step_y_deg = radians_to_degrees(std::atan(dot.y() / b));
+    }
+    double min_wrap = 90.0;
+    for (const auto& sweep : sweep_directions(lattice)) {
+        const auto paraxial = wrap_over_angle(optics, sweep.phi, Model::Paraxial);
+        const auto exact = wrap_over_angle(optics, sweep.phi, Model::Exact);
+        s.wrap_over_paraxial_deg.emplace_back(sweep.name, paraxial.value_or(90.0));
+        s.wrap_over_exact_deg.emplace_back(sweep.name, exact.value_or(90.0));
+        min_wrap = std::min(min_wrap, exact.value_or(90.0));
+        if (!variant) {
+            const auto loss = first_loss_angle(optics, sweep.phi, 15);
+            s.crosstalk_exact_deg.emplace_back(sweep.name, loss.value_or(90.0));
+        }
+    }
+    s.field_of_view_deg = 2.0 * min_wrap;
+    const CellIndex cell = optics.centre_cell();
+    const auto on_axis = optics.trace_bundle(incident_direction(0, 0), cell, 41);
+    const auto half_fov = optics.trace_bundle(
+        incident_direction(degrees_to_radians(0.5 * min_wrap), 0), cell, 41);
+    s.efficiency_on_axis = on_axis.rays ? double(on_axis.arrived) / double(on_axis.rays) : 0.0;
+    s.efficiency_at_half_fov = half_fov.rays ? double(half_fov.arrived) / double(half_fov.rays) : 0.0;
+    s.spot_rms_on_axis_um = 1000.0 * on_axis.rms_spot_radius;
+    s.spot_rms_at_half_fov_um = 1000.0 * half_fov.rms_spot_radius;
+
+    const std::size_t enc = optics.encoding_surface();
+    const CardinalPoints before = cardinal_points(system, 0, enc - 1);
+    s.focus_error_mm = system.surfaces[enc].z - before.rear_focal_z;
+
+    // Design rules.
+    const double aperture = variant ? 2.0 * std::get<CircularAperture>(system.surfaces.front().aperture).semi_diameter
+                                    : std::min(lattice.pitch_x(), lattice.pitch_y());
+    const double blur = aperture * std::abs(s.focus_error_mm) / std::abs(before.rear_focal_length);
+    const double smallest_feature = variant ? std::min(lattice.pitch_x(), lattice.pitch_y()) / 4
+                                            : std::min(dot.x(), dot.y());
+    if (blur > smallest_feature)
+        s.warnings.push_back("the encoding plane lies " + format(s.focus_error_mm, 4) +
+                             " mm from the paraxial focus: defocus blur " + format(1000 * blur, 1) +
+                             " um exceeds " + format(1000 * smallest_feature, 1) + " um");
+    for (const auto* report : {&on_axis, &half_fov}) {
+        std::size_t tir = 0;
+        for (std::size_t k = 0; k < report->lost_per_surface.size(); ++k) {
+            const std::size_t n = report->lost_per_surface[k][static_cast<std::size_t>(RayStatus::TotalInternalReflection)];
+            if (n == 0) continue;
+            tir += n;
+            s.warnings.push_back(
+                format(100.0 * double(n) / double(report->rays), 1) + "% of the rays " +
+                (report == &on_axis ? "on axis" : "at half the field of view") +
+                " are lost to total internal reflection at '" + system.surfaces[k].label +
+                "'" + (k % 2 == 1 ? " (a flat-side-first lens: turn its curved side toward the light)" : ""));
+        }
+        (void)tir;
+    }
+    if (!variant && s.directions_per_lenslet < 64)
+        s.warnings.push_back("only " + format(s.directions_per_lenslet, 0) +
+                             " print pixels per lenslet: the angular resolution is coarse");
+    if (min_wrap < 5.0)
+        s.warnings.push_back("wrap-over begins at " + format(min_wrap, 2) +
+                             " deg: the display's field of view is very narrow");
+    if (const Plane* diffuser = design.diffuser_plane(); diffuser && design.kind == DesignKind::II) {
+        // Design II: the corrective arrays must image plane A onto the diffuser at 1:1.
+        const std::size_t b_front = enc - 1;
+        const std::size_t b_back = enc + 1;
+        const CardinalPoints pair = cardinal_points(system, b_front, b_back);
+        const double object = system.surfaces[b_front].z - system.surfaces.front().z;
+        if (const auto image = conjugate(pair, object)) {
+            const double image_z = system.surfaces[b_back].z + image->image_distance;
+            const double miss = system.surfaces[system.find(diffuser->name + " diffuser")].z - image_z;
+            if (std::abs(miss) > 0.05 * std::abs(pair.efl))
+                s.warnings.push_back("the diffuser is " + format(miss, 3) +
+                                     " mm from the image of plane A through plane B (z = " +
+                                     format(image_z, 3) + " mm): macro-pixels will blur into each other");
+            if (std::abs(std::abs(image->magnification) - 1.0) > 0.1)
+                s.warnings.push_back("plane B images each lenslet of A onto the diffuser at " +
+                                     format(std::abs(image->magnification), 3) +
+                                     "x: macro-pixels " +
+                                     (std::abs(image->magnification) > 1 ? "overlap" : "leave gaps"));
+        }
+    }
+    return s;
+}
+
+Chart accuracy_chart(const DesignOptics& optics, double phi, const std::string& name,
+                     double max_angle_deg, int steps) {
+    Chart chart;
+    chart.direction = name;
+    const Eigen::Vector2d along(std::cos(phi), std::sin(phi));
+    const Eigen::Vector2d dot = optics.dot_mm();
+    const double pixel = std::hypot(along.x() * dot.x(), along.y() * dot.y());
+    const CellIndex cell = optics.centre_cell();
+    for (int k = 0; k <= steps; ++k) {
+        ChartRow row;
+        row.angle_deg = max_angle_deg * k / steps;
+        const auto d = incident_direction(degrees_to_radians(row.angle_deg), phi);
+        const auto paraxial = optics.land(d, cell, Model::Paraxial);
+        const auto exact = optics.land(d, cell, Model::Exact);
+        row.paraxial_mm = paraxial.offset.dot(along);
+        row.exact_status = exact.status;
+        const bool arrived = exact.status == RayStatus::Ok || exact.status == RayStatus::CrossedCell;
+        row.exact_mm = arrived ? exact.offset.dot(along) : std::nan("");
+        row.error_um = arrived ? 1000.0 * (row.exact_mm - row.paraxial_mm) : std::nan("");
+        row.error_pixels = arrived ? (row.exact_mm - row.paraxial_mm) / pixel : std::nan("");
+        if (!chart.half_pixel_angle_deg && arrived && std::abs(row.error_pixels) > 0.5)
+            chart.half_pixel_angle_deg = row.angle_deg;
+        chart.rows.push_back(row);
+    }
+    return chart;
+}
+
+double measure_rays_per_second(const DesignOptics& optics, Model model, std::size_t rays,
+                               double max_angle_deg) {
+    const SequentialSystem& system = optics.system();
+    const Eigen::Vector2d half = optics.lattice().half_extent();
+    const double z0 = system.surfaces.front().z - 2.0;
+    const double max_slope = std::tan(degrees_to_radians(max_angle_deg));
+    std::mt19937_64 random(12345);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    const std::size_t last = optics.encoding_surface();
+    using Clock = std::chrono::steady_clock;
+    if (model == Model::Exact) {
+        RayBatch batch;
+        batch.resize(rays);
+        for (std::size_t k = 0; k < rays; ++k) {
+            const Eigen::Vector3d d =
+                Eigen::Vector3d(max_slope * unit(random), max_slope * unit(random), 1.0).normalized();
+            batch.set(k, Ray{Eigen::Vector3d(half.x() * unit(random), half.y() * unit(random), z0), d});
+        }
+        const auto start = Clock::now();
+        trace_batch(system, batch, 0, last);
+        const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+        return static_cast<double>(rays) / std::max(seconds, 1e-9);
+    }
+    ParaxialBatch batch;
+    batch.resize(rays);
+    for (std::size_t k = 0; k < rays; ++k) {
+        batch.x[k] = half.x() * unit(random);
+        batch.y[k] = half.y() * unit(random);
+        batch.tx[k] = max_slope * unit(random);
+        batch.ty[k] = max_slope * unit(random);
+    }
+    const auto start = Clock::now();
+    trace_paraxial_batch(system, batch, z0, 0, last);
+    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    return static_cast<double>(rays) / std::max(seconds, 1e-9);
+}
+
+}  // namespace rfd::optics
