@@ -19,6 +19,16 @@
 namespace rfd::cli {
 namespace {
 
+nlohmann::json conjugates_json(const optics::DesignSummary& s) {
+    nlohmann::json out = nlohmann::json::array();
+    for (const auto& c : s.conjugates)
+        out.push_back({{"description", c.description},
+                       {"plane_z_mm", c.plane_z},
+                       {"target_z_mm", std::isfinite(c.target_z) ? nlohmann::json(c.target_z) : nlohmann::json()},
+                       {"magnification", std::isfinite(c.magnification) ? nlohmann::json(c.magnification) : nlohmann::json()}});
+    return out;
+}
+
 nlohmann::json to_json(const optics::DesignSummary& s) {
     auto pairs = [](const auto& list) {
         nlohmann::json out = nlohmann::json::object();
@@ -31,6 +41,9 @@ nlohmann::json to_json(const optics::DesignSummary& s) {
             {"pitch_x_mm", s.pitch_x},
             {"row_spacing_mm", s.pitch_y},
             {"count", {s.count_x, s.count_y}},
+            {"macro_grid", s.macro ? nlohmann::json{{"count", {s.macro->count_x, s.macro->count_y}},
+                                                    {"pitch_mm", {s.macro->pitch_x, s.macro->pitch_y}}}
+                                   : nlohmann::json()},
             {"focal_length_nominal_mm", s.focal_length_nominal},
             {"focal_length_paraxial_mm", s.focal_length_paraxial},
             {"printer_dpi", {s.dpi_x, s.dpi_y}},
@@ -45,6 +58,7 @@ nlohmann::json to_json(const optics::DesignSummary& s) {
             {"spot_rms_on_axis_um", s.spot_rms_on_axis_um},
             {"spot_rms_at_half_fov_um", s.spot_rms_at_half_fov_um},
             {"focus_error_mm", s.focus_error_mm},
+            {"conjugates", conjugates_json(s)},
             {"warnings", s.warnings}};
 }
 
@@ -58,6 +72,9 @@ std::string summary_text(const optics::DesignSummary& s, bool observer_variant) 
     add("%s  (Design %s)\n", s.name.c_str(), s.kind.c_str());
     add("  lattice                   %s, %d x %d lenslets\n", s.lattice.c_str(), s.count_x, s.count_y);
     add("  pitch                     %.4f mm (rows %.4f mm apart)\n", s.pitch_x, s.pitch_y);
+    if (s.macro)
+        add("  macro-pixels              %d x %d Design III cells, %.2f mm x %.2f mm apart\n",
+            s.macro->count_x, s.macro->count_y, s.macro->pitch_x, s.macro->pitch_y);
     add("  focal length              %.4f mm paraxial (maker: %.4g mm)\n", s.focal_length_paraxial,
         s.focal_length_nominal);
     add("  printer                   %.0f x %.0f dpi\n", s.dpi_x, s.dpi_y);
@@ -84,6 +101,12 @@ std::string summary_text(const optics::DesignSummary& s, bool observer_variant) 
     add("  RMS spot on encoding plane %.2f um on axis, %.2f um at half the field of view\n",
         s.spot_rms_on_axis_um, s.spot_rms_at_half_fov_um);
     add("  encoding plane vs focus   %+.4f mm\n", s.focus_error_mm);
+    for (const auto& check : s.conjugates) {
+        add("  %s\n      plane at z = %.4f mm, optics want z = %.4f mm (%+.4f mm)", check.description.c_str(),
+            check.plane_z, check.target_z, check.plane_z - check.target_z);
+        if (std::isfinite(check.magnification)) add(", magnification %.4f", check.magnification);
+        out += "\n";
+    }
     if (s.warnings.empty()) add("  design rules              no warnings\n");
     for (const auto& warning : s.warnings) add("  warning: %s\n", warning.c_str());
     return out;

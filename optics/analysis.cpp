@@ -253,6 +253,78 @@ const PlanoConvex* entry_lens(const Design& design) {
 
 }  // namespace
 
+std::optional<double> image_z(const SequentialSystem& system, std::size_t first,
+                              std::size_t last, double object_z, double* magnification) {
+    const CardinalPoints points = cardinal_points(system, first, last);
+    const auto image = conjugate(points, system.surfaces[first].z - object_z);
+    if (!image) return std::nullopt;
+    if (magnification) *magnification = image->magnification;
+    return system.surfaces[last].z + image->image_distance;
+}
+
+namespace {
+
+// The planes each design needs in focus or conjugate (thesis figures 8.5, 8.8, 8.11).
+std::vector<ConjugateCheck> conjugate_checks(const DesignOptics& optics) {
+    const Design& design = optics.design();
+    const SequentialSystem& system = optics.system();
+    const std::size_t enc = optics.encoding_surface();
+    std::vector<ConjugateCheck> checks;
+    auto focal_tolerance = [&](std::size_t first, std::size_t last) {
+        return 0.02 * std::abs(cardinal_points(system, first, last).efl);
+    };
+    auto add_image = [&](const std::string& text, std::size_t plane_surface, std::size_t first,
+                         std::size_t last, double object_z) {
+        ConjugateCheck check;
+        check.description = text;
+        check.plane_z = system.surfaces[plane_surface].z;
+        double m = std::nan("");
+        check.target_z = image_z(system, first, last, object_z, &m).value_or(std::nan(""));
+        check.magnification = m;
+        check.tolerance = focal_tolerance(first, last);
+        checks.push_back(check);
+    };
+    auto add_focus = [&](const std::string& text, std::size_t plane_surface, std::size_t first,
+                         std::size_t last, bool rear) {
+        ConjugateCheck check;
+        check.description = text;
+        check.plane_z = system.surfaces[plane_surface].z;
+        const CardinalPoints points = cardinal_points(system, first, last);
+        check.target_z = rear ? points.rear_focal_z : points.front_focal_z;
+        check.tolerance = focal_tolerance(first, last);
+        checks.push_back(check);
+    };
+    const std::string a = design.planes.front().name;
+    if (design.kind == DesignKind::I || design.kind == DesignKind::II) {
+        const std::string b = design.pattern_plane().name;
+        add_focus("pattern " + b + " in the back focal plane of " + a, enc, 0, enc - 1, true);
+        if (design.kind == DesignKind::II) {
+            const Plane* c = design.diffuser_plane();
+            add_image("diffuser " + c->name + " = image of " + a + " through " + b,
+                      system.find(c->name + " diffuser"), enc - 1, enc + 1, system.surfaces.front().z);
+        }
+        return checks;
+    }
+    // Designs III/IV: A main lens, B field lens, C meso-pixel lenslets, D pattern pair,
+    // E projection lenslets.
+    const std::size_t d_pattern = system.find(design.pattern_plane().name + " pattern");
+    add_focus("meso-pixel lenslets at the focus of the main lens (through the field lens)",
+              enc, 0, enc - 1, true);
+    add_image("pattern = image of the main lens through field lens and meso lenslets", d_pattern,
+              2, enc + 1, system.surfaces.front().z);
+    if (d_pattern + 2 < system.surfaces.size()) {
+        const std::size_t e_front = d_pattern + 2;
+        add_image("projection lenslets = image of the meso lenslets through the pattern pair",
+                  e_front, d_pattern - 1, d_pattern + 1, system.surfaces[enc].z);
+        if (e_front + 1 < system.surfaces.size())
+            add_focus("pattern in the front focal plane of the projection lenslets", d_pattern,
+                      e_front, e_front + 1, false);
+    }
+    return checks;
+}
+
+}  // namespace
+
 DesignSummary summarise(const DesignOptics& optics) {
     const Design& design = optics.design();
     const Lattice& lattice = optics.lattice();
@@ -266,6 +338,7 @@ DesignSummary summarise(const DesignOptics& optics) {
     s.pitch_y = lattice.pitch_y();
     s.count_x = lattice.count_x();
     s.count_y = lattice.count_y();
+    s.macro = design.macro;
     if (const PlanoConvex* lens = entry_lens(design)) s.focal_length_nominal = lens->nominal_focal_length;
     s.focal_length_paraxial = cardinal_points(system, 0, 1).efl;
     s.dpi_x = design.printer.dpi_x.value;
@@ -337,25 +410,20 @@ DesignSummary summarise(const DesignOptics& optics) {
     if (min_wrap < 5.0)
         s.warnings.push_back("wrap-over begins at " + format(min_wrap, 2) +
                              " deg: the display's field of view is very narrow");
-    if (const Plane* diffuser = design.diffuser_plane(); diffuser && design.kind == DesignKind::II) {
-        // Design II: the corrective arrays must image plane A onto the diffuser at 1:1.
-        const std::size_t b_front = enc - 1;
-        const std::size_t b_back = enc + 1;
-        const CardinalPoints pair = cardinal_points(system, b_front, b_back);
-        const double object = system.surfaces[b_front].z - system.surfaces.front().z;
-        if (const auto image = conjugate(pair, object)) {
-            const double image_z = system.surfaces[b_back].z + image->image_distance;
-            const double miss = system.surfaces[system.find(diffuser->name + " diffuser")].z - image_z;
-            if (std::abs(miss) > 0.05 * std::abs(pair.efl))
-                s.warnings.push_back("the diffuser is " + format(miss, 3) +
-                                     " mm from the image of plane A through plane B (z = " +
-                                     format(image_z, 3) + " mm): macro-pixels will blur into each other");
-            if (std::abs(std::abs(image->magnification) - 1.0) > 0.1)
-                s.warnings.push_back("plane B images each lenslet of A onto the diffuser at " +
-                                     format(std::abs(image->magnification), 3) +
-                                     "x: macro-pixels " +
-                                     (std::abs(image->magnification) > 1 ? "overlap" : "leave gaps"));
-        }
+    s.conjugates = conjugate_checks(optics);
+    for (const auto& check : s.conjugates) {
+        const double miss = check.plane_z - check.target_z;
+        if (!std::isfinite(check.target_z))
+            s.warnings.push_back(check.description + ": the image is at infinity");
+        else if (std::abs(miss) > check.tolerance)
+            s.warnings.push_back(check.description + ": the plane is " + format(miss, 3) +
+                                 " mm from where the optics put it (z = " +
+                                 format(check.target_z, 3) + " mm)");
+        if (std::isfinite(check.magnification) && design.kind == DesignKind::II &&
+            std::abs(std::abs(check.magnification) - 1.0) > 0.1)
+            s.warnings.push_back("plane B images each lenslet of A onto the diffuser at " +
+                                 format(std::abs(check.magnification), 3) + "x: macro-pixels " +
+                                 (std::abs(check.magnification) > 1 ? "overlap" : "leave gaps"));
     }
     return s;
 }

@@ -14,6 +14,7 @@
 // observer sees it. Positions on the encoding plane are relative to the lenslet's centre.
 
 #include <array>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -106,6 +107,21 @@ std::optional<double> wrap_over_angle(const DesignOptics& optics, double phi_rad
 std::optional<double> first_loss_angle(const DesignOptics& optics, double phi_rad,
                                        int rays_per_side);
 
+/// A pair of planes the design needs to be conjugate (or a plane that must lie in a
+/// focal plane), and how far the prescription puts it from there.
+struct ConjugateCheck {
+    std::string description;  ///< e.g. "diffuser C = image of A through B"
+    double plane_z = 0.0;     ///< where the plane is, mm
+    double target_z = 0.0;    ///< where the paraxial optics want it, mm (NaN: at infinity)
+    double magnification = std::numeric_limits<double>::quiet_NaN();  ///< NaN if n/a
+    double tolerance = 0.0;   ///< mm; beyond it the design rule warns
+};
+
+/// z of the paraxial image of the plane `object_z` through surfaces [first, last];
+/// nullopt when it is imaged to infinity. The magnification goes to `magnification`.
+std::optional<double> image_z(const SequentialSystem& system, std::size_t first,
+                              std::size_t last, double object_z, double* magnification);
+
 /// The summary `rfd design show` prints.
 struct DesignSummary {
     std::string name;
@@ -113,6 +129,7 @@ struct DesignSummary {
     std::string lattice;            ///< "hexagonal" or "rectangular"
     double pitch_x = 0, pitch_y = 0;   ///< mm (pitch_y: row spacing)
     int count_x = 0, count_y = 0;
+    std::optional<MacroGrid> macro;    ///< Design IV's grid of Design III cells
     double focal_length_nominal = 0;   ///< mm, the maker's value for the encoding lens
     double focal_length_paraxial = 0;  ///< mm, EFL from the prescription
     double dpi_x = 0, dpi_y = 0;
@@ -127,6 +144,7 @@ struct DesignSummary {
     double spot_rms_on_axis_um = 0;
     double spot_rms_at_half_fov_um = 0;
     double focus_error_mm = 0;         ///< encoding plane minus paraxial focus (z)
+    std::vector<ConjugateCheck> conjugates;
     std::vector<std::string> warnings;
 };
 DesignSummary summarise(const DesignOptics& optics);

@@ -218,6 +218,21 @@ Design build_design(ConfigTable& root) {
         t->finish();
         design.macro = macro;
         if (design.kind != DesignKind::IV) t->fail("count", "[macro] applies to Design IV only");
+        // Every cell must fit its widest part: the lenses and arrays of one macro-pixel.
+        double widest_x = 0.0, widest_y = 0.0;
+        for (const auto& [name, part] : parts) {
+            if (const auto* lens = std::get_if<LensPart>(&part)) {
+                widest_x = std::max(widest_x, lens->diameter);
+                widest_y = std::max(widest_y, lens->diameter);
+            } else if (const auto* array = std::get_if<LensletArrayPart>(&part)) {
+                widest_x = std::max(widest_x, 2.0 * array->lattice.half_extent().x());
+                widest_y = std::max(widest_y, 2.0 * array->lattice.half_extent().y());
+            }
+        }
+        if (macro.pitch_x < widest_x || macro.pitch_y < widest_y)
+            t->fail("pitch_mm", "macro-pixel pitch " + format(macro.pitch_x) + " x " +
+                                    format(macro.pitch_y) + " mm is smaller than the widest part (" +
+                                    format(widest_x) + " x " + format(widest_y) + " mm)");
     } else if (design.kind == DesignKind::IV) {
         root.fail("macro", "Design IV needs a [macro] grid of Design III cells");
     }
