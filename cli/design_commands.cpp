@@ -173,8 +173,8 @@ void add_chart_command(CLI::App& optics_cmd, const GlobalOptions&) {
             std::string file;
             double phi;
         };
-        const std::vector<Sweep> sweeps = {{hex ? "flat direction (x)" : "x", "x", 0.0},
-                                           {hex ? "corner direction (y)" : "y", "y", kPi / 2}};
+        const std::vector<Sweep> sweeps = {{hex ? "flat direction (x)" : "x direction", "x", 0.0},
+                                           {hex ? "corner direction (y)" : "y direction", "y", kPi / 2}};
         double wrap = 90.0;
         for (const auto& sweep : sweeps)
             wrap = std::min(wrap, optics::wrap_over_angle(optics, sweep.phi, optics::Model::Exact).value_or(60.0));

@@ -92,12 +92,14 @@ DesignOptics::Landing DesignOptics::land(const Eigen::Vector3d& direction, CellI
         (void)ray;
         landing.offset = Eigen::Vector2d(result.ray.x, result.ray.y) - reference;
         landing.status = result.status;
+        landing.surface = result.surface;
         landing.cell = lattice().cell_at({result.ray.x, result.ray.y});
         return landing;
     }
     const TraceResult result = trace(system_, chief_ray(direction, cell), 0, encoding_surface_);
     landing.offset = result.ray.origin.head<2>() - reference;
     landing.status = result.status;
+    landing.surface = result.surface;
     landing.cell = lattice().cell_at(result.ray.origin.head<2>());
     return landing;
 }
@@ -442,9 +444,16 @@ Chart accuracy_chart(const DesignOptics& optics, double phi, const std::string& 
         const auto d = incident_direction(degrees_to_radians(row.angle_deg), phi);
         const auto paraxial = optics.land(d, cell, Model::Paraxial);
         const auto exact = optics.land(d, cell, Model::Exact);
-        row.paraxial_mm = paraxial.offset.dot(along);
         row.exact_status = exact.status;
-        const bool arrived = exact.status == RayStatus::Ok || exact.status == RayStatus::CrossedCell;
+        // Both models must reach the encoding plane (landing there under a neighbouring
+        // lenslet counts: that is where wrap-over shows); a ray stopped earlier has no
+        // position on it to compare.
+        const auto reached = [&](const DesignOptics::Landing& l) {
+            return l.surface == static_cast<int>(optics.encoding_surface()) &&
+                   (l.status == RayStatus::Ok || l.status == RayStatus::CrossedCell);
+        };
+        const bool arrived = reached(exact) && reached(paraxial);
+        row.paraxial_mm = reached(paraxial) ? paraxial.offset.dot(along) : std::nan("");
         row.exact_mm = arrived ? exact.offset.dot(along) : std::nan("");
         row.error_um = arrived ? 1000.0 * (row.exact_mm - row.paraxial_mm) : std::nan("");
         row.error_pixels = arrived ? (row.exact_mm - row.paraxial_mm) / pixel : std::nan("");

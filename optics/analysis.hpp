@@ -58,6 +58,7 @@ public:
         Eigen::Vector2d offset = Eigen::Vector2d::Zero();  ///< mm from the cell centre
         RayStatus status = RayStatus::Ok;
         CellIndex cell{};  ///< cell the ray arrived under (== entry cell unless wrap-over)
+        int surface = -1;  ///< surface where the ray stopped (the encoding surface if it got there)
     };
     Landing land(const Eigen::Vector3d& direction, CellIndex cell, Model model) const;
 
