@@ -34,6 +34,20 @@ std::string_view unit_meaning(std::string_view key) {
     return "no unit";
 }
 
+// Levenshtein distance, for "did you mean" hints on short keys.
+std::size_t edit_distance(std::string_view a, std::string_view b) {
+    std::vector<std::size_t> previous(b.size() + 1), current(b.size() + 1);
+    for (std::size_t j = 0; j <= b.size(); ++j) previous[j] = j;
+    for (std::size_t i = 1; i <= a.size(); ++i) {
+        current[0] = i;
+        for (std::size_t j = 1; j <= b.size(); ++j)
+            current[j] = std::min({previous[j] + 1, current[j - 1] + 1,
+                                   previous[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
+        std::swap(previous, current);
+    }
+    return previous[b.size()];
+}
+
 std::string format_number(double value) {
     std::ostringstream out;
     out << value;
@@ -144,6 +158,12 @@ void ConfigTable::fail_missing(const std::string& key) const {
                                  std::string(unit_meaning(key)) + ", found '" + other_key +
                                  "' (" + std::string(unit_meaning(other_key)) + ")");
         }
+    }
+    // An unread key a letter or two away is a typo of this one: point at the typo.
+    for (const auto& [other, node] : *table_) {
+        const std::string other_key(other.str());
+        if (read_.count(other_key) || edit_distance(other_key, key) > 2) continue;
+        throw InputError(location(other_key), "unknown key (did you mean '" + key + "'?)");
     }
     throw InputError(location(), "missing required key '" + full_key(key) + "'");
 }
@@ -306,7 +326,7 @@ std::vector<ConfigTable> ConfigTable::table_array(const std::string& key) {
 void ConfigTable::finish() const {
     for (const auto& key : keys()) {
         if (read_.count(key)) continue;
-        throw InputError(location(key), "unknown key '" + full_key(key) + "'");
+        throw InputError(location(key), "unknown key");
     }
 }
 

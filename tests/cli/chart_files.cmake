@@ -1,0 +1,28 @@
+# Runs `rfd optics chart` and checks every promised file exists, the CSV has one row per
+# angle, and no temporary file is left behind.
+file(REMOVE_RECURSE ${OUT})
+execute_process(COMMAND ${RFD} --quiet optics chart ${DESIGN} --out ${OUT} --steps 40 --json
+                RESULT_VARIABLE code OUTPUT_VARIABLE stdout ERROR_VARIABLE stderr)
+if(NOT code EQUAL 0)
+  message(FATAL_ERROR "rfd optics chart failed (${code}): ${stderr}")
+endif()
+foreach(axis x y)
+  foreach(ext csv gp svg png)
+    if(NOT EXISTS ${OUT}/paraxial_error_${axis}.${ext})
+      message(FATAL_ERROR "missing ${OUT}/paraxial_error_${axis}.${ext}")
+    endif()
+  endforeach()
+  file(STRINGS ${OUT}/paraxial_error_${axis}.csv lines)
+  list(LENGTH lines count)
+  if(NOT count EQUAL 42)  # header + 41 angles
+    message(FATAL_ERROR "paraxial_error_${axis}.csv has ${count} lines, expected 42")
+  endif()
+endforeach()
+file(GLOB leftovers ${OUT}/*.tmp* ${OUT}/.*.tmp*)
+if(leftovers)
+  message(FATAL_ERROR "temporary files left behind: ${leftovers}")
+endif()
+string(FIND "${stdout}" "\"exact_rays_per_second\"" found)
+if(found EQUAL -1)
+  message(FATAL_ERROR "chart summary lacks the rays per second: ${stdout}")
+endif()
