@@ -29,6 +29,16 @@ nlohmann::json conjugates_json(const optics::DesignSummary& s) {
     return out;
 }
 
+nlohmann::json losses_json(const optics::DesignSummary& s) {
+    nlohmann::json out = nlohmann::json::array();
+    for (const auto& loss : s.losses)
+        out.push_back({{"angle_deg", loss.angle_deg},
+                       {"surface", loss.surface},
+                       {"status", optics::to_string(loss.status)},
+                       {"fraction", loss.fraction}});
+    return out;
+}
+
 nlohmann::json to_json(const optics::DesignSummary& s) {
     auto pairs = [](const auto& list) {
         nlohmann::json out = nlohmann::json::object();
@@ -55,6 +65,7 @@ nlohmann::json to_json(const optics::DesignSummary& s) {
             {"field_of_view_deg", s.field_of_view_deg},
             {"efficiency_on_axis", s.efficiency_on_axis},
             {"efficiency_at_half_fov", s.efficiency_at_half_fov},
+            {"losses", losses_json(s)},
             {"spot_rms_on_axis_um", s.spot_rms_on_axis_um},
             {"spot_rms_at_half_fov_um", s.spot_rms_at_half_fov_um},
             {"focus_error_mm", s.focus_error_mm},
@@ -98,6 +109,9 @@ std::string summary_text(const optics::DesignSummary& s, bool observer_variant) 
     add("  light efficiency          %.1f %% on axis, %.1f %% at half the field of view\n",
         100 * s.efficiency_on_axis, 100 * s.efficiency_at_half_fov);
     add("                            (rays reaching the last surface; Fresnel losses not included)\n");
+    for (const auto& loss : s.losses)
+        add("    at %5.2f deg: %5.1f %% lost at '%s' (%s)\n", loss.angle_deg, 100 * loss.fraction,
+            loss.surface.c_str(), std::string(optics::to_string(loss.status)).c_str());
     add("  RMS spot on encoding plane %.2f um on axis, %.2f um at half the field of view\n",
         s.spot_rms_on_axis_um, s.spot_rms_at_half_fov_um);
     add("  encoding plane vs focus   %+.4f mm\n", s.focus_error_mm);

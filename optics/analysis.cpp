@@ -375,6 +375,15 @@ DesignSummary summarise(const DesignOptics& optics) {
         incident_direction(degrees_to_radians(0.5 * min_wrap), 0), cell, 41);
     s.efficiency_on_axis = on_axis.rays ? double(on_axis.arrived) / double(on_axis.rays) : 0.0;
     s.efficiency_at_half_fov = half_fov.rays ? double(half_fov.arrived) / double(half_fov.rays) : 0.0;
+    for (const auto& [angle, report] : {std::pair{0.0, &on_axis}, std::pair{0.5 * min_wrap, &half_fov}}) {
+        for (std::size_t k = 0; k < report->lost_per_surface.size(); ++k)
+            for (int status = 1; status < kRayStatusCount; ++status) {
+                const std::size_t n = report->lost_per_surface[k][static_cast<std::size_t>(status)];
+                if (n > 0)
+                    s.losses.push_back({angle, system.surfaces[k].label, static_cast<RayStatus>(status),
+                                        double(n) / double(report->rays)});
+            }
+    }
     s.spot_rms_on_axis_um = 1000.0 * on_axis.rms_spot_radius;
     s.spot_rms_at_half_fov_um = 1000.0 * half_fov.rms_spot_radius;
 

@@ -142,6 +142,15 @@ struct DesignSummary {
     double field_of_view_deg = 0;      ///< full cone where no direction wraps (exact, min)
     double efficiency_on_axis = 0;     ///< fraction of light on the entry aperture arriving
     double efficiency_at_half_fov = 0;
+    /// Where the rays of a full bundle are lost, on axis and at half the field of view:
+    /// (angle in degrees, surface label, status, fraction of the bundle).
+    struct Loss {
+        double angle_deg = 0;
+        std::string surface;
+        RayStatus status = RayStatus::Ok;
+        double fraction = 0;
+    };
+    std::vector<Loss> losses;
     double spot_rms_on_axis_um = 0;
     double spot_rms_at_half_fov_um = 0;
     double focus_error_mm = 0;         ///< encoding plane minus paraxial focus (z)
