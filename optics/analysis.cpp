@@ -176,16 +176,7 @@ DesignOptics::BundleReport DesignOptics::trace_bundle(const Eigen::Vector3d& dir
                 landed.push_back(at_encoding.ray.origin.head<2>());
         }
     }
-    if (!landed.empty()) {
-        Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-        for (const auto& p : landed) mean += p;
-        mean /= static_cast<double>(landed.size());
-        double spread = 0.0;
-        for (const auto& p : landed) spread += (p - mean).squaredNorm();
-        report.rms_spot_radius = std::sqrt(spread / static_cast<double>(landed.size()));
-    } else {
-        report.rms_spot_radius = std::nan("");
-    }
+    report.rms_spot_radius = spot_statistics(landed).rms_radius;
     return report;
 }
 

@@ -13,6 +13,18 @@ Eigen::Vector3d point_at_z(const Ray& ray, double z) {
     return ray.origin + ((z - ray.origin.z()) / ray.direction.z()) * ray.direction;
 }
 
+SpotStatistics spot_statistics(const std::vector<Eigen::Vector2d>& points) {
+    SpotStatistics spot;
+    if (points.empty()) return spot;
+    spot.centroid.setZero();
+    for (const auto& p : points) spot.centroid += p;
+    spot.centroid /= static_cast<double>(points.size());
+    double spread = 0.0;
+    for (const auto& p : points) spread += (p - spot.centroid).squaredNorm();
+    spot.rms_radius = std::sqrt(spread / static_cast<double>(points.size()));
+    return spot;
+}
+
 SpotReport spot_report(const SequentialSystem& system, double field_angle_deg,
                        double pupil_semi_diameter, int rays) {
     RFD_CHECK(!system.surfaces.empty() && rays > 0);
@@ -51,8 +63,6 @@ SpotReport spot_report(const SequentialSystem& system, double field_angle_deg,
         paraxial.ray.y + (report.focal_plane_z - system.surfaces[last].z) * paraxial.ray.ty;
 
     const int side = std::max(1, static_cast<int>(std::lround(std::sqrt(rays * 4.0 / kPi))));
-    // Two passes (centroid, then spread): a spot of micrometres far off the axis would lose
-    // its digits in a one-pass sum of squares.
     std::vector<Eigen::Vector2d> landed;
     for (int iy = 0; iy < side; ++iy) {
         for (int ix = 0; ix < side; ++ix) {
@@ -66,17 +76,9 @@ SpotReport spot_report(const SequentialSystem& system, double field_angle_deg,
             landed.push_back(point_at_z(result.ray, report.focal_plane_z).head<2>());
         }
     }
-    if (!landed.empty()) {
-        Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
-        for (const auto& p : landed) centroid += p;
-        centroid /= static_cast<double>(landed.size());
-        double spread = 0.0;
-        for (const auto& p : landed) spread += (p - centroid).squaredNorm();
-        report.centroid_y = centroid.y();
-        report.rms_spot_radius = std::sqrt(spread / static_cast<double>(landed.size()));
-    } else {
-        report.centroid_y = report.rms_spot_radius = std::nan("");
-    }
+    const SpotStatistics spot = spot_statistics(landed);
+    report.centroid_y = spot.centroid.y();
+    report.rms_spot_radius = spot.rms_radius;
     return report;
 }
 

@@ -4,6 +4,8 @@
 
 #include <array>
 #include <cstddef>
+#include <limits>
+#include <vector>
 
 #include "optics/exact.hpp"
 #include "optics/system.hpp"
@@ -29,6 +31,14 @@ struct SpotReport {
 /// surface without a circular aperture when no pupil is given.
 SpotReport spot_report(const SequentialSystem& system, double field_angle_deg,
                        double pupil_semi_diameter, int rays);
+
+/// Centroid and RMS radius about it of a set of spot points (two passes, so that a spot
+/// of micrometres far off the axis keeps its digits). NaN for an empty set.
+struct SpotStatistics {
+    Eigen::Vector2d centroid = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
+    double rms_radius = std::numeric_limits<double>::quiet_NaN();
+};
+SpotStatistics spot_statistics(const std::vector<Eigen::Vector2d>& points);
 
 /// Propagates a ray in a straight line to the plane z.
 Eigen::Vector3d point_at_z(const Ray& ray, double z);
