@@ -70,7 +70,7 @@ std::optional<Hit> hit_arrayed(const Surface& surface, const Lattice& lattice, c
             const auto t = intersect(surface.profile, local_o, d, from);
             if (!t) return;
             const Eigen::Vector3d local = local_o + *t * d;
-            if (lattice.cell_at(local.head<2>() + centre) == cell) {
+            if (lattice.cell_contains(cell, local.head<2>() + centre)) {
                 if (!best || *t < best->t) best = Hit{*t, local, cell};
                 return;
             }

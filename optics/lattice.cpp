@@ -9,7 +9,14 @@ namespace rfd::optics {
 namespace {
 constexpr double kSqrt3 = 1.7320508075688772;
 
-int floor_mod2(int j) { return ((j % 2) + 2) % 2; }
+int floor_mod2(int j) { return j & 1; }  // two's complement: -1 & 1 == 1, as floor mod 2
+
+// floor() to int without the libm call the default x86-64 target makes of std::floor;
+// this runs once or more per ray. Valid for |v| < 2^31.
+inline int floor_to_int(double v) {
+    const int truncated = static_cast<int>(v);
+    return truncated - (v < static_cast<double>(truncated) ? 1 : 0);
+}
 }  // namespace
 
 Lattice Lattice::hexagonal(double pitch, int count_x, int count_y) {
@@ -21,7 +28,13 @@ Lattice Lattice::rectangular(double pitch_x, double pitch_y, int count_x, int co
 }
 
 Lattice::Lattice(LatticeKind kind, double pitch_x, double pitch_y, int count_x, int count_y)
-    : kind_(kind), pitch_x_(pitch_x), pitch_y_(pitch_y), count_x_(count_x), count_y_(count_y) {
+    : kind_(kind),
+      pitch_x_(pitch_x),
+      pitch_y_(pitch_y),
+      count_x_(count_x),
+      count_y_(count_y),
+      inverse_pitch_x_(1.0 / pitch_x),
+      inverse_pitch_y_(1.0 / pitch_y) {
     RFD_CHECK(pitch_x > 0.0 && pitch_y > 0.0 && count_x > 0 && count_y > 0);
     // Put the mean of all centres at the origin. In a hexagonal lattice with more than one
     // row, half the rows are shifted by pitch/2, so the mean shift is about pitch/4.
@@ -47,36 +60,41 @@ Eigen::Vector2d Lattice::center(CellIndex cell) const {
 }
 
 CellIndex Lattice::cell_at(const Eigen::Vector2d& point) const {
-    const Eigen::Vector2d local = point - origin_;
-    if (kind_ == LatticeKind::Rectangular) {
-        return {static_cast<int>(std::floor(local.x() / pitch_x_ + 0.5)),
-                static_cast<int>(std::floor(local.y() / pitch_y_ + 0.5))};
-    }
-    // Hexagonal: the nearest centre lies in the nearest row or one of its two neighbours.
-    const int row = static_cast<int>(std::floor(local.y() / pitch_y_ + 0.5));
-    CellIndex best{};
-    double best_distance = std::numeric_limits<double>::infinity();
-    for (int j = row - 1; j <= row + 1; ++j) {
-        const int i = static_cast<int>(std::floor((local.x() - row_shift(j)) / pitch_x_ + 0.5));
-        const CellIndex candidate{i, j};
-        const double distance = (center(candidate) - point).squaredNorm();
-        if (distance < best_distance) {
-            best_distance = distance;
-            best = candidate;
-        }
-    }
-    return best;
+    // Plain scalars: this runs for every ray at every array, and Eigen's 2-vector packets
+    // cost more here than they save.
+    const double x = point.x() - origin_.x();
+    const double y = point.y() - origin_.y();
+    if (kind_ == LatticeKind::Rectangular)
+        return {floor_to_int(x * inverse_pitch_x_ + 0.5), floor_to_int(y * inverse_pitch_y_ + 0.5)};
+    // Hexagonal: the nearest centre lies in the nearest row or in the neighbouring row on
+    // the point's side of it (rows are pitch*sqrt(3)/2 apart, cells reach pitch/sqrt(3)).
+    // Written without data-dependent branches.
+    const double row_position = y * inverse_pitch_y_;
+    const int j0 = floor_to_int(row_position + 0.5);
+    const int j1 = j0 + (row_position >= j0 ? 1 : -1);
+    const double shift0 = (j0 & 1) ? 0.5 * pitch_x_ : 0.0;
+    const double shift1 = (j1 & 1) ? 0.5 * pitch_x_ : 0.0;
+    const int i0 = floor_to_int((x - shift0) * inverse_pitch_x_ + 0.5);
+    const int i1 = floor_to_int((x - shift1) * inverse_pitch_x_ + 0.5);
+    const double dx0 = x - (i0 * pitch_x_ + shift0), dy0 = y - j0 * pitch_y_;
+    const double dx1 = x - (i1 * pitch_x_ + shift1), dy1 = y - j1 * pitch_y_;
+    const double d0 = dx0 * dx0 + dy0 * dy0;
+    const double d1 = dx1 * dx1 + dy1 * dy1;
+    // On a tie (a point on the shared edge) the lower row wins, deterministically.
+    const bool second = d1 < d0 || (d1 == d0 && j1 < j0);
+    return {second ? i1 : i0, second ? j1 : j0};
 }
 
 bool Lattice::cell_contains(CellIndex cell, const Eigen::Vector2d& point) const {
-    const Eigen::Vector2d offset = point - center(cell);
+    const double x = point.x() - (origin_.x() + cell.i * pitch_x_ + row_shift(cell.j));
+    const double y = point.y() - (origin_.y() + cell.j * pitch_y_);
     const double half = 0.5 * pitch_x_;
     if (kind_ == LatticeKind::Rectangular)
-        return std::abs(offset.x()) <= half && std::abs(offset.y()) <= 0.5 * pitch_y_;
+        return std::abs(x) <= half && std::abs(y) <= 0.5 * pitch_y_;
     // Face normals of the hexagon at 0, 60 and 120 degrees.
     const double s = 0.5 * kSqrt3;
-    return std::abs(offset.x()) <= half && std::abs(0.5 * offset.x() + s * offset.y()) <= half &&
-           std::abs(-0.5 * offset.x() + s * offset.y()) <= half;
+    return std::abs(x) <= half && std::abs(0.5 * x + s * y) <= half &&
+           std::abs(-0.5 * x + s * y) <= half;
 }
 
 std::vector<Eigen::Vector2d> Lattice::cell_corners() const {

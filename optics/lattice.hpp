@@ -83,6 +83,8 @@ private:
     double pitch_y_;
     int count_x_;
     int count_y_;
+    double inverse_pitch_x_;  // multiplications instead of divisions in cell_at()
+    double inverse_pitch_y_;
     Eigen::Vector2d origin_;  // centre of cell (0, 0)
 };
 

@@ -94,6 +94,7 @@ struct PreparedSurface {
     double z = 0.0;
     double semi_diameter2 = -1.0;  // < 0: no circular aperture
     const Lattice* lattice = nullptr;
+    bool refracts = true;  // false for bookkeeping planes (same medium on both sides)
 };
 
 std::vector<PreparedSurface> prepare(const SequentialSystem& system, std::size_t first,
@@ -106,6 +107,8 @@ std::vector<PreparedSurface> prepare(const SequentialSystem& system, std::size_t
         p.refraction = refraction(curvature_of(surface.profile), system.index_in_front(s),
                                   surface.index_after);
         p.z = surface.z;
+        p.refracts = p.refraction.c != 0.0 || p.refraction.d != 1.0;
+        RFD_DCHECK(p.refraction.a == 1.0 && p.refraction.b == 0.0);
         if (const auto* circle = std::get_if<CircularAperture>(&surface.aperture)) {
             const double limit = circle->semi_diameter * (1.0 + kApertureTolerance);
             p.semi_diameter2 = limit * limit;
@@ -120,6 +123,7 @@ std::vector<PreparedSurface> prepare(const SequentialSystem& system, std::size_t
 ParaxialResult trace_prepared(const std::vector<PreparedSurface>& surfaces, std::size_t first,
                               ParaxialRay ray, double z) {
     ParaxialResult result;
+    Eigen::Vector2d centre = Eigen::Vector2d::Zero();
     for (std::size_t k = 0; k < surfaces.size(); ++k) {
         const PreparedSurface& surface = surfaces[k];
         result.surface = static_cast<int>(first + k);
@@ -127,7 +131,6 @@ ParaxialResult trace_prepared(const std::vector<PreparedSurface>& surfaces, std:
         ray.x += distance * ray.tx;
         ray.y += distance * ray.ty;
         z = surface.z;
-        double cx = 0.0, cy = 0.0;
         if (surface.lattice) {
             const Eigen::Vector2d point(ray.x, ray.y);
             if (!result.has_cell) {
@@ -138,24 +141,27 @@ ParaxialResult trace_prepared(const std::vector<PreparedSurface>& surfaces, std:
                     result.ray = ray;
                     return result;
                 }
+                centre = surface.lattice->center(result.cell);
             } else if (!surface.lattice->cell_contains(result.cell, point)) {
                 result.status = RayStatus::CrossedCell;
                 result.ray = ray;
                 return result;
             }
-            const Eigen::Vector2d centre = surface.lattice->center(result.cell);
-            cx = centre.x();
-            cy = centre.y();
         } else if (surface.semi_diameter2 >= 0.0 &&
                    ray.x * ray.x + ray.y * ray.y > surface.semi_diameter2) {
             result.status = RayStatus::Vignetted;
             result.ray = ray;
             return result;
         }
-        // The refraction of a lenslet whose axis is at (cx, cy), in augmented form.
-        const auto in_x = decentred(surface.refraction, cx).apply(ray.x, ray.tx);
-        const auto in_y = decentred(surface.refraction, cy).apply(ray.y, ray.ty);
-        ray = {in_x[0], in_y[0], in_x[1], in_y[1]};
+        // Refraction of a lenslet whose axis is at height h (h = 0 for centred surfaces),
+        // the augmented matrix with A = 1, B = 0:  u' = C (y - h) + D u.
+        // Arrayed surfaces share one lattice, so the entry lenslet's centre serves them all.
+        if (surface.refracts) {
+            const double hx = surface.lattice ? centre.x() : 0.0;
+            const double hy = surface.lattice ? centre.y() : 0.0;
+            ray.tx = surface.refraction.c * (ray.x - hx) + surface.refraction.d * ray.tx;
+            ray.ty = surface.refraction.c * (ray.y - hy) + surface.refraction.d * ray.ty;
+        }
     }
     result.ray = ray;
     result.status = RayStatus::Ok;
