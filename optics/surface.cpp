@@ -56,8 +56,11 @@ std::optional<double> intersect(const Profile& profile, const Eigen::Vector3d& o
     if (s != 0.0) roots[0] = q / s;
     if (a != 0.0) roots[1] = s / a;
     if (roots[0] > roots[1]) std::swap(roots[0], roots[1]);
+    // A ray that starts on the surface has a root at t = 0 that rounding turns into
+    // +-1e-17: never return a hit closer than kSelfIntersection.
+    const double t_first = std::max(t_min, kSelfIntersection);
     for (double t : roots) {
-        if (!(t > t_min) || !std::isfinite(t)) continue;
+        if (!(t > t_first) || !std::isfinite(t)) continue;
         // Keep only the vertex branch: there, (1+k) c z <= 1 (the far sheet of a sphere
         // or ellipsoid and the second sheet of a hyperboloid lie beyond).
         const double z = o.z() + t * d.z();

@@ -75,9 +75,15 @@ std::optional<double> sag(const Profile& profile, double r2);
 /// Outward unit normal (pointing toward +z at the vertex) at local point p on the profile.
 Eigen::Vector3d normal_at(const Profile& profile, const Eigen::Vector3d& local_point);
 
+/// Curved surfaces never report a hit closer than this (mm) along the ray: a ray that
+/// starts on a surface must not meet it again at its own starting point.
+inline constexpr double kSelfIntersection = 1e-9;
+
 /// Distance t along a ray (origin o, unit direction d, both in the vertex frame) to the
-/// first intersection with the vertex branch of the profile with t > t_min, computed with
-/// the cancellation-free form of the quadratic root. nullopt when the ray misses.
+/// first intersection with the vertex branch of the profile with t > t_min (and, for a
+/// conic, t > kSelfIntersection), computed with the cancellation-free form of the
+/// quadratic root. nullopt when the ray misses. Flats honour a negative t_min, so that a
+/// ray already on a flat in contact with the previous one is not lost.
 std::optional<double> intersect(const Profile& profile, const Eigen::Vector3d& o,
                                 const Eigen::Vector3d& d, double t_min);
 

@@ -32,4 +32,18 @@ void SequentialSystem::validate() const {
     }
 }
 
+SequentialSystem reversed(const SequentialSystem& system) {
+    SequentialSystem back;
+    back.name = system.name + " (reversed)";
+    back.index_before = system.surfaces.empty() ? system.index_before : system.surfaces.back().index_after;
+    for (std::size_t k = system.surfaces.size(); k-- > 0;) {
+        Surface surface = system.surfaces[k];
+        surface.z = -surface.z;
+        if (auto* conic = std::get_if<Conic>(&surface.profile)) conic->curvature = -conic->curvature;
+        surface.index_after = system.index_in_front(k);
+        back.surfaces.push_back(std::move(surface));
+    }
+    return back;
+}
+
 }  // namespace rfd::optics

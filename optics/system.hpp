@@ -30,4 +30,10 @@ struct SequentialSystem {
     void validate() const;
 };
 
+/// The same system traversed backwards: z -> -z (surface order and the media reversed),
+/// every curvature's sign flipped, apertures kept. A ray leaving the original system and
+/// sent back (z and direction negated) retraces its path through the reversed system.
+/// The reversed system's medium in front is the original's last medium.
+SequentialSystem reversed(const SequentialSystem& system);
+
 }  // namespace rfd::optics
