@@ -65,6 +65,8 @@ nlohmann::json to_json(const optics::DesignSummary& s) {
             {"field_of_view_deg", s.field_of_view_deg},
             {"efficiency_on_axis", s.efficiency_on_axis},
             {"efficiency_at_half_fov", s.efficiency_at_half_fov},
+            {"efficiency_with_fresnel_on_axis", s.efficiency_fresnel_on_axis},
+            {"efficiency_with_fresnel_at_half_fov", s.efficiency_fresnel_at_half_fov},
             {"losses", losses_json(s)},
             {"spot_rms_on_axis_um", s.spot_rms_on_axis_um},
             {"spot_rms_at_half_fov_um", s.spot_rms_at_half_fov_um},
@@ -108,7 +110,9 @@ std::string summary_text(const optics::DesignSummary& s, bool observer_variant) 
     add("  field of view             %.2f deg (full cone, exact)\n", s.field_of_view_deg);
     add("  light efficiency          %.1f %% on axis, %.1f %% at half the field of view\n",
         100 * s.efficiency_on_axis, 100 * s.efficiency_at_half_fov);
-    add("                            (rays reaching the last surface; Fresnel losses not included)\n");
+    add("                            (rays reaching the last surface of the optics)\n");
+    add("    with Fresnel reflections  %.1f %% on axis, %.1f %% at half the field of view (uncoated)\n",
+        100 * s.efficiency_fresnel_on_axis, 100 * s.efficiency_fresnel_at_half_fov);
     for (const auto& loss : s.losses)
         add("    at %5.2f deg: %5.1f %% lost at '%s' (%s)\n", loss.angle_deg, 100 * loss.fraction,
             loss.surface.c_str(), std::string(optics::to_string(loss.status)).c_str());

@@ -166,6 +166,7 @@ DesignOptics::BundleReport DesignOptics::trace_bundle(const Eigen::Vector3d& dir
             const TraceResult full = trace(system_, ray, 0, last);
             if (full.status == RayStatus::Ok) {
                 ++report.arrived;
+                report.transmitted += full.transmittance;
             } else {
                 ++report.lost_per_surface[static_cast<std::size_t>(full.surface)]
                                          [static_cast<std::size_t>(full.status)];
@@ -366,6 +367,8 @@ DesignSummary summarise(const DesignOptics& optics) {
         incident_direction(degrees_to_radians(0.5 * min_wrap), 0), cell, 41);
     s.efficiency_on_axis = on_axis.rays ? double(on_axis.arrived) / double(on_axis.rays) : 0.0;
     s.efficiency_at_half_fov = half_fov.rays ? double(half_fov.arrived) / double(half_fov.rays) : 0.0;
+    s.efficiency_fresnel_on_axis = on_axis.rays ? on_axis.transmitted / double(on_axis.rays) : 0.0;
+    s.efficiency_fresnel_at_half_fov = half_fov.rays ? half_fov.transmitted / double(half_fov.rays) : 0.0;
     for (const auto& [angle, report] : {std::pair{0.0, &on_axis}, std::pair{0.5 * min_wrap, &half_fov}}) {
         for (std::size_t k = 0; k < report->lost_per_surface.size(); ++k)
             for (int status = 1; status < kRayStatusCount; ++status) {

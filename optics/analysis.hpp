@@ -78,6 +78,7 @@ public:
         std::size_t rays = 0;
         std::size_t arrived = 0;
         std::size_t crossed = 0;  ///< landed under a neighbouring lenslet (wrap-over)
+        double transmitted = 0.0; ///< sum of Fresnel transmittances of the rays that arrived
         std::vector<std::array<std::size_t, kRayStatusCount>> lost_per_surface;
         double rms_spot_radius = 0.0;  ///< mm, on the encoding plane, rays that got there
     };
@@ -142,6 +143,8 @@ struct DesignSummary {
     double field_of_view_deg = 0;      ///< full cone where no direction wraps (exact, min)
     double efficiency_on_axis = 0;     ///< fraction of light on the entry aperture arriving
     double efficiency_at_half_fov = 0;
+    double efficiency_fresnel_on_axis = 0;      ///< the same with Fresnel reflection losses
+    double efficiency_fresnel_at_half_fov = 0;
     /// Where the rays of a full bundle are lost, on axis and at half the field of view:
     /// (angle in degrees, surface label, status, fraction of the bundle).
     struct Loss {

@@ -148,13 +148,16 @@ TraceResult trace(const SequentialSystem& system, const Ray& ray, std::size_t fi
         }
         const double n_before = system.index_in_front(s);
         if (n_before != surface.index_after) {
-            const auto refracted = refract(result.ray.direction,
-                                           normal_at(surface.profile, hit->local),
-                                           n_before / surface.index_after);
+            const Eigen::Vector3d normal = normal_at(surface.profile, hit->local);
+            const auto refracted =
+                refract(result.ray.direction, normal, n_before / surface.index_after);
             if (!refracted) {
                 result.status = RayStatus::TotalInternalReflection;
                 return result;
             }
+            result.transmittance *= fresnel_transmittance(
+                std::abs(normal.dot(result.ray.direction)), std::abs(normal.dot(*refracted)),
+                n_before, surface.index_after);
             result.ray.direction = *refracted;
         }
         t_min = kMinTravel;

@@ -36,6 +36,9 @@ struct TraceResult {
     int surface = -1;               ///< surface where the ray stopped (or the last one)
     CellIndex cell{};               ///< lenslet entered at the first arrayed surface
     bool has_cell = false;          ///< false until the ray meets an arrayed surface
+    /// Fraction of the ray's power left after the Fresnel reflections at every refracting
+    /// surface it crossed (unpolarised light, no absorption, no coatings).
+    double transmittance = 1.0;
 };
 
 /// Traces one ray through surfaces [first, last] (inclusive) of the system.

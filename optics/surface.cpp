@@ -85,4 +85,10 @@ std::optional<Eigen::Vector3d> refract(const Eigen::Vector3d& d, const Eigen::Ve
     return t.normalized();
 }
 
+double fresnel_transmittance(double cos_i, double cos_t, double n1, double n2) {
+    const double rs = (n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t);
+    const double rp = (n2 * cos_i - n1 * cos_t) / (n2 * cos_i + n1 * cos_t);
+    return 1.0 - 0.5 * (rs * rs + rp * rp);
+}
+
 }  // namespace rfd::optics

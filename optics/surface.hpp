@@ -93,4 +93,9 @@ std::optional<double> intersect(const Profile& profile, const Eigen::Vector3d& o
 std::optional<Eigen::Vector3d> refract(const Eigen::Vector3d& d, const Eigen::Vector3d& n,
                                        double eta);
 
+/// Power transmittance of an uncoated interface for unpolarised light (the mean of the
+/// s and p Fresnel transmittances), from the cosines of the angles of incidence and
+/// refraction. At normal incidence 1 - ((n1 - n2) / (n1 + n2))^2, 0.958 for glass in air.
+double fresnel_transmittance(double cos_i, double cos_t, double n1, double n2);
+
 }  // namespace rfd::optics

@@ -327,3 +327,25 @@ TEST(Exact, SpotReportOfAPlanoConvexLens) {
 
 }  // namespace
 }  // namespace rfd::optics
+
+namespace rfd::optics {
+namespace {
+
+TEST(Exact, FresnelTransmittanceOfAGlassSlab) {
+    // Normal incidence: T = 1 - ((n-1)/(n+1))^2 per face, two faces.
+    SequentialSystem slab;
+    slab.surfaces.push_back({Flat{}, Unbounded{}, 0.0, 1.5, "in"});
+    slab.surfaces.push_back({Flat{}, Unbounded{}, 3.0, 1.0, "out"});
+    const double face = 1.0 - 0.04;
+    EXPECT_NEAR(trace(slab, Ray{{0, 0, -1}, {0, 0, 1}}).transmittance, face * face, 1e-12);
+    // At Brewster's angle (atan 1.5) the p wave passes whole: T = 1 - Rs/2.
+    const double brewster = std::atan(1.5);
+    const double ci = std::cos(brewster), ct = std::sin(brewster);  // theta_t = 90 deg - theta_b
+    const double rs = (ci - 1.5 * ct) / (ci + 1.5 * ct);
+    EXPECT_NEAR(fresnel_transmittance(ci, ct, 1.0, 1.5), 1.0 - 0.5 * rs * rs, 1e-12);
+    // Energy is the same both ways through an interface (reciprocity).
+    EXPECT_NEAR(fresnel_transmittance(ci, ct, 1.0, 1.5), fresnel_transmittance(ct, ci, 1.5, 1.0), 1e-12);
+}
+
+}  // namespace
+}  // namespace rfd::optics
