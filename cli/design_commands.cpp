@@ -168,6 +168,7 @@ void add_chart_command(CLI::App& optics_cmd, const GlobalOptions&) {
         int steps = 120;
         double max_angle = 0.0;
         std::size_t timing_rays = 400000;
+        bool no_timing = false;
         bool json = false;
     };
     auto opt = std::make_shared<Options>();
@@ -179,6 +180,8 @@ void add_chart_command(CLI::App& optics_cmd, const GlobalOptions&) {
         ->check(CLI::Range(0.0, 89.0));
     cmd->add_option("--timing-rays", opt->timing_rays, "Rays per model for the rays/s figure")
         ->check(CLI::Range(1000, 100000000));
+    cmd->add_flag("--no-timing", opt->no_timing,
+                  "Skip the rays/s measurement (outputs are then byte-identical run to run)");
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
     cmd->callback([opt] {
         const auto design = optics::load_design(opt->file);
@@ -198,24 +201,31 @@ void add_chart_command(CLI::App& optics_cmd, const GlobalOptions&) {
             wrap = std::min(wrap, optics::wrap_over_angle(optics, sweep.phi, optics::Model::Exact).value_or(60.0));
         const double max_angle = opt->max_angle > 0 ? opt->max_angle : std::min(89.0, 1.25 * wrap);
 
-        const double paraxial_rate = optics::measure_rays_per_second(
+        // Rays per second are a measurement of this machine, the only part of the output
+        // that changes from run to run; --no-timing leaves them out.
+        const double paraxial_rate = opt->no_timing ? std::nan("") : optics::measure_rays_per_second(
             optics, optics::Model::Paraxial, opt->timing_rays, 0.8 * wrap);
-        const double exact_rate = optics::measure_rays_per_second(
+        const double exact_rate = opt->no_timing ? std::nan("") : optics::measure_rays_per_second(
             optics, optics::Model::Exact, opt->timing_rays, 0.8 * wrap);
+        auto rate_json = [](double rate) { return std::isfinite(rate) ? nlohmann::json(rate) : nlohmann::json(); };
 
         nlohmann::json summary = {{"design", design.name},
-                                  {"paraxial_rays_per_second", paraxial_rate},
-                                  {"exact_rays_per_second", exact_rate},
-                                  {"exact_over_paraxial_time", paraxial_rate / exact_rate},
+                                  {"paraxial_rays_per_second", rate_json(paraxial_rate)},
+                                  {"exact_rays_per_second", rate_json(exact_rate)},
+                                  {"exact_over_paraxial_time", rate_json(paraxial_rate / exact_rate)},
                                   {"sweeps", nlohmann::json::array()}};
         const std::filesystem::path dir(opt->out);
         for (const auto& sweep : sweeps) {
             const auto chart = optics::accuracy_chart(optics, sweep.phi, sweep.name, max_angle, opt->steps);
             LineChart plot;
             char title[400];
-            std::snprintf(title, sizeof title,
-                          "%s\nparaxial against exact along the %s; paraxial %.3g rays/s, exact %.3g rays/s",
-                          design.name.c_str(), sweep.name.c_str(), paraxial_rate, exact_rate);
+            if (opt->no_timing)
+                std::snprintf(title, sizeof title, "%s\nparaxial against exact along the %s",
+                              design.name.c_str(), sweep.name.c_str());
+            else
+                std::snprintf(title, sizeof title,
+                              "%s\nparaxial against exact along the %s; paraxial %.3g rays/s, exact %.3g rays/s",
+                              design.name.c_str(), sweep.name.c_str(), paraxial_rate, exact_rate);
             plot.title = title;
             plot.x_label = "incident angle (degrees)";
             plot.y_label = "paraxial error on the encoding plane (print pixels)";
@@ -247,8 +257,9 @@ void add_chart_command(CLI::App& optics_cmd, const GlobalOptions&) {
             return;
         }
         std::printf("%s\n", design.name.c_str());
-        std::printf("  paraxial: %.3g rays/s, exact: %.3g rays/s (exact takes %.1fx as long)\n",
-                    paraxial_rate, exact_rate, paraxial_rate / exact_rate);
+        if (!opt->no_timing)
+            std::printf("  paraxial: %.3g rays/s, exact: %.3g rays/s (exact takes %.1fx as long)\n",
+                        paraxial_rate, exact_rate, paraxial_rate / exact_rate);
         for (const auto& sweep : summary["sweeps"]) {
             const auto& angle = sweep["half_pixel_error_angle_deg"];
             if (angle.is_null())
