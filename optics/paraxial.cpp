@@ -88,79 +88,91 @@ std::optional<Conjugate> conjugate(const CardinalPoints& points, double object_d
 
 namespace {
 
-// Per-surface data prepared once for a run of paraxial traces.
-struct PreparedSurface {
-    RayMatrix refraction;
-    double z = 0.0;
+// A run of paraxial traces is prepared once: surfaces that test nothing (no aperture, no
+// lattice) are folded, with the transfers around them, into the transfer matrix of the
+// next surface that does. They are centred (only arrayed surfaces are decentred), so the
+// folding is exact; a ray then costs one 2x2 product and one test per checking surface.
+struct Stage {
+    RayMatrix transfer;            // from the previous stage's plane to this surface's
+    RayMatrix refraction;          // this surface's, applied about the lenslet axis
     double semi_diameter2 = -1.0;  // < 0: no circular aperture
     const Lattice* lattice = nullptr;
-    bool refracts = true;  // false for bookkeeping planes (same medium on both sides)
+    int surface = 0;               // index in the system, for the result
+    bool refracts = true;          // false for bookkeeping planes (same medium both sides)
 };
 
-std::vector<PreparedSurface> prepare(const SequentialSystem& system, std::size_t first,
-                                     std::size_t last) {
+std::vector<Stage> prepare(const SequentialSystem& system, double z_start, std::size_t first,
+                           std::size_t last) {
     RFD_CHECK(first <= last && last < system.surfaces.size());
-    std::vector<PreparedSurface> prepared;
+    std::vector<Stage> stages;
+    RayMatrix pending = translation(system.surfaces[first].z - z_start);
     for (std::size_t s = first; s <= last; ++s) {
         const Surface& surface = system.surfaces[s];
-        PreparedSurface p;
-        p.refraction = refraction(curvature_of(surface.profile), system.index_in_front(s),
-                                  surface.index_after);
-        p.z = surface.z;
-        p.refracts = p.refraction.c != 0.0 || p.refraction.d != 1.0;
-        RFD_DCHECK(p.refraction.a == 1.0 && p.refraction.b == 0.0);
+        Stage stage;
+        stage.refraction = refraction(curvature_of(surface.profile), system.index_in_front(s),
+                                      surface.index_after);
+        RFD_DCHECK(stage.refraction.a == 1.0 && stage.refraction.b == 0.0);
         if (const auto* circle = std::get_if<CircularAperture>(&surface.aperture)) {
             const double limit = circle->semi_diameter * (1.0 + kApertureTolerance);
-            p.semi_diameter2 = limit * limit;
+            stage.semi_diameter2 = limit * limit;
         }
         if (const auto* arrayed = std::get_if<LatticeAperture>(&surface.aperture))
-            p.lattice = &arrayed->lattice;
-        prepared.push_back(p);
+            stage.lattice = &arrayed->lattice;
+        const bool tests = stage.lattice || stage.semi_diameter2 >= 0.0;
+        const double to_next = s < last ? system.surfaces[s + 1].z - surface.z : 0.0;
+        if (!tests && s < last) {
+            pending = translation(to_next) * stage.refraction * pending;
+            continue;
+        }
+        stage.transfer = pending;
+        stage.surface = static_cast<int>(s);
+        stage.refracts = stage.refraction.c != 0.0 || stage.refraction.d != 1.0;
+        stages.push_back(stage);
+        pending = translation(to_next);
     }
-    return prepared;
+    return stages;
 }
 
-ParaxialResult trace_prepared(const std::vector<PreparedSurface>& surfaces, std::size_t first,
-                              ParaxialRay ray, double z) {
+ParaxialResult trace_prepared(const std::vector<Stage>& stages, ParaxialRay ray) {
     ParaxialResult result;
-    Eigen::Vector2d centre = Eigen::Vector2d::Zero();
-    for (std::size_t k = 0; k < surfaces.size(); ++k) {
-        const PreparedSurface& surface = surfaces[k];
-        result.surface = static_cast<int>(first + k);
-        const double distance = surface.z - z;
-        ray.x += distance * ray.tx;
-        ray.y += distance * ray.ty;
-        z = surface.z;
-        if (surface.lattice) {
+    double hx = 0.0, hy = 0.0;  // axis of the lenslet entered (0 for centred surfaces)
+    for (const Stage& stage : stages) {
+        result.surface = stage.surface;
+        const RayMatrix& m = stage.transfer;
+        ray = {m.a * ray.x + m.b * ray.tx, m.a * ray.y + m.b * ray.ty,
+               m.c * ray.x + m.d * ray.tx, m.c * ray.y + m.d * ray.ty};
+        if (stage.lattice) {
             const Eigen::Vector2d point(ray.x, ray.y);
             if (!result.has_cell) {
-                result.cell = surface.lattice->cell_at(point);
+                result.cell = stage.lattice->cell_at(point);
                 result.has_cell = true;
-                if (!surface.lattice->contains(result.cell)) {
+                if (!stage.lattice->contains(result.cell)) {
                     result.status = RayStatus::Vignetted;
                     result.ray = ray;
                     return result;
                 }
-                centre = surface.lattice->center(result.cell);
-            } else if (!surface.lattice->cell_contains(result.cell, point)) {
+                const Eigen::Vector2d centre = stage.lattice->center(result.cell);
+                hx = centre.x();
+                hy = centre.y();
+            } else if (!stage.lattice->cell_contains(result.cell, point)) {
                 result.status = RayStatus::CrossedCell;
                 result.ray = ray;
                 return result;
             }
-        } else if (surface.semi_diameter2 >= 0.0 &&
-                   ray.x * ray.x + ray.y * ray.y > surface.semi_diameter2) {
+        } else if (stage.semi_diameter2 >= 0.0 &&
+                   ray.x * ray.x + ray.y * ray.y > stage.semi_diameter2) {
             result.status = RayStatus::Vignetted;
             result.ray = ray;
             return result;
         }
-        // Refraction of a lenslet whose axis is at height h (h = 0 for centred surfaces),
-        // the augmented matrix with A = 1, B = 0:  u' = C (y - h) + D u.
-        // Arrayed surfaces share one lattice, so the entry lenslet's centre serves them all.
-        if (surface.refracts) {
-            const double hx = surface.lattice ? centre.x() : 0.0;
-            const double hy = surface.lattice ? centre.y() : 0.0;
-            ray.tx = surface.refraction.c * (ray.x - hx) + surface.refraction.d * ray.tx;
-            ray.ty = surface.refraction.c * (ray.y - hy) + surface.refraction.d * ray.ty;
+        // Refraction about the lenslet's axis at height h: the augmented matrix with
+        // A = 1, B = 0 gives u' = C (y - h) + D u. Arrayed surfaces share one lattice, so
+        // the entry lenslet's axis serves them all; centred surfaces use h = 0.
+        if (stage.refracts) {
+            const double ax = stage.lattice ? hx : 0.0;
+            const double ay = stage.lattice ? hy : 0.0;
+            ray.tx = stage.refraction.c * (ray.x - ax) + stage.refraction.d * ray.tx;
+            ray.ty = stage.refraction.c * (ray.y - ay) + stage.refraction.d * ray.ty;
         }
     }
     result.ray = ray;
@@ -172,7 +184,7 @@ ParaxialResult trace_prepared(const std::vector<PreparedSurface>& surfaces, std:
 
 ParaxialResult trace_paraxial(const SequentialSystem& system, const ParaxialRay& ray,
                               double z_start, std::size_t first, std::size_t last) {
-    return trace_prepared(prepare(system, first, last), first, ray, z_start);
+    return trace_prepared(prepare(system, z_start, first, last), ray);
 }
 
 void ParaxialBatch::resize(std::size_t n) {
@@ -184,11 +196,11 @@ void ParaxialBatch::resize(std::size_t n) {
 
 void trace_paraxial_batch(const SequentialSystem& system, ParaxialBatch& batch, double z_start,
                           std::size_t first, std::size_t last) {
-    const auto surfaces = prepare(system, first, last);
+    const auto stages = prepare(system, z_start, first, last);
     parallel_for_chunks(batch.size(), 4096, [&](std::size_t begin, std::size_t end) {
         for (std::size_t k = begin; k < end; ++k) {
-            const ParaxialResult r = trace_prepared(
-                surfaces, first, {batch.x[k], batch.y[k], batch.tx[k], batch.ty[k]}, z_start);
+            const ParaxialResult r =
+                trace_prepared(stages, {batch.x[k], batch.y[k], batch.tx[k], batch.ty[k]});
             batch.x[k] = r.ray.x;
             batch.y[k] = r.ray.y;
             batch.tx[k] = r.ray.tx;
