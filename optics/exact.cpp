@@ -96,8 +96,18 @@ std::optional<Hit> hit_arrayed(const Surface& surface, const Lattice& lattice, c
         j_min = std::min(j_min, c.j);
         j_max = std::max(j_max, c.j);
     }
-    for (int j = j_min - 1; j <= j_max + 1; ++j)
-        for (int i = i_min - 1; i <= i_max + 1; ++i) try_cell({i, j}, best);
+    // Only the array's cells and the ring around it can be met: a grazing ray's segment
+    // through the slab can span kilometres of lattice, which must not become a loop over
+    // millions of cells. The ring keeps hits just outside the array (vignetted) exact.
+    const int i_lo = std::max(i_min - 1, -1), i_hi = std::min(i_max + 1, lattice.count_x());
+    const int j_lo = std::max(j_min - 1, -1), j_hi = std::min(j_max + 1, lattice.count_y());
+    for (int j = j_lo; j <= j_hi; ++j)
+        for (int i = i_lo; i <= i_hi; ++i) try_cell({i, j}, best);
+    if (!best && (i_lo != i_min - 1 || i_hi != i_max + 1 || j_lo != j_min - 1 || j_hi != j_max + 1)) {
+        // The ray crosses the array's slab outside the array: it meets the sheet beyond the
+        // lenslets, which the aperture test reports as vignetted.
+        best = Hit{t_a, o + t_a * d - Eigen::Vector3d(0, 0, surface.z), c_a};
+    }
     return best;
 }
 

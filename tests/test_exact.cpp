@@ -349,3 +349,25 @@ TEST(Exact, FresnelTransmittanceOfAGlassSlab) {
 
 }  // namespace
 }  // namespace rfd::optics
+
+namespace rfd::optics {
+namespace {
+
+TEST(Exact, GrazingRaysOnALensletArrayEndQuickly) {
+    // Near 90 degrees the ray's path through the slab of caps spans an enormous stretch
+    // of lattice; the trace must stay bounded by the array and give a status.
+    const Lattice lattice = Lattice::hexagonal(2.358, 9, 9);
+    SequentialSystem s;
+    s.surfaces.push_back({Conic{1 / 1.4751}, LatticeAperture{lattice}, 0.0, 1.4917, "A front"});
+    s.surfaces.push_back({Flat{}, Unbounded{}, 2.0, 1.0, "A back"});
+    for (double degrees : {85.0, 89.0, 89.9, 89.99, 89.999, 89.9999}) {
+        const double th = degrees * 3.14159265358979 / 180.0, ph = 3.14159265358979 / 4;
+        const Eigen::Vector3d d(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
+        const TraceResult r = trace(s, Ray{Eigen::Vector3d(0, 0, 0.1) - d * (0.2 / d.z()), d});
+        EXPECT_TRUE(r.ray.origin.allFinite()) << degrees;
+        EXPECT_NE(r.status, RayStatus::CrossedCell) << degrees;
+    }
+}
+
+}  // namespace
+}  // namespace rfd::optics
