@@ -9,7 +9,6 @@ namespace rfd::optics {
 namespace {
 constexpr double kSqrt3 = 1.7320508075688772;
 
-int floor_mod2(int j) { return j & 1; }  // two's complement: -1 & 1 == 1, as floor mod 2
 
 // floor() to int without the libm call the default x86-64 target makes of std::floor;
 // this runs once or more per ray. Valid for |v| < 2^31.
@@ -47,17 +46,11 @@ Lattice::Lattice(LatticeKind kind, double pitch_x, double pitch_y, int count_x, 
                               -0.5 * (count_y_ - 1) * pitch_y_);
 }
 
-double Lattice::row_shift(int j) const {
-    return kind_ == LatticeKind::Hexagonal && floor_mod2(j) == 1 ? 0.5 * pitch_x_ : 0.0;
-}
 
 double Lattice::cell_area() const { return pitch_x_ * pitch_y_; }
 
 double Lattice::density_per_mm2() const { return 1.0 / cell_area(); }
 
-Eigen::Vector2d Lattice::center(CellIndex cell) const {
-    return {origin_.x() + cell.i * pitch_x_ + row_shift(cell.j), origin_.y() + cell.j * pitch_y_};
-}
 
 CellIndex Lattice::cell_at(const Eigen::Vector2d& point) const {
     // Plain scalars: this runs for every ray at every array, and Eigen's 2-vector packets
@@ -85,17 +78,6 @@ CellIndex Lattice::cell_at(const Eigen::Vector2d& point) const {
     return {second ? i1 : i0, second ? j1 : j0};
 }
 
-bool Lattice::cell_contains(CellIndex cell, const Eigen::Vector2d& point) const {
-    const double x = point.x() - (origin_.x() + cell.i * pitch_x_ + row_shift(cell.j));
-    const double y = point.y() - (origin_.y() + cell.j * pitch_y_);
-    const double half = 0.5 * pitch_x_;
-    if (kind_ == LatticeKind::Rectangular)
-        return std::abs(x) <= half && std::abs(y) <= 0.5 * pitch_y_;
-    // Face normals of the hexagon at 0, 60 and 120 degrees.
-    const double s = 0.5 * kSqrt3;
-    return std::abs(x) <= half && std::abs(0.5 * x + s * y) <= half &&
-           std::abs(-0.5 * x + s * y) <= half;
-}
 
 std::vector<Eigen::Vector2d> Lattice::cell_corners() const {
     if (kind_ == LatticeKind::Rectangular) {

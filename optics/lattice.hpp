@@ -51,15 +51,28 @@ public:
     /// Area of one cell in square millimetres.
     double cell_area() const;
 
-    /// Centre of cell (i, j); defined for cells outside the array too.
-    Eigen::Vector2d center(CellIndex cell) const;
+    /// Centre of cell (i, j); defined for cells outside the array too. Inline: it runs
+    /// for every ray at every arrayed surface.
+    Eigen::Vector2d center(CellIndex cell) const {
+        return {origin_.x() + cell.i * pitch_x_ + row_shift(cell.j), origin_.y() + cell.j * pitch_y_};
+    }
     /// The cell whose Voronoi region contains `point` (may lie outside the array).
     CellIndex cell_at(const Eigen::Vector2d& point) const;
     bool contains(CellIndex cell) const {
         return cell.i >= 0 && cell.j >= 0 && cell.i < count_x_ && cell.j < count_y_;
     }
     /// True when `point` lies in the (closed) region of `cell`; cheaper than cell_at().
-    bool cell_contains(CellIndex cell, const Eigen::Vector2d& point) const;
+    bool cell_contains(CellIndex cell, const Eigen::Vector2d& point) const {
+        const double x = point.x() - (origin_.x() + cell.i * pitch_x_ + row_shift(cell.j));
+        const double y = point.y() - (origin_.y() + cell.j * pitch_y_);
+        const double half = 0.5 * pitch_x_;
+        const double ax = x < 0 ? -x : x;
+        if (kind_ == LatticeKind::Rectangular) return ax <= half && (y < 0 ? -y : y) <= 0.5 * pitch_y_;
+        // Face normals of the hexagon at 0, 60 and 120 degrees (0.866... = sqrt(3)/2).
+        const double a = 0.5 * x + 0.8660254037844386 * y;
+        const double b = -0.5 * x + 0.8660254037844386 * y;
+        return ax <= half && (a < 0 ? -a : a) <= half && (b < 0 ? -b : b) <= half;
+    }
     /// Corners of a cell relative to its centre, counter-clockwise (4 or 6 of them).
     std::vector<Eigen::Vector2d> cell_corners() const;
     /// Largest distance from a cell's centre to its boundary (the corner distance).
@@ -76,7 +89,11 @@ public:
 
 private:
     Lattice(LatticeKind kind, double pitch_x, double pitch_y, int count_x, int count_y);
-    double row_shift(int j) const;  // x shift of row j (hexagonal odd rows)
+    // x shift of row j: pitch/2 on odd rows of a hexagonal lattice (j & 1 is the floor
+    // modulo 2 for negative rows too, in two's complement).
+    double row_shift(int j) const {
+        return kind_ == LatticeKind::Hexagonal && (j & 1) ? 0.5 * pitch_x_ : 0.0;
+    }
 
     LatticeKind kind_;
     double pitch_x_;
