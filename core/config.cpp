@@ -48,6 +48,37 @@ std::size_t edit_distance(std::string_view a, std::string_view b) {
     return previous[b.size()];
 }
 
+// Keys that differ in one whole word, such as dpi_x and dpi_y, are siblings rather than
+// typos of each other, however short the words.
+bool differ_by_a_whole_word(std::string_view a, std::string_view b) {
+    while (!a.empty() && !b.empty()) {
+        const std::string_view word_a = a.substr(0, a.find('_'));
+        const std::string_view word_b = b.substr(0, b.find('_'));
+        if (word_a != word_b &&
+            edit_distance(word_a, word_b) == std::max(word_a.size(), word_b.size()))
+            return true;
+        a.remove_prefix(std::min(a.size(), word_a.size() + 1));
+        b.remove_prefix(std::min(b.size(), word_b.size() + 1));
+    }
+    return false;
+}
+
+// `found` is a misspelling of `wanted`: a letter or two away, and not a sibling key.
+bool is_typo_of(std::string_view found, std::string_view wanted) {
+    return edit_distance(found, wanted) <= 2 && !differ_by_a_whole_word(found, wanted);
+}
+
+// `found` stands where `wanted` was expected, in another unit (or none).
+bool is_unit_mistake(std::string_view found, std::string_view wanted) {
+    return found != wanted && stem_of(wanted) != wanted && stem_of(found) == stem_of(wanted);
+}
+
+std::string wrong_unit_message(std::string_view wanted, std::string_view found) {
+    return "wrong unit: expected '" + std::string(wanted) + "' in " +
+           std::string(unit_meaning(wanted)) + ", found '" + std::string(found) + "' (" +
+           std::string(unit_meaning(found)) + ")";
+}
+
 std::string format_number(double value) {
     std::ostringstream out;
     out << value;
@@ -148,21 +179,17 @@ void ConfigTable::fail(const std::string& key, const std::string& message) const
 
 void ConfigTable::fail_missing(const std::string& key) const {
     // A key with the same stem but another unit suffix is almost certainly a unit mistake.
-    const std::string_view wanted_stem = stem_of(key);
     for (const auto& [other, node] : *table_) {
         const std::string other_key(other.str());
-        if (other_key != key && stem_of(other_key) == wanted_stem && wanted_stem != key) {
+        if (is_unit_mistake(other_key, key)) {
             read_.insert(other_key);
-            throw InputError(location(other_key),
-                             "wrong unit: expected '" + key + "' in " +
-                                 std::string(unit_meaning(key)) + ", found '" + other_key +
-                                 "' (" + std::string(unit_meaning(other_key)) + ")");
+            throw InputError(location(other_key), wrong_unit_message(key, other_key));
         }
     }
     // An unread key a letter or two away is a typo of this one: point at the typo.
     for (const auto& [other, node] : *table_) {
         const std::string other_key(other.str());
-        if (read_.count(other_key) || edit_distance(other_key, key) > 2) continue;
+        if (read_.count(other_key) || !is_typo_of(other_key, key)) continue;
         throw InputError(location(other_key), "unknown key (did you mean '" + key + "'?)");
     }
     throw InputError(location(), "missing required key '" + full_key(key) + "'");
@@ -326,6 +353,14 @@ std::vector<ConfigTable> ConfigTable::table_array(const std::string& key) {
 void ConfigTable::finish() const {
     for (const auto& key : keys()) {
         if (read_.count(key)) continue;
+        // A key that was asked for and is absent (an optional one) explains most unknown
+        // keys: the same quantity in another unit, or a typo.
+        for (const auto& wanted : read_)
+            if (!find(wanted) && is_unit_mistake(key, wanted))
+                throw InputError(location(key), wrong_unit_message(wanted, key));
+        for (const auto& wanted : read_)
+            if (!find(wanted) && is_typo_of(key, wanted))
+                throw InputError(location(key), "unknown key (did you mean '" + wanted + "'?)");
         throw InputError(location(key), "unknown key");
     }
 }

@@ -55,6 +55,34 @@ std::optional<Hit> hit_arrayed(const Surface& surface, const Lattice& lattice, c
     if (t_a > t_b) std::swap(t_a, t_b);
     if (t_b <= t_min) return std::nullopt;
     t_a = std::max(t_a, t_min);
+    if (!std::isfinite(t_a)) return std::nullopt;
+    // Search only while the ray is over the array or the ring around it (a box a quarter
+    // cell wider than the array, inside the ring): a grazing ray's path through the slab
+    // can span kilometres of lattice, whose cell indices would overflow. A ray in the slab
+    // beyond the box meets the sheet there, outside the array, and is vignetted.
+    const Eigen::Vector2d box = lattice.half_extent() +
+                                0.25 * Eigen::Vector2d(lattice.pitch_x(), lattice.pitch_y());
+    double t_in = t_a, t_out = t_b;
+    for (int axis = 0; axis < 2; ++axis) {
+        if (d[axis] == 0.0) {
+            if (std::abs(o[axis]) > box[axis]) t_in = HUGE_VAL;
+            continue;
+        }
+        const double t0 = (-box[axis] - o[axis]) / d[axis];
+        const double t1 = (box[axis] - o[axis]) / d[axis];
+        t_in = std::max(t_in, std::min(t0, t1));
+        t_out = std::min(t_out, std::max(t0, t1));
+    }
+    auto on_sheet = [&](double t) {  // a hit outside the array, at the box's edge
+        const Eigen::Vector2d p = (o + t * d).head<2>().cwiseMax(-box).cwiseMin(box);
+        const CellIndex cell = lattice.cell_at(p);
+        const Eigen::Vector2d centre = lattice.center(cell);
+        return std::optional<Hit>(
+            Hit{t, o + t * d - Eigen::Vector3d(centre.x(), centre.y(), surface.z), cell});
+    };
+    if (t_in > t_a || t_in > t_out) return on_sheet(t_a);
+    const bool leaves_box = t_out < t_b;
+    t_b = std::min(t_b, t_out);
     const Eigen::Vector2d p_a = (o + t_a * d).head<2>();
     const Eigen::Vector2d p_b = (o + t_b * d).head<2>();
     const CellIndex c_a = lattice.cell_at(p_a);
@@ -82,7 +110,7 @@ std::optional<Hit> hit_arrayed(const Surface& surface, const Lattice& lattice, c
     if (c_a == c_b) {
         // Cells are convex: a segment whose ends lie in one cell stays in it.
         try_cell(c_a, best);
-        return best;
+        return best || !leaves_box ? best : on_sheet(t_out);
     }
     const Eigen::Vector2d lo = p_a.cwiseMin(p_b);
     const Eigen::Vector2d hi = p_a.cwiseMax(p_b);
@@ -103,12 +131,9 @@ std::optional<Hit> hit_arrayed(const Surface& surface, const Lattice& lattice, c
     const int j_lo = std::max(j_min - 1, -1), j_hi = std::min(j_max + 1, lattice.count_y());
     for (int j = j_lo; j <= j_hi; ++j)
         for (int i = i_lo; i <= i_hi; ++i) try_cell({i, j}, best);
-    if (!best && (i_lo != i_min - 1 || i_hi != i_max + 1 || j_lo != j_min - 1 || j_hi != j_max + 1)) {
-        // The ray crosses the array's slab outside the array: it meets the sheet beyond the
-        // lenslets, which the aperture test reports as vignetted.
-        best = Hit{t_a, o + t_a * d - Eigen::Vector3d(0, 0, surface.z), c_a};
-    }
-    return best;
+    // The segment lies in the box, so every cell it crosses was tried. Without a hit, a ray
+    // that leaves the box in the slab meets the sheet beyond the array there.
+    return best || !leaves_box ? best : on_sheet(t_out);
 }
 
 bool inside_aperture(const Aperture& aperture, const Hit& hit, const Lattice* lattice) {

@@ -1,5 +1,6 @@
 #include "optics/lattice.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -11,8 +12,11 @@ constexpr double kSqrt3 = 1.7320508075688772;
 
 
 // floor() to int without the libm call the default x86-64 target makes of std::floor;
-// this runs once or more per ray. Valid for |v| < 2^31.
+// this runs once or more per ray. Beyond 2^30 cells (and for NaN) v is clamped: such a
+// point is far outside any array, and converting it unclamped would overflow the int.
 inline int floor_to_int(double v) {
+    // A well-predicted branch: real rays never take it (NaN goes to -2^30).
+    if (!(v > -0x1p30 && v < 0x1p30)) [[unlikely]] v = v > 0.0 ? 0x1p30 : -0x1p30;
     const int truncated = static_cast<int>(v);
     return truncated - (v < static_cast<double>(truncated) ? 1 : 0);
 }
@@ -118,9 +122,13 @@ double Lattice::boundary_distance(const Eigen::Vector2d& dir) const {
 Eigen::Vector2d Lattice::half_extent() const {
     if (kind_ == LatticeKind::Rectangular)
         return {0.5 * count_x_ * pitch_x_, 0.5 * count_y_ * pitch_y_};
-    const double extra_x = count_y_ > 1 ? 0.25 * pitch_x_ : 0.0;
-    return {0.5 * count_x_ * pitch_x_ + extra_x,
-            0.5 * (count_y_ - 1) * pitch_y_ + circumradius()};
+    // Odd rows reach pitch/2 further right; centring the mean shifts the array left by
+    // pitch/4 only for an even number of rows, so with an odd number (> 1) the right
+    // side is the wider one.
+    const double left = -origin_.x() + 0.5 * pitch_x_;
+    const double right = origin_.x() + (count_x_ - 1) * pitch_x_ + row_shift(count_y_ > 1 ? 1 : 0) +
+                         0.5 * pitch_x_;
+    return {std::max(left, right), 0.5 * (count_y_ - 1) * pitch_y_ + circumradius()};
 }
 
 }  // namespace rfd::optics

@@ -10,8 +10,10 @@
 // +-x (inradius pitch/2 along x, the "flat" direction) and corners at +-y (circumradius
 // pitch/sqrt(3), the "corner" direction). Cell area pitch^2*sqrt(3)/2.
 //
-// Which cell a point belongs to is decided by the nearest centre (the Voronoi cell), so the
-// answer for points on a shared edge is the lower-indexed candidate, deterministically.
+// Which cell a point belongs to is decided by the nearest centre (the Voronoi cell). A point
+// on a shared edge goes to one of its cells deterministically: within a row to the higher
+// column (x/pitch rounds half up), between the rows of a hexagonal lattice to the lower
+// row, between the rows of a rectangular lattice to the higher row.
 // Centres are always computed from the floating-point lattice, never by accumulation.
 //
 // Example: Lattice::hexagonal(2.358, 40, 40).cell_at({0.3, -1.2})
@@ -79,7 +81,8 @@ public:
     double circumradius() const;
     /// Distance from the centre to the cell boundary along the unit direction `dir`.
     double boundary_distance(const Eigen::Vector2d& dir) const;
-    /// Half-extent of the whole array (outer cell boundaries) along x and y.
+    /// Half-extent of the whole array (outer cell boundaries) along x and y: the wider
+    /// side, as a hexagonal array with an odd number of rows reaches further to +x.
     Eigen::Vector2d half_extent() const;
     /// Linear index (j * count_x + i) of a cell inside the array.
     std::size_t linear_index(CellIndex cell) const {

@@ -1,5 +1,7 @@
 #include "optics/lens_file.hpp"
 
+#include <cmath>
+
 #include "optics/materials.hpp"
 
 namespace rfd::optics {
@@ -53,14 +55,26 @@ SequentialSystem build(ConfigTable& root) {
         const auto* ca = std::get_if<CircularAperture>(&a.aperture);
         const auto* cb = std::get_if<CircularAperture>(&b.aperture);
         if (!ca || !cb) continue;
-        const double r = std::min(ca->semi_diameter, cb->semi_diameter);
-        const double gap = (b.z + sag(b.profile, r * r).value_or(0.0)) -
-                           (a.z + sag(a.profile, r * r).value_or(0.0));
+        // Sampled across the aperture, not only at the rim: two conics can cross inside it
+        // and part again before the rim (a strong asphere close to a sphere).
+        const double semi = std::min(ca->semi_diameter, cb->semi_diameter);
+        double gap = HUGE_VAL, at = 0.0;
+        constexpr int kSamples = 256;
+        for (int k = 1; k <= kSamples; ++k) {
+            const double r = semi * k / kSamples;
+            const double g = (b.z + sag(b.profile, r * r).value_or(0.0)) -
+                             (a.z + sag(a.profile, r * r).value_or(0.0));
+            if (g < gap) {
+                gap = g;
+                at = r;
+            }
+        }
         if (gap < -1e-9)
             tables[std::min(s - 1, tables.size() - 1)].fail(
                 "thickness_mm", "surfaces " + a.label + " and " + b.label +
-                                    " intersect inside the aperture (edge gap " +
-                                    std::to_string(gap) + " mm)");
+                                    " intersect inside the aperture (gap " +
+                                    std::to_string(gap) + " mm at radius " +
+                                    std::to_string(at) + " mm)");
     }
     root.finish();
     system.validate();

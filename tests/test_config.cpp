@@ -77,3 +77,141 @@ TEST(LensFile, MalformedSurfacesAreNamed) {
 
 }  // namespace
 }  // namespace rfd
+
+namespace rfd {
+namespace {
+
+using ::testing::Not;
+
+// The message of an exception of the given type, or a text no assertion expects.
+template <typename Exception>
+std::string message_if(const std::function<void()>& action) {
+    try {
+        action();
+    } catch (const Exception& error) {
+        return error.what();
+    }
+    return "no exception of the expected type";
+}
+
+TEST(Config, UnknownKeyNamesFileLineAndDottedKey) {
+    auto doc = ConfigTable::parse_string(
+        "name = \"d\"\n[lattice]\npitch_mm = 2.358\ncount = [40, 40]\nshape = \"hex\"\n", "design.toml");
+    doc.string("name");
+    auto lattice = doc.table("lattice");
+    lattice.positive("pitch_mm");
+    lattice.integer_pair("count", 1, 1000);
+    doc.finish();  // the root read everything it has
+    const std::string message = message_if<InputError>([&] { lattice.finish(); });
+    EXPECT_THAT(message, HasSubstr("design.toml:5:"));
+    EXPECT_THAT(message, HasSubstr("lattice.shape: unknown key"));
+    // An unknown table at the root is an unknown key of the root.
+    auto other = ConfigTable::parse_string("a = 1\n\n[extra]\nb = 2\n", "x.toml");
+    other.integer("a", 0, 9);
+    EXPECT_THAT(message_if<InputError>([&] { other.finish(); }), HasSubstr("x.toml:3:"));
+    EXPECT_THAT(message_if<InputError>([&] { other.finish(); }), HasSubstr("extra: unknown key"));
+}
+
+TEST(Config, MissingKeyNamesTheTable) {
+    auto doc = ConfigTable::parse_string("[printer]\nname = \"p\"\n", "design.toml");
+    auto printer = doc.table("printer");
+    const std::string message = message_if<InputError>([&] { printer.number("dpi_x", 1, 1e5); });
+    EXPECT_THAT(message, HasSubstr("design.toml:1:"));
+    EXPECT_THAT(message, HasSubstr("printer: missing required key 'printer.dpi_x'"));
+    auto nested = ConfigTable::parse_string("[[part]]\nx = 1\n", "n.toml");
+    auto parts = nested.table_array("part");
+    EXPECT_THAT(message_if<InputError>([&] { parts[0].table("optics"); }),
+                HasSubstr("missing required key 'part[0].optics'"));
+    EXPECT_THAT(message_if<InputError>([&] { nested.table("absent"); }),
+                HasSubstr("missing required key 'absent'"));
+}
+
+TEST(Config, ASiblingKeyIsNotCalledATypo) {
+    // dpi_y is a key of its own, read after dpi_x: a missing dpi_x must not be reported as
+    // "dpi_y: unknown key (did you mean 'dpi_x'?)".
+    auto doc = ConfigTable::parse_string("[printer]\ndpi_y = 1440\n", "design.toml");
+    auto printer = doc.table("printer");
+    const std::string message = message_if<InputError>([&] { printer.number("dpi_x", 1, 1e5); });
+    EXPECT_THAT(message, HasSubstr("missing required key 'printer.dpi_x'"));
+    EXPECT_THAT(message, Not(HasSubstr("unknown key")));
+    // A real misspelling one letter away is still pointed at, on its own line.
+    auto typo = ConfigTable::parse_string("[printer]\ndpi_x = 2880\ndpy_y = 1440\n", "design.toml");
+    auto p = typo.table("printer");
+    p.number("dpi_x", 1, 1e5);
+    EXPECT_THAT(message_if<InputError>([&] { p.number("dpi_y", 1, 1e5); }),
+                HasSubstr("design.toml:3:9: printer.dpy_y: unknown key (did you mean 'dpi_y'?)"));
+}
+
+TEST(Config, WrongUnitForRequiredAndOptionalKeys) {
+    auto doc = ConfigTable::parse_string("pitch_cm = 0.2358\nthickness_in = 0.1\n", "d.toml");
+    // Required: reported when the key is asked for.
+    const std::string required = message_if<InputError>([&] { doc.positive("pitch_mm"); });
+    EXPECT_THAT(required, HasSubstr("d.toml:1:12: pitch_cm: wrong unit: expected 'pitch_mm' in millimetres, "
+                                    "found 'pitch_cm' (centimetres)"));
+    // Optional: absent as asked, so finish() reports the key that stood in for it.
+    EXPECT_FALSE(doc.optional_number("thickness_mm", 0, 100).has_value());
+    const std::string optional = message_if<InputError>([&] { doc.finish(); });
+    EXPECT_THAT(optional, HasSubstr("d.toml:2:"));
+    EXPECT_THAT(optional, HasSubstr("wrong unit: expected 'thickness_mm' in millimetres, found "
+                                    "'thickness_in' (inches)"));
+    // A key without a unit where one is expected.
+    auto bare = ConfigTable::parse_string("focal_length = 50\n", "d.toml");
+    EXPECT_THAT(message_if<InputError>([&] { bare.positive("focal_length_mm"); }),
+                HasSubstr("found 'focal_length' (no unit)"));
+    // And a misspelt optional key gets its hint from finish().
+    auto misspelt = ConfigTable::parse_string("conci = -1\n", "d.toml");
+    EXPECT_FALSE(misspelt.optional_number("conic", -1e6, 1e6).has_value());
+    EXPECT_THAT(message_if<InputError>([&] { misspelt.finish(); }),
+                HasSubstr("d.toml:1:9: conci: unknown key (did you mean 'conic'?)"));
+}
+
+TEST(Config, NumbersOutOfRangeOrOfTheWrongKind) {
+    auto doc = ConfigTable::parse_string(
+        "n = 1.5\nbig = 7\nneg = -2\nzero = 0\nnan = nan\ninf = inf\ncount = [3, 0]\nmode = \"fast\"\n"
+        "flag = 1\npair = [1.0, -2.0]\n",
+        "r.toml");
+    EXPECT_THAT(message_if<InputError>([&] { doc.integer("n", 0, 9); }),
+                HasSubstr("r.toml:1:5: n: expected an integer, found a number"));
+    EXPECT_THAT(message_if<InputError>([&] { doc.integer("big", 0, 5); }),
+                HasSubstr("r.toml:2:7: big: value 7 is outside the allowed range [0, 5]"));
+    EXPECT_THAT(message_if<InputError>([&] { doc.number("neg", 0.0, 1.0); }),
+                HasSubstr("value -2 is outside the allowed range [0, 1]"));
+    EXPECT_THAT(message_if<InputError>([&] { doc.positive("zero"); }), HasSubstr("expected a positive number, found 0"));
+    EXPECT_THAT(message_if<InputError>([&] { doc.non_negative("neg"); }), HasSubstr("expected a number >= 0, found -2"));
+    EXPECT_THAT(message_if<InputError>([&] { doc.number("nan", -1e9, 1e9); }), HasSubstr("nan: expected a finite number"));
+    EXPECT_THAT(message_if<InputError>([&] { doc.positive("inf"); }), HasSubstr("inf: expected a finite number"));
+    EXPECT_THAT(message_if<InputError>([&] { doc.integer_pair("count", 1, 10); }),
+                HasSubstr("count: value 0 is outside the allowed range [1, 10]"));
+    EXPECT_THAT(message_if<InputError>([&] { doc.choice("mode", {"exact", "paraxial"}); }),
+                HasSubstr("mode: 'fast' is not one of 'exact', 'paraxial'"));
+    EXPECT_THAT(message_if<InputError>([&] { doc.boolean("flag"); }), HasSubstr("expected true or false, found an integer"));
+    EXPECT_THAT(message_if<InputError>([&] { doc.positive_pair("pair"); }), HasSubstr("expected two positive numbers"));
+    EXPECT_THAT(message_if<InputError>([&] { doc.table("n"); }), HasSubstr("expected a table, found a number"));
+}
+
+TEST(Config, ErrorTypesAndExitCodes) {
+    // Bad content is an InputError (exit code 2), a missing file an IoError (3); both are
+    // rfd::Error, which the CLI's main catches once.
+    EXPECT_THROW(ConfigTable::parse_string("x = [", "s.toml"), InputError);
+    try {
+        ConfigTable::parse_string("a = 1\nb = 2\nc = \"unterminated\n", "s.toml");
+        ADD_FAILURE() << "no syntax error";
+    } catch (const Error& error) {
+        EXPECT_EQ(error.exit_code(), 2);
+        EXPECT_THAT(error.what(), HasSubstr("s.toml:3:"));
+        EXPECT_THAT(error.what(), HasSubstr("TOML syntax error"));
+    }
+    try {
+        ConfigTable::parse_file("/nonexistent/lens.toml");
+        ADD_FAILURE() << "no I/O error";
+    } catch (const Error& error) {
+        EXPECT_EQ(error.exit_code(), 3);
+        EXPECT_THAT(error.what(), HasSubstr("/nonexistent/lens.toml: cannot open"));
+    }
+    // A duplicate key is a syntax error too, on the line of the second one.
+    EXPECT_THAT(message_if<InputError>([] { ConfigTable::parse_string("k = 1\n\nk = 2\n", "s.toml"); }),
+                HasSubstr("s.toml:3:"));
+}
+
+}  // namespace
+}  // namespace rfd

@@ -113,6 +113,7 @@ TEST(Exact, IntersectionLiesOnTheSurfaceAndMatchesBisection) {
     for (const Profile& profile : {Profile(Conic{1 / 5.0}), Profile(Conic{-1 / 8.0}),
                                    Profile(Conic{1 / 6.0, -1.0}), Profile(Conic{1 / 6.0, -2.5}),
                                    Profile(Conic{1 / 6.0, 0.8}), Profile(Flat{})}) {
+        int bisected = 0;
         for (int k = 0; k < 2000; ++k) {
             const Eigen::Vector3d o(2.5 * unit(random), 2.5 * unit(random), -3.0);
             const Eigen::Vector3d d = Eigen::Vector3d(0.3 * unit(random), 0.3 * unit(random), 1.0).normalized();
@@ -135,8 +136,10 @@ TEST(Exact, IntersectionLiesOnTheSurfaceAndMatchesBisection) {
                     (f(mid) < 0 ? lo : hi) = mid;
                 }
                 EXPECT_NEAR(0.5 * (lo + hi), *t, 1e-9);
+                ++bisected;
             }
         }
+        EXPECT_GT(bisected, 1900);  // the comparison ran for nearly every ray
     }
 }
 
@@ -366,6 +369,350 @@ TEST(Exact, GrazingRaysOnALensletArrayEndQuickly) {
         const TraceResult r = trace(s, Ray{Eigen::Vector3d(0, 0, 0.1) - d * (0.2 / d.z()), d});
         EXPECT_TRUE(r.ray.origin.allFinite()) << degrees;
         EXPECT_NE(r.status, RayStatus::CrossedCell) << degrees;
+    }
+}
+
+}  // namespace
+}  // namespace rfd::optics
+
+namespace rfd::optics {
+namespace {
+
+constexpr double kPiExact = 3.14159265358979323846;
+
+Eigen::Vector3d direction_at(double theta, double phi) {
+    return {std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)};
+}
+
+// A ray whose straight line passes through `point` with direction d, started one unit of
+// z in front of it.
+Ray ray_through(const Eigen::Vector3d& point, const Eigen::Vector3d& d) {
+    return Ray{point - d / d.z(), d};
+}
+
+TEST(Exact, AgreesWithParaxialOnDecentredLenslets) {
+    // Every lenslet of the array, in its own frame: rays 1e-5 mm from its vertex at slopes
+    // of 1e-5 land on the pattern plane (flat: the same plane in both models) where the
+    // augmented matrices put them, to 1e-9 of the local height and slope. Third-order
+    // terms are (1e-5 / R)^2 ~ 5e-11 relative; rounding of the ~10 mm centres ~ 3e-10.
+    const SequentialSystem system = lenslet_array();
+    const Lattice& lattice = *system.lattice();
+    const double scale = 1e-5;
+    for (int j = 0; j < lattice.count_y(); ++j) {
+        for (int i = 0; i < lattice.count_x(); ++i) {
+            const Eigen::Vector2d c = lattice.center({i, j});
+            for (const auto& [h, a] : {std::pair{1.0, 1.0}, {-3.0, 2.0}, {2.0, -1.5}}) {
+                const double lx = 0.4 * h * scale, ly = h * scale, ux = 0.5 * a * scale, uy = a * scale;
+                const Ray ray{{c.x() + lx - ux, c.y() + ly - uy, -1.0}, Eigen::Vector3d(ux, uy, 1.0).normalized()};
+                const TraceResult exact = trace(system, ray);
+                const ParaxialResult paraxial = trace_paraxial(system, paraxial_from(ray), -1.0, 0, 2);
+                ASSERT_EQ(exact.status, RayStatus::Ok);
+                ASSERT_EQ(paraxial.status, RayStatus::Ok);
+                EXPECT_EQ(exact.cell, (CellIndex{i, j}));
+                EXPECT_EQ(paraxial.cell, (CellIndex{i, j}));
+                const double ex = exact.ray.origin.x() - c.x(), px = paraxial.ray.x - c.x();
+                const double ey = exact.ray.origin.y() - c.y(), py = paraxial.ray.y - c.y();
+                EXPECT_NEAR(exact.ray.origin.z(), system.surfaces[2].z, 1e-12);
+                EXPECT_NEAR(ex, px, 1e-9 * std::abs(px));
+                EXPECT_NEAR(ey, py, 1e-9 * std::abs(py));
+                const Eigen::Vector3d& d = exact.ray.direction;
+                EXPECT_NEAR(d.x() / d.z(), paraxial.ray.tx, 1e-9 * std::abs(paraxial.ray.tx));
+                EXPECT_NEAR(d.y() / d.z(), paraxial.ray.ty, 1e-9 * std::abs(paraxial.ray.ty));
+            }
+        }
+    }
+}
+
+TEST(Exact, SnellAtTheVertexOfADecentredLenslet) {
+    // At a lenslet's vertex the normal is the z axis, whatever the lenslet's position:
+    // sin(theta') = sin(theta) / n, in the same azimuth.
+    const SequentialSystem system = lenslet_array();
+    const Lattice& lattice = *system.lattice();
+    const double n = system.surfaces[0].index_after;
+    std::mt19937_64 random(31);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    std::uniform_int_distribution<int> column(0, lattice.count_x() - 1), row(0, lattice.count_y() - 1);
+    for (int k = 0; k < 2000; ++k) {
+        const CellIndex cell{column(random), row(random)};
+        const Eigen::Vector2d c = lattice.center(cell);
+        const double theta = 0.7 * unit(random), phi = 2 * kPiExact * unit(random);
+        const Eigen::Vector3d d = direction_at(theta, phi);
+        const TraceResult r = trace(system, ray_through({c.x(), c.y(), 0.0}, d), 0, 0);
+        ASSERT_EQ(r.status, RayStatus::Ok);
+        EXPECT_EQ(r.cell, cell);
+        EXPECT_NEAR((r.ray.origin - Eigen::Vector3d(c.x(), c.y(), 0.0)).norm(), 0.0, 1e-12);
+        const Eigen::Vector3d& out = r.ray.direction;
+        EXPECT_NEAR(out.head<2>().norm(), std::sin(theta) / n, 1e-12);
+        EXPECT_NEAR(out.x() * d.y() - out.y() * d.x(), 0.0, 1e-12);  // same plane of incidence
+        EXPECT_GT(out.head<2>().dot(d.head<2>()), -1e-15);
+    }
+}
+
+TEST(Exact, WrapOverHappensAtTheClosedFormAngle) {
+    // The ray through a lenslet's vertex at angle theta and azimuth phi refracts to
+    // theta' = asin(sin(theta)/n), crosses the sheet (thickness t), leaves the flat back at
+    // theta again, and meets the pattern plane (at z_p) a distance
+    //     rho(theta) = t tan(theta') + (z_p - t) tan(theta)
+    // from the lenslet's axis. It stays in its cell while rho <= b(phi), the distance to
+    // the cell boundary in that direction; the wrap-over angle solves rho = b. The
+    // paraxial model has rho = tan(theta) (t/n + z_p - t), so atan(b / (t/n + z_p - t)).
+    const SequentialSystem system = lenslet_array();
+    const Lattice& lattice = *system.lattice();
+    const double n = system.surfaces[0].index_after, t = system.surfaces[1].z, zp = system.surfaces[2].z;
+    auto rho = [&](double theta) {
+        return t * std::tan(std::asin(std::sin(theta) / n)) + (zp - t) * std::tan(theta);
+    };
+    std::mt19937_64 random(17);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    const CellIndex cell{4, 4};
+    const Eigen::Vector2d c = lattice.center(cell);
+    for (int k = 0; k < 200; ++k) {
+        const double phi = 2 * kPiExact * unit(random);
+        const double b = lattice.boundary_distance({std::cos(phi), std::sin(phi)});
+        double lo = 0.0, hi = 1.5;
+        for (int step = 0; step < 100; ++step) (rho(0.5 * (lo + hi)) < b ? lo : hi) = 0.5 * (lo + hi);
+        const double wrap = 0.5 * (lo + hi);
+        const double delta = 1e-7;  // moves the landing point by ~4e-7 mm
+        const TraceResult inside = trace(system, ray_through({c.x(), c.y(), 0.0}, direction_at(wrap - delta, phi)));
+        const TraceResult beyond = trace(system, ray_through({c.x(), c.y(), 0.0}, direction_at(wrap + delta, phi)));
+        ASSERT_EQ(inside.status, RayStatus::Ok) << phi;
+        EXPECT_EQ(inside.cell, cell);
+        const Eigen::Vector2d landing = inside.ray.origin.head<2>() - c;
+        EXPECT_NEAR(landing.norm(), rho(wrap - delta), 1e-12);
+        EXPECT_NEAR(landing.x() * std::sin(phi) - landing.y() * std::cos(phi), 0.0, 1e-12);
+        EXPECT_EQ(beyond.status, RayStatus::CrossedCell) << phi;
+        EXPECT_EQ(beyond.surface, 2);
+        EXPECT_EQ(beyond.cell, cell);
+        // The paraxial model wraps over at its own closed form, earlier than the exact one:
+        // tan(asin(sin(theta)/n)) < tan(theta)/n for n > 1, so the exact ray moves less
+        // sideways in the glass (the paraxial slope in glass, u/n, overstates it).
+        const double wrap_paraxial = std::atan(b / (t / n + zp - t));
+        EXPECT_GT(wrap, wrap_paraxial);
+        for (const auto& [angle, expected] : {std::pair{wrap_paraxial - delta, RayStatus::Ok},
+                                             std::pair{wrap_paraxial + delta, RayStatus::CrossedCell}}) {
+            const double slope = std::tan(angle);
+            const ParaxialRay start{c.x() - slope * std::cos(phi), c.y() - slope * std::sin(phi),
+                                    slope * std::cos(phi), slope * std::sin(phi)};
+            EXPECT_EQ(trace_paraxial(system, start, -1.0, 0, 2).status, expected) << phi;
+        }
+    }
+}
+
+TEST(Exact, EntryCellIsTheCellUnderTheHit) {
+    // For oblique rays the cell reported is that of the point where the ray met the caps
+    // (not of where it crossed the vertex plane), and the point lies on that cell's cap.
+    const SequentialSystem system = lenslet_array();
+    const Lattice& lattice = *system.lattice();
+    std::mt19937_64 random(23);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    const Eigen::Vector2d half = lattice.half_extent();
+    int different_from_vertex_plane = 0, checked = 0;
+    for (int k = 0; k < 20000; ++k) {
+        const double theta = 0.9 * std::abs(unit(random)), phi = kPiExact * unit(random);
+        const Eigen::Vector3d d = direction_at(theta, phi);
+        const Eigen::Vector3d at(0.9 * half.x() * unit(random), 0.9 * half.y() * unit(random), 0.0);
+        const TraceResult r = trace(system, ray_through(at, d), 0, 0);
+        if (r.status != RayStatus::Ok) continue;
+        ++checked;
+        const Eigen::Vector2d p = r.ray.origin.head<2>();
+        const CellIndex expected = lattice.cell_at(p);
+        if (!(r.cell == expected)) {  // only on a shared edge, where both are nearest
+            EXPECT_NEAR((lattice.center(r.cell) - p).norm(), (lattice.center(expected) - p).norm(), 1e-12);
+        }
+        const Eigen::Vector2d local = p - lattice.center(r.cell);
+        EXPECT_NEAR(r.ray.origin.z(), sag(system.surfaces[0].profile, local.squaredNorm()).value(), 1e-12);
+        if (!(lattice.cell_at(at.head<2>()) == r.cell)) ++different_from_vertex_plane;
+    }
+    EXPECT_GT(checked, 19000);
+    EXPECT_GT(different_from_vertex_plane, 100);  // the test sees oblique entries
+}
+
+TEST(Exact, RaysSkimmingTheArrayAreStoppedAtItsEdge) {
+    // Between two rows of caps (distance pitch*sqrt(3)/4 from both rows' centres) the caps
+    // are at least sag(1.02 mm) = 0.41 mm deep: a ray 0.3 mm under the vertex plane,
+    // almost parallel to it, crosses the whole array without meeting a cap. It is stopped
+    // at the array's edge, outside the array, and never "hits" where it started.
+    const SequentialSystem system = lenslet_array();
+    const Lattice& lattice = *system.lattice();
+    const double gap_y = lattice.center({0, 4}).y() + 0.5 * lattice.pitch_y();
+    for (double dz : {1e-6, 1e-9, 1e-12, 1e-300}) {
+        const Ray ray{{-8.0, gap_y, 0.3}, Eigen::Vector3d(1.0, 0.0, dz).normalized()};
+        const TraceResult r = trace(system, ray, 0, 0);
+        EXPECT_EQ(r.status, RayStatus::Vignetted) << dz;
+        EXPECT_TRUE(r.ray.origin.allFinite());
+        EXPECT_GT(r.ray.origin.x(), lattice.half_extent().x()) << dz;
+        EXPECT_LT(r.ray.origin.x(), lattice.half_extent().x() + lattice.pitch_x()) << dz;
+    }
+}
+
+TEST(Exact, GrazingRaysOnTheArrayGiveAStatusAndStayFinite) {
+    const SequentialSystem system = lenslet_array();
+    const Lattice& lattice = *system.lattice();
+    std::mt19937_64 random(29);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    int ok = 0;
+    for (int k = 0; k < 3000; ++k) {
+        const double below_90 = std::pow(10.0, -1.0 - 8.0 * std::abs(unit(random)));  // 1e-9 .. 0.1 deg
+        const double theta = (90.0 - below_90) * kPiExact / 180.0, phi = kPiExact * unit(random);
+        const Eigen::Vector3d d = direction_at(theta, phi);
+        const Eigen::Vector3d start(15.0 * unit(random), 15.0 * unit(random), -0.01 + 0.5 * std::abs(unit(random)));
+        const TraceResult r = trace(system, Ray{start, d});
+        EXPECT_TRUE(r.ray.origin.allFinite()) << theta;
+        EXPECT_TRUE(r.ray.direction.allFinite());
+        EXPECT_NEAR(r.ray.direction.norm(), 1.0, 1e-12);
+        if (r.surface == 0 && r.status == RayStatus::Vignetted) {
+            // Stopped at a point outside the array (where it entered the slab of caps, or
+            // where it left the array's box without meeting a cap).
+            EXPECT_FALSE(lattice.contains(lattice.cell_at(r.ray.origin.head<2>())));
+        }
+        if (r.has_cell) {
+            // Entered a lenslet: the entry point was on its cap (checked on surface 0 alone).
+            const TraceResult entry = trace(system, Ray{start, d}, 0, 0);
+            ASSERT_EQ(entry.status, RayStatus::Ok);
+            const Eigen::Vector2d local = entry.ray.origin.head<2>() - lattice.center(entry.cell);
+            EXPECT_TRUE(lattice.cell_contains(entry.cell, entry.ray.origin.head<2>()));
+            EXPECT_NEAR(entry.ray.origin.z(), sag(system.surfaces[0].profile, local.squaredNorm()).value(), 1e-9);
+            ++ok;
+        }
+    }
+    EXPECT_GT(ok, 0);
+}
+
+TEST(Exact, SteepRaysOnAPlanoConvexLensFailForTheRightReason) {
+    // 85 to 89.9 degrees across the aperture, both ways round. Every outcome is a status
+    // with finite numbers, and each total internal reflection or vignetting is the one
+    // the closed forms predict from where the ray met the surface:
+    //  - at a flat exit, TIR iff the sine of the angle in the glass exceeds 1/n;
+    //  - at the curved exit (c = -1/R), the normal at height y is tilted by asin(y/R), so in
+    //    the y-z plane TIR iff |theta_glass - asin(y/R)| > asin(1/n);
+    //  - vignetting iff the hit lies beyond the semi-diameter.
+    const double n = 1.5168, critical = std::asin(1 / n), radius = 25.8;
+    std::array<int, kRayStatusCount> seen{};
+    for (bool curved_first : {true, false}) {
+        const SequentialSystem system = pcx(curved_first);
+        for (double degrees = 85.0; degrees <= 89.9 + 1e-9; degrees += 0.1) {
+            const Eigen::Vector3d d = direction_at(degrees * kPiExact / 180.0, kPiExact / 2);
+            for (double h = -12.0; h <= 12.0; h += 0.5) {
+                const Ray ray = ray_through({0.0, h, 0.0}, d);
+                const TraceResult r = trace(system, ray);
+                ASSERT_TRUE(r.ray.origin.allFinite() && r.ray.direction.allFinite()) << degrees << " " << h;
+                ++seen[static_cast<std::size_t>(r.status)];
+                if (r.status == RayStatus::Missed || r.status == RayStatus::Ok) continue;
+                ASSERT_NE(r.status, RayStatus::CrossedCell);
+                const std::size_t s = static_cast<std::size_t>(r.surface);
+                const double rim = r.ray.origin.head<2>().norm();
+                if (r.status == RayStatus::Vignetted) {
+                    EXPECT_GT(rim, 12.5) << degrees << " " << h;
+                    continue;
+                }
+                // TIR: at the exit surface, with the ray as it was inside the glass.
+                ASSERT_EQ(s, 1u);
+                EXPECT_LE(rim, 12.5 * (1 + kApertureTolerance));
+                const Eigen::Vector3d inside = trace(system, ray, 0, 0).ray.direction;
+                if (curved_first) {
+                    EXPECT_GT(inside.head<2>().norm(), 1 / n);
+                } else {
+                    const double theta_glass = std::atan2(inside.y(), inside.z());
+                    EXPECT_GT(std::abs(theta_glass - std::asin(r.ray.origin.y() / radius)), critical);
+                }
+            }
+        }
+    }
+    // Conversely: rays that got through had angles below the critical one at the exit.
+    for (bool curved_first : {true, false}) {
+        const SequentialSystem system = pcx(curved_first);
+        for (double degrees = 85.0; degrees <= 89.9 + 1e-9; degrees += 0.1) {
+            const Eigen::Vector3d d = direction_at(degrees * kPiExact / 180.0, kPiExact / 2);
+            for (double h = -12.0; h <= 12.0; h += 0.5) {
+                const Ray ray = ray_through({0.0, h, 0.0}, d);
+                const TraceResult exit = trace(system, ray, 0, 1);
+                if (exit.status != RayStatus::Ok) continue;
+                const Eigen::Vector3d inside = trace(system, ray, 0, 0).ray.direction;
+                if (curved_first) {
+                    EXPECT_LE(inside.head<2>().norm(), 1 / n);
+                } else {
+                    const double theta_glass = std::atan2(inside.y(), inside.z());
+                    EXPECT_LE(std::abs(theta_glass - std::asin(exit.ray.origin.y() / radius)), critical + 1e-12);
+                }
+            }
+        }
+    }
+    EXPECT_GT(seen[static_cast<std::size_t>(RayStatus::TotalInternalReflection)], 0);
+    EXPECT_GT(seen[static_cast<std::size_t>(RayStatus::Vignetted)], 0);
+    EXPECT_GT(seen[static_cast<std::size_t>(RayStatus::Missed)], 0);
+}
+
+TEST(Exact, RaysParallelToOrAwayFromTheSurfacesMissThem) {
+    const SequentialSystem system = pcx(false);  // flat first
+    EXPECT_EQ(trace(system, Ray{{0, 0, -1}, {0, 1, 0}}).status, RayStatus::Missed);
+    EXPECT_EQ(trace(system, Ray{{0, 0, -1}, {0, 0, -1}}).status, RayStatus::Missed);
+    const TraceResult back = trace(system, Ray{{0, 0, -1}, Eigen::Vector3d(0, 0.3, -1).normalized()});
+    EXPECT_EQ(back.status, RayStatus::Missed);
+    EXPECT_EQ(back.surface, 0);
+    EXPECT_TRUE(back.ray.origin.allFinite());
+    EXPECT_EQ(trace(lenslet_array(), Ray{{0, 0, -1}, {1, 0, 0}}).status, RayStatus::Missed);
+}
+
+TEST(Exact, ReversingThroughALensletArrayReturnsToTheStart) {
+    // In the reversed frame the caps are concave toward the light (c < 0): the same cell
+    // must be found from the other side and the ray must come back along its own line.
+    const SequentialSystem system = lenslet_array();
+    const SequentialSystem back = reversed(system);
+    const Lattice& lattice = *system.lattice();
+    std::mt19937_64 random(37);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    int checked = 0;
+    for (int k = 0; k < 3000; ++k) {
+        const CellIndex cell{static_cast<int>(4 + 4 * unit(random)), static_cast<int>(4 + 4 * unit(random))};
+        const Eigen::Vector2d c = lattice.center(cell);
+        const Eigen::Vector3d start(c.x() + 0.6 * unit(random), c.y() + 0.6 * unit(random), -1.0);
+        const Eigen::Vector3d d = Eigen::Vector3d(0.15 * unit(random), 0.15 * unit(random), 1.0).normalized();
+        const TraceResult forward = trace(system, Ray{start, d});
+        if (forward.status != RayStatus::Ok) continue;
+        const Eigen::Vector3d o(forward.ray.origin.x(), forward.ray.origin.y(), -forward.ray.origin.z());
+        const Eigen::Vector3d r(-forward.ray.direction.x(), -forward.ray.direction.y(), forward.ray.direction.z());
+        const TraceResult home = trace(back, Ray{o - 1e-3 * r, r});
+        ASSERT_EQ(home.status, RayStatus::Ok);
+        EXPECT_EQ(home.cell, forward.cell);
+        const Eigen::Vector3d p(home.ray.origin.x(), home.ray.origin.y(), -home.ray.origin.z());
+        const Eigen::Vector3d dir(-home.ray.direction.x(), -home.ray.direction.y(), home.ray.direction.z());
+        EXPECT_NEAR((p - start).cross(d).norm(), 0.0, 1e-9);
+        EXPECT_NEAR((dir - d).norm(), 0.0, 1e-12);
+        ++checked;
+    }
+    EXPECT_GT(checked, 2000);
+}
+
+TEST(Exact, RaysLeavingAnySurfaceNeverMeetItAtTheirStart) {
+    // Spheres both ways, paraboloid, hyperboloid, prolate and oblate ellipsoids, a flat:
+    // a ray refracted at a point of the surface, leaving on either side, gets no hit at
+    // t ~ 0 from intersect(t_min = 0); a later hit, if any, is a real one on the surface.
+    std::mt19937_64 random(41);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    for (const Profile& profile :
+         {Profile(Conic{1 / 5.0}), Profile(Conic{-1 / 5.0}), Profile(Conic{1 / 4.0, -1.0}),
+          Profile(Conic{-1 / 4.0, -2.5}), Profile(Conic{1 / 6.0, -0.5}), Profile(Conic{1 / 6.0, 0.8}),
+          Profile(Flat{})}) {
+        int checked = 0;
+        for (int k = 0; k < 4000; ++k) {
+            const double x = 2.0 * unit(random), y = 2.0 * unit(random);
+            const auto z = sag(profile, x * x + y * y);
+            if (!z) continue;
+            const Eigen::Vector3d on(x, y, *z);
+            const double side = k % 2 == 0 ? 1.0 : -1.0;  // toward +z (into glass) or -z (out)
+            const Eigen::Vector3d in =
+                Eigen::Vector3d(0.4 * unit(random), 0.4 * unit(random), side).normalized();
+            const auto out = refract(in, normal_at(profile, on), side > 0 ? 1.0 / 1.5 : 1.5);
+            if (!out) continue;  // total internal reflection on the way out
+            ++checked;
+            const auto again = intersect(profile, on, *out, 0.0);
+            if (again) {
+                EXPECT_GT(*again, 1e-6);
+                const Eigen::Vector3d p = on + *again * *out;
+                EXPECT_NEAR(p.z(), sag(profile, p.head<2>().squaredNorm()).value(), 1e-9);
+            }
+        }
+        EXPECT_GT(checked, 2500);
     }
 }
 
