@@ -5,6 +5,9 @@ find_package(CLI11 2 REQUIRED)
 find_package(nlohmann_json 3 REQUIRED)
 find_package(TBB REQUIRED)
 find_package(Threads REQUIRED)
+find_package(OpenImageIO 2.4 REQUIRED CONFIG)
+# CGAL is header-only here (5.x); relight/ uses its Delaunay triangulations.
+find_package(CGAL 5 REQUIRED CONFIG)
 
 if(RFD_BUILD_TESTS)
   find_package(GTest REQUIRED)

@@ -7,20 +7,35 @@
 
 namespace rfd {
 
+std::filesystem::path temporary_sibling(const std::filesystem::path& target) {
+    namespace fs = std::filesystem;
+    const fs::path full = target.has_parent_path() ? target : fs::path(".") / target;
+    std::error_code ec;
+    if (!fs::is_directory(full.parent_path(), ec))
+        throw IoError(SourceLocation{target.string()},
+                      "cannot write: directory '" + full.parent_path().string() +
+                          "' does not exist");
+    // A random prefix keeps concurrent writers of the same target apart; the name keeps
+    // its extension.
+    std::random_device entropy;
+    return full.parent_path() /
+           (".tmp" + std::to_string(entropy() % 1000000) + "-" + full.filename().string());
+}
+
+void move_into_place(const std::filesystem::path& temporary, const std::filesystem::path& target) {
+    std::error_code ec;
+    std::filesystem::rename(temporary, target, ec);
+    if (ec) {
+        std::filesystem::remove(temporary, ec);
+        throw IoError(SourceLocation{target.string()}, "cannot move the finished file into place");
+    }
+}
+
 void write_file_atomically(const std::filesystem::path& path,
                            const std::function<void(std::ostream&)>& write) {
     namespace fs = std::filesystem;
-    const fs::path target = path.has_parent_path() ? path : fs::path(".") / path;
+    const fs::path temporary = temporary_sibling(path);
     std::error_code ec;
-    if (!fs::is_directory(target.parent_path(), ec))
-        throw IoError(SourceLocation{path.string()},
-                      "cannot write: directory '" + target.parent_path().string() +
-                          "' does not exist");
-    // A per-process random suffix keeps concurrent writers of the same target apart.
-    std::random_device entropy;
-    const fs::path temporary =
-        target.parent_path() /
-        ("." + target.filename().string() + ".tmp" + std::to_string(entropy() % 1000000));
     {
         std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
         if (!out) throw IoError(SourceLocation{path.string()}, "cannot write: permission denied");
@@ -38,11 +53,7 @@ void write_file_atomically(const std::filesystem::path& path,
             throw IoError(SourceLocation{path.string()}, "write failed (disk full?)");
         }
     }
-    fs::rename(temporary, target, ec);
-    if (ec) {
-        fs::remove(temporary, ec);
-        throw IoError(SourceLocation{path.string()}, "cannot move the finished file into place");
-    }
+    move_into_place(temporary, path);
 }
 
 void write_text_file(const std::filesystem::path& path, const std::string& text) {

@@ -14,6 +14,14 @@ namespace rfd {
 void write_file_atomically(const std::filesystem::path& path,
                            const std::function<void(std::ostream&)>& write);
 
+/// A fresh temporary path beside `target` that keeps its extension (tools that pick a
+/// format from the extension, such as OpenImageIO, write it correctly). Throws IoError when
+/// target's directory does not exist.
+std::filesystem::path temporary_sibling(const std::filesystem::path& target);
+
+/// Renames a finished temporary file onto `target`; removes it and throws IoError on failure.
+void move_into_place(const std::filesystem::path& temporary, const std::filesystem::path& target);
+
 /// Convenience for whole text contents.
 void write_text_file(const std::filesystem::path& path, const std::string& text);
 

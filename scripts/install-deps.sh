@@ -7,6 +7,9 @@ packages=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libglm-dev libcgal-dev libtbb-dev
   libopenimageio-dev openimageio-tools libcairo2-dev
+  # OpenCV's photo module: HDR assembly (Robertson et al. 2003). Its headers also satisfy
+  # a path Debian's OpenImageIO CMake config insists on (/usr/include/opencv4).
+  libopencv-photo-dev
   libtomlplusplus-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   openscad gnuplot-nox

@@ -1,0 +1,44 @@
+#include "core/image.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "core/error.hpp"
+
+namespace rfd {
+
+Image::Image(int width, int height, int channels, float fill)
+    : width_(width), height_(height), channels_(channels) {
+    RFD_CHECK(width >= 0 && height >= 0 && channels >= 0);
+    samples_.assign(pixel_count() * static_cast<std::size_t>(channels), fill);
+}
+
+double mean_squared_error(const Image& a, const Image& b) {
+    RFD_CHECK(a.same_shape(b));
+    if (a.samples().empty()) return 0.0;
+    double sum = 0.0;
+    const auto sa = a.samples(), sb = b.samples();
+    for (std::size_t k = 0; k < sa.size(); ++k) {
+        const double d = static_cast<double>(sa[k]) - static_cast<double>(sb[k]);
+        sum += d * d;
+    }
+    return sum / static_cast<double>(sa.size());
+}
+
+double psnr(const Image& a, const Image& b, double peak) {
+    const double mse = mean_squared_error(a, b);
+    if (mse == 0.0) return std::numeric_limits<double>::infinity();
+    return 10.0 * std::log10(peak * peak / mse);
+}
+
+float srgb_to_linear(float encoded) {
+    if (encoded <= 0.04045f) return encoded / 12.92f;
+    return std::pow((encoded + 0.055f) / 1.055f, 2.4f);
+}
+
+float linear_to_srgb(float linear) {
+    if (linear <= 0.0031308f) return 12.92f * linear;
+    return 1.055f * std::pow(linear, 1.0f / 2.4f) - 0.055f;
+}
+
+}  // namespace rfd

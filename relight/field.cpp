@@ -1,0 +1,177 @@
+#include "relight/field.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "core/files.hpp"
+#include "core/image_io.hpp"
+#include "core/units.hpp"
+
+namespace rfd::relight {
+namespace {
+
+bool is_blank_or_comment(const std::string& line) {
+    for (const char c : line) {
+        if (c == '#') return true;
+        if (!std::isspace(static_cast<unsigned char>(c))) return false;
+    }
+    return true;
+}
+
+SourceLocation at(const std::filesystem::path& path, int line) {
+    return SourceLocation{path.string(), line, 0, ""};
+}
+
+}  // namespace
+
+std::vector<LightEntry> read_light_file(const std::filesystem::path& lp_path) {
+    std::ifstream in(lp_path);
+    if (!in) throw IoError(SourceLocation{lp_path.string()}, "cannot open light file");
+    std::string line;
+    int line_number = 0;
+    long declared = -1;
+    std::vector<LightEntry> entries;
+    while (std::getline(in, line)) {
+        ++line_number;
+        if (!line.empty() && line.back() == '\r') line.pop_back();  // files from Windows tools
+        if (is_blank_or_comment(line)) continue;
+        std::istringstream fields(line);
+        if (declared < 0) {
+            std::string extra;
+            if (!(fields >> declared) || declared < 0 || (fields >> extra))
+                throw InputError(at(lp_path, line_number),
+                                 "expected the image count (a non-negative integer), got '" +
+                                     line + "'");
+            continue;
+        }
+        LightEntry entry;
+        entry.line = line_number;
+        double x = 0, y = 0, z = 0;
+        if (!(fields >> entry.file >> x >> y >> z))
+            throw InputError(at(lp_path, line_number),
+                             "expected 'filename x y z [kernel_degrees]', got '" + line + "'");
+        double kernel_degrees = 0.0;
+        if (fields >> kernel_degrees) {
+            if (!(kernel_degrees >= 0.0 && kernel_degrees < 180.0))
+                throw InputError(at(lp_path, line_number),
+                                 "kernel radius must be in [0, 180) degrees, got " +
+                                     std::to_string(kernel_degrees));
+        } else if (!fields.eof()) {
+            throw InputError(at(lp_path, line_number),
+                             "the fifth value (kernel radius in degrees) is not a number");
+        }
+        std::string extra;
+        fields.clear();
+        if (fields >> extra)
+            throw InputError(at(lp_path, line_number), "unexpected extra value '" + extra + "'");
+        const Eigen::Vector3d d(x, y, z);
+        const double length = d.norm();
+        if (!std::isfinite(length) || length < 1e-12)
+            throw InputError(at(lp_path, line_number),
+                             "light direction (" + std::to_string(x) + ", " + std::to_string(y) +
+                                 ", " + std::to_string(z) + ") has zero length");
+        // Unit directions are kept bit for bit, so a written field reads back identically.
+        entry.direction = std::abs(length - 1.0) > 1e-12 ? Eigen::Vector3d(d / length) : d;
+        entry.kernel_radius = degrees_to_radians(kernel_degrees);
+        entries.push_back(entry);
+    }
+    if (declared < 0) throw InputError(at(lp_path, line_number), "light file is empty");
+    if (static_cast<long>(entries.size()) != declared)
+        throw InputError(at(lp_path, 1), "declares " + std::to_string(declared) +
+                                             " images but lists " +
+                                             std::to_string(entries.size()));
+    return entries;
+}
+
+void write_light_file(const std::filesystem::path& lp_path, const std::vector<std::string>& files,
+                      const std::vector<Eigen::Vector3d>& directions,
+                      const std::vector<double>& kernel_radii) {
+    RFD_CHECK(files.size() == directions.size());
+    RFD_CHECK(kernel_radii.empty() || kernel_radii.size() == directions.size());
+    std::string text = std::to_string(files.size()) + "\n";
+    char buffer[160];
+    for (std::size_t i = 0; i < files.size(); ++i) {
+        const Eigen::Vector3d& d = directions[i];
+        // 17 significant digits: directions survive the round trip bit for bit.
+        std::snprintf(buffer, sizeof buffer, " %.17g %.17g %.17g", d.x(), d.y(), d.z());
+        text += files[i] + buffer;
+        if (!kernel_radii.empty()) {
+            std::snprintf(buffer, sizeof buffer, " %.17g", radians_to_degrees(kernel_radii[i]));
+            text += buffer;
+        }
+        text += "\n";
+    }
+    write_text_file(lp_path, text);
+}
+
+std::filesystem::path light_file_of(const std::filesystem::path& field) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    if (!fs::is_directory(field, ec)) {
+        if (!fs::exists(field, ec))
+            throw IoError(SourceLocation{field.string()}, "no such field (folder or .lp file)");
+        return field;
+    }
+    std::vector<fs::path> found;
+    for (const auto& entry : fs::directory_iterator(field, ec))
+        if (entry.path().extension() == ".lp") found.push_back(entry.path());
+    if (found.size() != 1)
+        throw InputError(SourceLocation{field.string()},
+                         found.empty() ? "folder holds no .lp light file"
+                                       : "folder holds " + std::to_string(found.size()) +
+                                             " .lp files; name the one to use");
+    return found.front();
+}
+
+ReflectanceField read_field(const std::filesystem::path& field_path) {
+    const std::filesystem::path lp = light_file_of(field_path);
+    const std::vector<LightEntry> entries = read_light_file(lp);
+    if (entries.empty()) throw InputError(at(lp, 1), "a field needs at least one image");
+    ReflectanceField field;
+    bool any_kernel = false;
+    for (const LightEntry& entry : entries) {
+        const std::filesystem::path image_path = lp.parent_path() / entry.file;
+        Image image;
+        try {
+            image = read_image(image_path);
+        } catch (const Error& error) {
+            throw InputError(at(lp, entry.line), std::string("image '") + entry.file +
+                                                     "': " + error.what());
+        }
+        if (!field.images.empty() && !image.same_shape(field.images.front())) {
+            const Image& first = field.images.front();
+            throw InputError(at(lp, entry.line),
+                             "image '" + entry.file + "' is " + std::to_string(image.width()) +
+                                 "x" + std::to_string(image.height()) + "x" +
+                                 std::to_string(image.channels()) + ", the first image is " +
+                                 std::to_string(first.width()) + "x" +
+                                 std::to_string(first.height()) + "x" +
+                                 std::to_string(first.channels()));
+        }
+        field.directions.push_back(entry.direction);
+        field.images.push_back(std::move(image));
+        field.kernel_radii.push_back(entry.kernel_radius);
+        any_kernel = any_kernel || entry.kernel_radius > 0.0;
+    }
+    if (!any_kernel) field.kernel_radii.clear();
+    return field;
+}
+
+void write_field(const std::filesystem::path& folder, const ReflectanceField& field,
+                 const std::string& name, const std::string& extension) {
+    RFD_CHECK(field.images.size() == field.directions.size());
+    ensure_directory(folder);
+    std::vector<std::string> files;
+    char buffer[32];
+    for (std::size_t i = 0; i < field.size(); ++i) {
+        std::snprintf(buffer, sizeof buffer, "_%04zu", i);
+        files.push_back(name + buffer + extension);
+        write_image(folder / files.back(), field.images[i]);
+    }
+    write_light_file(folder / (name + ".lp"), files, field.directions, field.kernel_radii);
+}
+
+}  // namespace rfd::relight

@@ -1,0 +1,72 @@
+#pragma once
+// A reflectance field (thesis 2.4, 4.1): one linear image of a fixed-viewpoint scene per
+// light direction, R_i(x, y) = R(x, y, theta_i, phi_i).
+//
+// Directions are unit vectors toward the light in the field frame of core/sphere.hpp (x
+// right, y up in the image, z toward the camera). A two-level field (5.4) also records, per
+// image, the angular radius of the light kernel it was taken with; 0 means a narrow light.
+//
+// On disk a field is a folder with an RTI-style light file `<name>.lp` and the images:
+//     3
+//     img_0000.exr 0.0 0.0 1.0
+//     img_0001.exr 0.5 0.0 0.8660254
+//     img_0002.exr 0.0 0.5 0.8660254 4.0
+// First line the image count, then per image: file name (relative to the .lp's folder),
+// the direction toward the light (normalised on reading) and optionally the kernel radius
+// in degrees. Lines starting with '#' are comments.
+//
+// Example: ReflectanceField field = read_field("out/bottle"); field.size();
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/image.hpp"
+
+namespace rfd::relight {
+
+struct ReflectanceField {
+    std::vector<Eigen::Vector3d> directions;  ///< unit, toward the light
+    std::vector<Image> images;                ///< linear, all the same shape
+    std::vector<double> kernel_radii;         ///< radians per image, or empty (all narrow)
+
+    std::size_t size() const { return directions.size(); }
+    int width() const { return images.empty() ? 0 : images.front().width(); }
+    int height() const { return images.empty() ? 0 : images.front().height(); }
+    int channels() const { return images.empty() ? 0 : images.front().channels(); }
+    double kernel_radius(std::size_t i) const { return kernel_radii.empty() ? 0.0 : kernel_radii[i]; }
+};
+
+/// One line of a light file.
+struct LightEntry {
+    std::string file;                   ///< as written in the .lp
+    Eigen::Vector3d direction;          ///< normalised
+    double kernel_radius = 0.0;         ///< radians
+    int line = 0;                       ///< 1-based line in the .lp
+};
+
+/// Parses a light file. Throws InputError naming file and line for a bad count, a missing
+/// field, an unparsable number or a zero-length direction; IoError if it cannot be read.
+std::vector<LightEntry> read_light_file(const std::filesystem::path& lp_path);
+
+/// Writes directions (and kernel radii when `kernel_radii` is non-empty) as a light file.
+void write_light_file(const std::filesystem::path& lp_path, const std::vector<std::string>& files,
+                      const std::vector<Eigen::Vector3d>& directions,
+                      const std::vector<double>& kernel_radii = {});
+
+/// The light file of a field given as a folder (which must hold exactly one .lp) or as the
+/// .lp itself.
+std::filesystem::path light_file_of(const std::filesystem::path& field);
+
+/// Reads a whole field. Throws for any malformed light file, a missing or unreadable image,
+/// images of different sizes, and non-finite samples, naming the file and the .lp line.
+ReflectanceField read_field(const std::filesystem::path& field);
+
+/// Writes `field` to `folder` (created if needed) as `<name>.lp` plus `<name>_NNNN<ext>`
+/// images; the light file is written last, so an interrupted write leaves no readable field.
+void write_field(const std::filesystem::path& folder, const ReflectanceField& field,
+                 const std::string& name = "field", const std::string& extension = ".exr");
+
+}  // namespace rfd::relight

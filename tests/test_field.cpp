@@ -1,0 +1,195 @@
+// Images and reflectance fields on disk: round trips, colour decoding, and a distinct
+// message for every way a light file can be malformed.
+
+#include <fstream>
+#include <random>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "core/error.hpp"
+#include "core/image_io.hpp"
+#include "core/sphere.hpp"
+#include "relight/field.hpp"
+#include "tests/support/temp_dir.hpp"
+
+#include <OpenImageIO/imageio.h>
+
+namespace rfd::relight {
+namespace {
+
+using ::testing::HasSubstr;
+using rfd::testing::TempDir;
+
+Image random_image(int w, int h, int c, unsigned seed, float scale = 4.0f) {
+    std::mt19937 random(seed);
+    std::uniform_real_distribution<float> value(0.0f, scale);
+    Image image(w, h, c);
+    for (float& v : image.samples()) v = value(random);
+    return image;
+}
+
+std::string error_of(const std::function<void()>& action) {
+    try {
+        action();
+    } catch (const Error& error) {
+        return error.what();
+    }
+    return "";
+}
+
+void write(const std::filesystem::path& path, const std::string& text) {
+    std::ofstream(path) << text;
+}
+
+TEST(ImageIo, ExrRoundTripIsBitExact) {
+    TempDir dir;
+    const Image image = random_image(37, 23, 3, 1);
+    write_image(dir / "a.exr", image);
+    EXPECT_EQ(read_image(dir / "a.exr"), image);
+}
+
+TEST(ImageIo, PngIsSrgbEncodedAndDecodedBack) {
+    TempDir dir;
+    Image image(4, 1, 1);
+    image.at(0, 0, 0) = 0.0f;
+    image.at(1, 0, 0) = 0.2140411f;  // sRGB 0.5 within a code value
+    image.at(2, 0, 0) = 1.0f;
+    image.at(3, 0, 0) = 7.0f;  // clamps
+    write_image(dir / "a.png", image);
+    const Image back = read_image(dir / "a.png");
+    EXPECT_FLOAT_EQ(back.at(0, 0, 0), 0.0f);
+    EXPECT_NEAR(back.at(1, 0, 0), 0.2140411f, 0.003f);  // 8-bit quantisation near mid-grey
+    EXPECT_FLOAT_EQ(back.at(2, 0, 0), 1.0f);
+    EXPECT_FLOAT_EQ(back.at(3, 0, 0), 1.0f);
+}
+
+TEST(ImageIo, SrgbCurveIsContinuousAndInvertible) {
+    for (float v = 0.0f; v <= 1.0f; v += 0.001f) EXPECT_NEAR(srgb_to_linear(linear_to_srgb(v)), v, 1e-6f);
+    EXPECT_NEAR(srgb_to_linear(0.04045f), linear_to_srgb(0.0031308f) / 12.92f * 0.0f + 0.0031308f, 1e-6f);
+}
+
+TEST(ImageIo, RefusesToWriteNaN) {
+    TempDir dir;
+    Image image(2, 2, 1, 0.5f);
+    image.at(1, 1, 0) = std::numeric_limits<float>::quiet_NaN();
+    EXPECT_THAT(error_of([&] { write_image(dir / "a.exr", image); }),
+                HasSubstr("pixel (1, 1) channel 0: not a finite number"));
+    EXPECT_TRUE(std::filesystem::is_empty(dir.path()));
+}
+
+ReflectanceField small_field(bool kernels) {
+    ReflectanceField field;
+    for (int i = 0; i < 5; ++i) {
+        field.directions.push_back(direction_from_angles(0.3 * i, 1.1 * i));
+        field.images.push_back(random_image(9, 7, 3, 10 + i));
+        if (kernels) field.kernel_radii.push_back(0.01 * i);
+    }
+    return field;
+}
+
+TEST(Field, WriteThenReadIsIdentical) {
+    for (const bool kernels : {false, true}) {
+        TempDir dir;
+        const ReflectanceField field = small_field(kernels);
+        write_field(dir.path(), field, "f");
+        const ReflectanceField back = read_field(dir.path());
+        ASSERT_EQ(back.size(), field.size());
+        for (std::size_t i = 0; i < field.size(); ++i) {
+            EXPECT_EQ(back.images[i], field.images[i]);
+            EXPECT_EQ(back.directions[i], field.directions[i]);  // bit-exact with %.17g
+        }
+        if (kernels) {
+            ASSERT_EQ(back.kernel_radii.size(), field.size());
+            for (std::size_t i = 0; i < field.size(); ++i)
+                EXPECT_NEAR(back.kernel_radii[i], field.kernel_radii[i], 1e-15);
+        } else {
+            EXPECT_TRUE(back.kernel_radii.empty());
+        }
+    }
+}
+
+TEST(Field, WritingTwiceGivesIdenticalBytes) {
+    TempDir dir;
+    const ReflectanceField field = small_field(false);
+    write_field(dir / "a", field);
+    write_field(dir / "b", field);
+    for (const auto& entry : std::filesystem::directory_iterator(dir / "a")) {
+        std::ifstream a(entry.path(), std::ios::binary), b(dir / "b" / entry.path().filename(), std::ios::binary);
+        const std::string bytes_a((std::istreambuf_iterator<char>(a)), {}), bytes_b((std::istreambuf_iterator<char>(b)), {});
+        EXPECT_EQ(bytes_a, bytes_b) << entry.path();
+    }
+}
+
+// Each malformed light file gives its own message, naming the file and the line.
+class MalformedLightFile : public ::testing::Test {
+protected:
+    void SetUp() override { write_image(dir / "a.exr", random_image(4, 3, 3, 1)); }
+    std::string read_error(const std::string& lp_text) {
+        write(dir / "f.lp", lp_text);
+        return error_of([&] { read_field(dir / "f.lp"); });
+    }
+    TempDir dir;
+};
+
+TEST_F(MalformedLightFile, CountMismatch) {
+    EXPECT_THAT(read_error("2\na.exr 0 0 1\n"), HasSubstr("f.lp:1: declares 2 images but lists 1"));
+}
+TEST_F(MalformedLightFile, BadCount) {
+    EXPECT_THAT(read_error("two\na.exr 0 0 1\n"), HasSubstr("f.lp:1: expected the image count"));
+}
+TEST_F(MalformedLightFile, MissingImage) {
+    EXPECT_THAT(read_error("1\nnope.exr 0 0 1\n"), HasSubstr("f.lp:2: image 'nope.exr'"));
+    EXPECT_THAT(read_error("1\nnope.exr 0 0 1\n"), HasSubstr("no such image file"));
+}
+TEST_F(MalformedLightFile, ZeroLengthDirection) {
+    EXPECT_THAT(read_error("1\na.exr 0 0 0\n"), HasSubstr("f.lp:2: light direction (0.000000, 0.000000, 0.000000) has zero length"));
+}
+TEST_F(MalformedLightFile, MissingCoordinate) {
+    EXPECT_THAT(read_error("1\na.exr 0 1\n"), HasSubstr("f.lp:2: expected 'filename x y z [kernel_degrees]'"));
+}
+TEST_F(MalformedLightFile, DifferentSizes) {
+    write_image(dir / "b.exr", random_image(5, 3, 3, 2));
+    EXPECT_THAT(read_error("2\na.exr 0 0 1\n# comment\nb.exr 1 0 1\n"),
+                HasSubstr("f.lp:4: image 'b.exr' is 5x3x3, the first image is 4x3x3"));
+}
+TEST_F(MalformedLightFile, NaNPixels) {
+    // OpenImageIO writes NaN when asked to; rfd refuses to read it back.
+    Image bad = random_image(4, 3, 3, 3);
+    bad.at(2, 1, 1) = std::numeric_limits<float>::quiet_NaN();
+    std::vector<float> interleaved;
+    {
+        auto out = OIIO::ImageOutput::create((dir / "nan.exr").string());
+        OIIO::ImageSpec spec(4, 3, 3, OIIO::TypeDesc::FLOAT);
+        for (int y = 0; y < 3; ++y)
+            for (int x = 0; x < 4; ++x)
+                for (int c = 0; c < 3; ++c) interleaved.push_back(bad.at(x, y, c));
+        ASSERT_TRUE(out->open((dir / "nan.exr").string(), spec));
+        ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, interleaved.data()));
+        out->close();
+    }
+    EXPECT_THAT(read_error("1\nnan.exr 0 0 1\n"),
+                HasSubstr("f.lp:2: image 'nan.exr': " + (dir / "nan.exr").string() +
+                          ": pixel (2, 1) channel 1 is not a finite number"));
+}
+TEST_F(MalformedLightFile, ExtraValueAndBadKernel) {
+    EXPECT_THAT(read_error("1\na.exr 0 0 1 2 3\n"), HasSubstr("f.lp:2: unexpected extra value '3'"));
+    EXPECT_THAT(read_error("1\na.exr 0 0 1 200\n"), HasSubstr("f.lp:2: kernel radius must be in [0, 180)"));
+    EXPECT_THAT(read_error("1\na.exr 0 0 1 wide\n"), HasSubstr("f.lp:2: the fifth value"));
+}
+TEST_F(MalformedLightFile, EmptyFile) {
+    EXPECT_THAT(read_error("# nothing\n"), HasSubstr("light file is empty"));
+}
+
+TEST(Sphere, AnglesRoundTrip) {
+    for (double theta = 0.05; theta < 3.1; theta += 0.3)
+        for (double phi = -3.0; phi < 3.1; phi += 0.5) {
+            const SphericalAngles a = angles_of(direction_from_angles(theta, phi));
+            EXPECT_NEAR(a.theta, theta, 1e-12);
+            EXPECT_NEAR(a.phi, phi, 1e-12);
+        }
+    EXPECT_NEAR(angle_between(Eigen::Vector3d::UnitX(), Eigen::Vector3d(1, 1e-9, 0).normalized()), 1e-9, 1e-20);
+}
+
+}  // namespace
+}  // namespace rfd::relight
