@@ -3,6 +3,8 @@
 // Counters: rays/s and ray-surface interactions/s (3 surfaces per ray). A memory-streaming
 // baseline over the same arrays runs in the same process so results can be quoted as
 // ratios, which travel between machines better than absolute times.
+// The paraxial batch runs stage by stage over blocks of rays with branch-free masks; on
+// AVX2 machines a clone compiled for them is picked at load time (same bits either way).
 // The paraxial engine folds surfaces that test nothing (here the array's flat back) into
 // the transfer matrix of the next one; they still count as interactions, since the
 // composed matrix computes their effect exactly.

@@ -21,5 +21,13 @@ if(RFD_SANITIZE)
   target_link_options(rfd_sanitizers INTERFACE -fsanitize=address,undefined)
 endif()
 
+# -fno-trapping-math: rfd never reads floating-point exception flags, so the compiler may
+# evaluate both arms of a select; without it GCC will not vectorise the masked loops of the
+# batch tracers. Unlike -ffast-math it changes no computed value.
+# -ffp-contract=off: no fused multiply-adds, so the kernels compiled for AVX2 machines
+# (target_clones) give the same bits as the baseline build: outputs do not depend on the CPU.
+add_library(rfd_codegen INTERFACE)
+target_compile_options(rfd_codegen INTERFACE -fno-trapping-math -ffp-contract=off)
+
 add_library(rfd_flags INTERFACE)
-target_link_libraries(rfd_flags INTERFACE rfd_warnings rfd_sanitizers)
+target_link_libraries(rfd_flags INTERFACE rfd_warnings rfd_sanitizers rfd_codegen)

@@ -11,15 +11,6 @@ namespace {
 constexpr double kSqrt3 = 1.7320508075688772;
 
 
-// floor() to int without the libm call the default x86-64 target makes of std::floor;
-// this runs once or more per ray. Beyond 2^30 cells (and for NaN) v is clamped: such a
-// point is far outside any array, and converting it unclamped would overflow the int.
-inline int floor_to_int(double v) {
-    // A well-predicted branch: real rays never take it (NaN goes to -2^30).
-    if (!(v > -0x1p30 && v < 0x1p30)) [[unlikely]] v = v > 0.0 ? 0x1p30 : -0x1p30;
-    const int truncated = static_cast<int>(v);
-    return truncated - (v < static_cast<double>(truncated) ? 1 : 0);
-}
 }  // namespace
 
 Lattice Lattice::hexagonal(double pitch, int count_x, int count_y) {
@@ -54,33 +45,6 @@ Lattice::Lattice(LatticeKind kind, double pitch_x, double pitch_y, int count_x, 
 double Lattice::cell_area() const { return pitch_x_ * pitch_y_; }
 
 double Lattice::density_per_mm2() const { return 1.0 / cell_area(); }
-
-
-CellIndex Lattice::cell_at(const Eigen::Vector2d& point) const {
-    // Plain scalars: this runs for every ray at every array, and Eigen's 2-vector packets
-    // cost more here than they save.
-    const double x = point.x() - origin_.x();
-    const double y = point.y() - origin_.y();
-    if (kind_ == LatticeKind::Rectangular)
-        return {floor_to_int(x * inverse_pitch_x_ + 0.5), floor_to_int(y * inverse_pitch_y_ + 0.5)};
-    // Hexagonal: the nearest centre lies in the nearest row or in the neighbouring row on
-    // the point's side of it (rows are pitch*sqrt(3)/2 apart, cells reach pitch/sqrt(3)).
-    // Written without data-dependent branches.
-    const double row_position = y * inverse_pitch_y_;
-    const int j0 = floor_to_int(row_position + 0.5);
-    const int j1 = j0 + (row_position >= j0 ? 1 : -1);
-    const double shift0 = (j0 & 1) ? 0.5 * pitch_x_ : 0.0;
-    const double shift1 = (j1 & 1) ? 0.5 * pitch_x_ : 0.0;
-    const int i0 = floor_to_int((x - shift0) * inverse_pitch_x_ + 0.5);
-    const int i1 = floor_to_int((x - shift1) * inverse_pitch_x_ + 0.5);
-    const double dx0 = x - (i0 * pitch_x_ + shift0), dy0 = y - j0 * pitch_y_;
-    const double dx1 = x - (i1 * pitch_x_ + shift1), dy1 = y - j1 * pitch_y_;
-    const double d0 = dx0 * dx0 + dy0 * dy0;
-    const double d1 = dx1 * dx1 + dy1 * dy1;
-    // On a tie (a point on the shared edge) the lower row wins, deterministically.
-    const bool second = d1 < d0 || (d1 == d0 && j1 < j0);
-    return {second ? i1 : i0, second ? j1 : j0};
-}
 
 
 std::vector<Eigen::Vector2d> Lattice::cell_corners() const {

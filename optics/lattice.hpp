@@ -53,28 +53,78 @@ public:
     /// Area of one cell in square millimetres.
     double cell_area() const;
 
-    /// Centre of cell (i, j); defined for cells outside the array too. Inline: it runs
-    /// for every ray at every arrayed surface.
+    /// Centre of cell (i, j); defined for cells outside the array too.
     Eigen::Vector2d center(CellIndex cell) const {
-        return {origin_.x() + cell.i * pitch_x_ + row_shift(cell.j), origin_.y() + cell.j * pitch_y_};
+        return kind_ == LatticeKind::Hexagonal ? center_of<LatticeKind::Hexagonal>(cell)
+                                               : center_of<LatticeKind::Rectangular>(cell);
     }
     /// The cell whose Voronoi region contains `point` (may lie outside the array).
-    CellIndex cell_at(const Eigen::Vector2d& point) const;
+    CellIndex cell_at(const Eigen::Vector2d& point) const {
+        return kind_ == LatticeKind::Hexagonal ? cell_at_of<LatticeKind::Hexagonal>(point)
+                                               : cell_at_of<LatticeKind::Rectangular>(point);
+    }
     bool contains(CellIndex cell) const {
-        return cell.i >= 0 && cell.j >= 0 && cell.i < count_x_ && cell.j < count_y_;
+        return (cell.i >= 0) & (cell.j >= 0) & (cell.i < count_x_) & (cell.j < count_y_);
     }
     /// True when `point` lies in the (closed) region of `cell`; cheaper than cell_at().
     bool cell_contains(CellIndex cell, const Eigen::Vector2d& point) const {
-        const double x = point.x() - (origin_.x() + cell.i * pitch_x_ + row_shift(cell.j));
+        return kind_ == LatticeKind::Hexagonal
+                   ? cell_contains_of<LatticeKind::Hexagonal>(cell, point)
+                   : cell_contains_of<LatticeKind::Rectangular>(cell, point);
+    }
+
+    // The same three for a kind known at compile time, for loops over many rays: inline
+    // and free of branches, so batch tracers vectorise them. Precondition: K == kind().
+    template <LatticeKind K>
+    Eigen::Vector2d center_of(CellIndex cell) const {
+        return {origin_.x() + cell.i * pitch_x_ + row_shift_of<K>(cell.j),
+                origin_.y() + cell.j * pitch_y_};
+    }
+    template <LatticeKind K>
+    CellIndex cell_at_of(const Eigen::Vector2d& point) const {
+        // Plain scalars: Eigen's 2-vector packets cost more here than they save.
+        const double x = point.x() - origin_.x();
+        const double y = point.y() - origin_.y();
+        if constexpr (K == LatticeKind::Rectangular) {
+            return {floor_to_int(x * inverse_pitch_x_ + 0.5), floor_to_int(y * inverse_pitch_y_ + 0.5)};
+        } else {
+            // The nearest centre lies in the nearest row or in the neighbouring row on the
+            // point's side of it (rows are pitch*sqrt(3)/2 apart, cells reach
+            // pitch/sqrt(3)). Arithmetic on 0/1 values: the row side is random from ray to
+            // ray, and branches on it would mispredict half the time.
+            const double row_position = y * inverse_pitch_y_;
+            const int j0 = floor_to_int(row_position + 0.5);
+            const int j1 = j0 + 2 * static_cast<int>(row_position >= j0) - 1;
+            const double shift0 = row_shift_of<K>(j0);
+            const double shift1 = row_shift_of<K>(j1);
+            const int i0 = floor_to_int((x - shift0) * inverse_pitch_x_ + 0.5);
+            const int i1 = floor_to_int((x - shift1) * inverse_pitch_x_ + 0.5);
+            const double dx0 = x - (i0 * pitch_x_ + shift0), dy0 = y - j0 * pitch_y_;
+            const double dx1 = x - (i1 * pitch_x_ + shift1), dy1 = y - j1 * pitch_y_;
+            const double d0 = dx0 * dx0 + dy0 * dy0;
+            const double d1 = dx1 * dx1 + dy1 * dy1;
+            // On a tie (a point on the shared edge) the lower row wins, deterministically.
+            const int second = static_cast<int>(d1 < d0) |
+                               (static_cast<int>(d1 == d0) & static_cast<int>(j1 < j0));
+            return {i0 + second * (i1 - i0), j0 + second * (j1 - j0)};
+        }
+    }
+    template <LatticeKind K>
+    bool cell_contains_of(CellIndex cell, const Eigen::Vector2d& point) const {
+        const double x = point.x() - (origin_.x() + cell.i * pitch_x_ + row_shift_of<K>(cell.j));
         const double y = point.y() - (origin_.y() + cell.j * pitch_y_);
         const double half = 0.5 * pitch_x_;
         const double ax = x < 0 ? -x : x;
-        if (kind_ == LatticeKind::Rectangular) return ax <= half && (y < 0 ? -y : y) <= 0.5 * pitch_y_;
-        // Face normals of the hexagon at 0, 60 and 120 degrees (0.866... = sqrt(3)/2).
-        const double a = 0.5 * x + 0.8660254037844386 * y;
-        const double b = -0.5 * x + 0.8660254037844386 * y;
-        return ax <= half && (a < 0 ? -a : a) <= half && (b < 0 ? -b : b) <= half;
+        if constexpr (K == LatticeKind::Rectangular) {
+            return (ax <= half) & ((y < 0 ? -y : y) <= 0.5 * pitch_y_);
+        } else {
+            // Face normals of the hexagon at 0, 60 and 120 degrees (0.866... = sqrt(3)/2).
+            const double a = 0.5 * x + 0.8660254037844386 * y;
+            const double b = -0.5 * x + 0.8660254037844386 * y;
+            return (ax <= half) & ((a < 0 ? -a : a) <= half) & ((b < 0 ? -b : b) <= half);
+        }
     }
+
     /// Corners of a cell relative to its centre, counter-clockwise (4 or 6 of them).
     std::vector<Eigen::Vector2d> cell_corners() const;
     /// Largest distance from a cell's centre to its boundary (the corner distance).
@@ -91,11 +141,27 @@ public:
     }
 
 private:
+    // floor() to int without the libm call the default x86-64 target makes of std::floor.
+    // Beyond 2^30 cells (and for NaN) v is clamped: such a point is far outside any array,
+    // and converting it unclamped would overflow the int. Branch-free (min/max), so it
+    // vectorises in batch loops.
+    static int floor_to_int(double v) {
+        v = v > -0x1p30 ? v : -0x1p30;  // NaN compares false: clamped low
+        v = v < 0x1p30 ? v : 0x1p30;
+        const int truncated = static_cast<int>(v);
+        return truncated - static_cast<int>(v < static_cast<double>(truncated));
+    }
+
     Lattice(LatticeKind kind, double pitch_x, double pitch_y, int count_x, int count_y);
     // x shift of row j: pitch/2 on odd rows of a hexagonal lattice (j & 1 is the floor
     // modulo 2 for negative rows too, in two's complement).
     double row_shift(int j) const {
-        return kind_ == LatticeKind::Hexagonal && (j & 1) ? 0.5 * pitch_x_ : 0.0;
+        return kind_ == LatticeKind::Hexagonal ? row_shift_of<LatticeKind::Hexagonal>(j) : 0.0;
+    }
+    template <LatticeKind K>
+    double row_shift_of(int j) const {
+        if constexpr (K == LatticeKind::Hexagonal) return (j & 1) * (0.5 * pitch_x_);
+        return 0.0;
     }
 
     LatticeKind kind_;

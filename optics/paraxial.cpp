@@ -1,5 +1,8 @@
 #include "optics/paraxial.hpp"
 
+#include <algorithm>
+#include <array>
+#include <bit>
 #include <cmath>
 #include <limits>
 
@@ -194,20 +197,163 @@ void ParaxialBatch::resize(std::size_t n) {
     cell_j.resize(n);
 }
 
+namespace {
+
+// One stage applied to a run of rays [0, n) of a batch. The loops run stage by stage
+// rather than ray by ray: each is a straight pass over arrays with no per-ray dispatch,
+// and a ray that has already stopped is carried through unchanged by selects, not
+// branches (rays stop at random places, so branches would mispredict). The arithmetic is
+// that of trace_prepared(), term for term, so both give bit-identical rays.
+struct BatchView {
+    double* x;
+    double* y;
+    double* tx;
+    double* ty;
+    RayStatus* status;
+    std::int32_t* cell_i;
+    std::int32_t* cell_j;
+    double* axis_x;  // axis of the lenslet entered (0 until one is)
+    double* axis_y;
+};
+
+// Branch-free selects as bit masks. GCC turns `x[k] = alive ? new : x[k]` into a
+// conditional store, which it cannot vectorise without AVX; bitwise blends it can.
+inline std::uint64_t mask64(bool condition) { return -static_cast<std::uint64_t>(condition); }
+inline std::uint32_t mask32(bool condition) { return -static_cast<std::uint32_t>(condition); }
+inline double select(std::uint64_t mask, double if_set, double otherwise) {
+    return std::bit_cast<double>((std::bit_cast<std::uint64_t>(if_set) & mask) |
+                                 (std::bit_cast<std::uint64_t>(otherwise) & ~mask));
+}
+inline std::int32_t select(std::uint32_t mask, std::int32_t if_set, std::int32_t otherwise) {
+    return static_cast<std::int32_t>((static_cast<std::uint32_t>(if_set) & mask) |
+                                     (static_cast<std::uint32_t>(otherwise) & ~mask));
+}
+inline RayStatus stop_if(bool alive, bool stops, RayStatus reason, RayStatus current) {
+    const auto m = static_cast<std::uint8_t>(-static_cast<int>(alive && stops));
+    return static_cast<RayStatus>((static_cast<std::uint8_t>(reason) & m) |
+                                  (static_cast<std::uint8_t>(current) & static_cast<std::uint8_t>(~m)));
+}
+
+// A ray meets its first arrayed surface: it enters the lenslet whose cell it hits, or is
+// vignetted outside the array.
+template <LatticeKind K>
+void enter_lattice(const Lattice& lattice, const BatchView& v, std::size_t n) {
+    const double* __restrict px = v.x;
+    const double* __restrict py = v.y;
+    RayStatus* __restrict status = v.status;
+    std::int32_t* __restrict cell_i = v.cell_i;
+    std::int32_t* __restrict cell_j = v.cell_j;
+    double* __restrict axis_x = v.axis_x;
+    double* __restrict axis_y = v.axis_y;
+    for (std::size_t k = 0; k < n; ++k) {
+        const bool alive = status[k] == RayStatus::Ok;
+        const CellIndex cell = lattice.cell_at_of<K>({px[k], py[k]});
+        const Eigen::Vector2d centre = lattice.center_of<K>(cell);
+        cell_i[k] = select(mask32(alive), cell.i, cell_i[k]);
+        cell_j[k] = select(mask32(alive), cell.j, cell_j[k]);
+        axis_x[k] = select(mask64(alive), centre.x(), axis_x[k]);
+        axis_y[k] = select(mask64(alive), centre.y(), axis_y[k]);
+        status[k] = stop_if(alive, !lattice.contains(cell), RayStatus::Vignetted, status[k]);
+    }
+}
+
+// Later arrayed surfaces: the ray must still be inside the lenslet it entered.
+template <LatticeKind K>
+void stay_in_cell(const Lattice& lattice, const BatchView& v, std::size_t n) {
+    const double* __restrict px = v.x;
+    const double* __restrict py = v.y;
+    RayStatus* __restrict status = v.status;
+    const std::int32_t* __restrict cell_i = v.cell_i;
+    const std::int32_t* __restrict cell_j = v.cell_j;
+    for (std::size_t k = 0; k < n; ++k) {
+        const bool alive = status[k] == RayStatus::Ok;
+        const bool stays = lattice.cell_contains_of<K>({cell_i[k], cell_j[k]}, {px[k], py[k]});
+        status[k] = stop_if(alive, !stays, RayStatus::CrossedCell, status[k]);
+    }
+}
+
+// Compiled twice: for AVX2 machines (x86-64-v3) and for the x86-64 baseline, chosen at
+// load time. ISO C++ mode keeps floating-point contraction off, so both clones compute
+// bit-identical results.
+__attribute__((target_clones("arch=x86-64-v3", "default"), flatten))
+void apply_stage(const Stage& stage, bool enters_lattice, const BatchView& v, std::size_t n) {
+    double* __restrict px = v.x;
+    double* __restrict py = v.y;
+    double* __restrict ptx = v.tx;
+    double* __restrict pty = v.ty;
+    RayStatus* __restrict status = v.status;
+    const double* __restrict axis_x = v.axis_x;
+    const double* __restrict axis_y = v.axis_y;
+
+    const RayMatrix m = stage.transfer;
+    for (std::size_t k = 0; k < n; ++k) {
+        const std::uint64_t alive = mask64(status[k] == RayStatus::Ok);
+        const double x0 = px[k], y0 = py[k], tx0 = ptx[k], ty0 = pty[k];
+        px[k] = select(alive, m.a * x0 + m.b * tx0, x0);
+        py[k] = select(alive, m.a * y0 + m.b * ty0, y0);
+        ptx[k] = select(alive, m.c * x0 + m.d * tx0, tx0);
+        pty[k] = select(alive, m.c * y0 + m.d * ty0, ty0);
+    }
+    if (stage.lattice && enters_lattice) {
+        if (stage.lattice->kind() == LatticeKind::Hexagonal)
+            enter_lattice<LatticeKind::Hexagonal>(*stage.lattice, v, n);
+        else
+            enter_lattice<LatticeKind::Rectangular>(*stage.lattice, v, n);
+    } else if (stage.lattice) {
+        if (stage.lattice->kind() == LatticeKind::Hexagonal)
+            stay_in_cell<LatticeKind::Hexagonal>(*stage.lattice, v, n);
+        else
+            stay_in_cell<LatticeKind::Rectangular>(*stage.lattice, v, n);
+    } else if (stage.semi_diameter2 >= 0.0) {
+        for (std::size_t k = 0; k < n; ++k) {
+            const bool alive = status[k] == RayStatus::Ok;
+            const bool outside = px[k] * px[k] + py[k] * py[k] > stage.semi_diameter2;
+            status[k] = stop_if(alive, outside, RayStatus::Vignetted, status[k]);
+        }
+    }
+    if (!stage.refracts) return;
+    const double c = stage.refraction.c, d = stage.refraction.d;
+    if (stage.lattice) {
+        for (std::size_t k = 0; k < n; ++k) {
+            const std::uint64_t alive = mask64(status[k] == RayStatus::Ok);
+            ptx[k] = select(alive, c * (px[k] - axis_x[k]) + d * ptx[k], ptx[k]);
+            pty[k] = select(alive, c * (py[k] - axis_y[k]) + d * pty[k], pty[k]);
+        }
+    } else {
+        // Centred surfaces refract about h = 0; written as trace_prepared() does.
+        for (std::size_t k = 0; k < n; ++k) {
+            const std::uint64_t alive = mask64(status[k] == RayStatus::Ok);
+            ptx[k] = select(alive, c * (px[k] - 0.0) + d * ptx[k], ptx[k]);
+            pty[k] = select(alive, c * (py[k] - 0.0) + d * pty[k], pty[k]);
+        }
+    }
+}
+
+}  // namespace
+
 void trace_paraxial_batch(const SequentialSystem& system, ParaxialBatch& batch, double z_start,
                           std::size_t first, std::size_t last) {
     const auto stages = prepare(system, z_start, first, last);
+    constexpr std::size_t kBlock = 1024;  // rays per pass: the block stays in L1/L2
     parallel_for_chunks(batch.size(), 4096, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t k = begin; k < end; ++k) {
-            const ParaxialResult r =
-                trace_prepared(stages, {batch.x[k], batch.y[k], batch.tx[k], batch.ty[k]});
-            batch.x[k] = r.ray.x;
-            batch.y[k] = r.ray.y;
-            batch.tx[k] = r.ray.tx;
-            batch.ty[k] = r.ray.ty;
-            batch.status[k] = r.status;
-            batch.cell_i[k] = r.cell.i;
-            batch.cell_j[k] = r.cell.j;
+        std::array<double, kBlock> axis_x, axis_y;
+        for (std::size_t block = begin; block < end; block += kBlock) {
+            const std::size_t n = std::min(kBlock, end - block);
+            const BatchView view{batch.x.data() + block,      batch.y.data() + block,
+                                 batch.tx.data() + block,     batch.ty.data() + block,
+                                 batch.status.data() + block, batch.cell_i.data() + block,
+                                 batch.cell_j.data() + block, axis_x.data(),
+                                 axis_y.data()};
+            std::fill_n(view.status, n, RayStatus::Ok);
+            std::fill_n(view.cell_i, n, 0);
+            std::fill_n(view.cell_j, n, 0);
+            std::fill_n(view.axis_x, n, 0.0);
+            std::fill_n(view.axis_y, n, 0.0);
+            bool entered = false;
+            for (const Stage& stage : stages) {
+                apply_stage(stage, !entered, view, n);
+                entered = entered || stage.lattice != nullptr;
+            }
         }
     });
 }
