@@ -1,0 +1,91 @@
+#include "relight/capture_device.hpp"
+
+#include <cstdio>
+#include <cstdlib>
+#include <sys/wait.h>
+
+#include "core/error.hpp"
+#include "core/files.hpp"
+#include "core/image_io.hpp"
+#include "core/sphere.hpp"
+#include "core/units.hpp"
+
+namespace rfd::relight {
+namespace {
+
+std::string number(double v) {
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, "%.9g", v);
+    return buffer;
+}
+
+// Single-quoted for the shell: the only character to escape is the quote itself.
+std::string shell_quoted(const std::string& text) {
+    std::string quoted = "'";
+    for (const char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return quoted + "'";
+}
+
+void replace_all(std::string& text, const std::string& key, const std::string& value) {
+    for (std::size_t at = text.find(key); at != std::string::npos; at = text.find(key, at + value.size()))
+        text.replace(at, key.size(), value);
+}
+
+}  // namespace
+
+CommandCaptureDevice::CommandCaptureDevice(std::string command_template,
+                                           std::filesystem::path scratch, double narrow_radius,
+                                           double wide_radius)
+    : template_(std::move(command_template)),
+      scratch_(std::move(scratch)),
+      narrow_radius_(narrow_radius),
+      wide_radius_(wide_radius) {
+    if (template_.find("{out}") == std::string::npos)
+        throw InputError(SourceLocation{"", 0, 0, "--device"},
+                         "the capture command must contain {out}, the image file it writes");
+    ensure_directory(scratch_);
+}
+
+std::string CommandCaptureDevice::command_for(const Eigen::Vector3d& direction, LightKernel kernel,
+                                              const std::filesystem::path& out) const {
+    const SphericalAngles angles = angles_of(direction);
+    std::string command = template_;
+    replace_all(command, "{x}", number(direction.x()));
+    replace_all(command, "{y}", number(direction.y()));
+    replace_all(command, "{z}", number(direction.z()));
+    replace_all(command, "{theta}", number(radians_to_degrees(angles.theta)));
+    replace_all(command, "{phi}", number(radians_to_degrees(angles.phi)));
+    replace_all(command, "{kernel}", kernel == LightKernel::Narrow ? "narrow" : "wide");
+    replace_all(command, "{out}", shell_quoted(out.string()));
+    return command;
+}
+
+std::vector<Image> CommandCaptureDevice::capture(const std::vector<Eigen::Vector3d>& directions,
+                                                 LightKernel kernel) {
+    std::vector<Image> images;
+    for (const Eigen::Vector3d& direction : directions) {
+        char name[32];
+        std::snprintf(name, sizeof name, "capture_%06zu.exr", counter_++);
+        const std::filesystem::path out = scratch_ / name;
+        std::error_code ec;
+        std::filesystem::remove(out, ec);
+        const std::string command = command_for(direction, kernel, out);
+        const int status = std::system(command.c_str());
+        if (status == -1 || !WIFEXITED(status) || WEXITSTATUS(status) != 0)
+            throw ToolError("capture command failed (" +
+                            (status == -1 || !WIFEXITED(status)
+                                 ? std::string("did not run to completion")
+                                 : "exit status " + std::to_string(WEXITSTATUS(status))) +
+                            "): " + command);
+        if (!std::filesystem::exists(out))
+            throw ToolError("capture command succeeded but wrote no image at " + out.string() +
+                            ": " + command);
+        images.push_back(read_image(out));
+        if (!images.front().same_shape(images.back()))
+            throw ToolError("capture command returned images of different sizes: " + command);
+        std::filesystem::remove(out, ec);
+    }
+    return images;
+}
+
+}  // namespace rfd::relight
