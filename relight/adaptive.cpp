@@ -1,6 +1,7 @@
 #include "relight/adaptive.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <numeric>
 #include <set>
@@ -12,6 +13,15 @@
 #include "core/sphere.hpp"
 
 namespace rfd::relight {
+
+std::vector<Triangle> canonical_order(std::vector<Triangle> triangles) {
+    for (Triangle& t : triangles) {
+        const auto smallest = std::min_element(t.begin(), t.end());
+        std::rotate(t.begin(), smallest, t.end());
+    }
+    std::sort(triangles.begin(), triangles.end());
+    return triangles;
+}
 
 std::vector<std::vector<std::size_t>> one_rings(std::size_t vertex_count,
                                                 const std::vector<Triangle>& triangles) {
@@ -185,6 +195,68 @@ Image matched_to_mean(const Image& wide, const Image& narrow) {
     const auto factor = static_cast<float>(sum_narrow / sum_wide);
     for (float& v : scaled.samples()) v *= factor;
     return scaled;
+}
+
+AdaptiveRun adaptive_capture(CaptureDevice& device, const std::vector<Eigen::Vector3d>& initial,
+                             const Triangulate& triangulate, const AdaptiveOptions& options,
+                             const std::function<void(const AdaptiveRun&)>& after_iteration) {
+    RFD_CHECK(options.per_iteration > 0);
+    AdaptiveRun run;
+    const std::size_t first = std::min(initial.size(), options.total);
+    run.field.directions.assign(initial.begin(), initial.begin() + static_cast<std::ptrdiff_t>(first));
+    run.field.images = device.capture(run.field.directions, LightKernel::Narrow);
+    run.iteration.assign(first, 0);
+    run.images_after.push_back(first);
+    if (after_iteration) after_iteration(run);
+    ProjectionErrors errors;
+    for (std::size_t iteration = 1; run.field.size() < options.total; ++iteration) {
+        const auto start = std::chrono::steady_clock::now();
+        const std::vector<Triangle> triangles = canonical_order(triangulate(run.field.directions));
+        const auto rings = one_rings(run.field.size(), triangles);
+        const std::vector<double> vertex_errors = errors.update(run.field.images, rings);
+        InsertionOptions insertion_options;
+        insertion_options.count = std::min(options.per_iteration, options.total - run.field.size());
+        insertion_options.min_separation = options.min_separation;
+        const Insertion insertion =
+            choose_new_directions(run.field.directions, triangles, vertex_errors, insertion_options);
+        run.analysis_seconds.push_back(
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+        if (insertion.directions.empty()) {
+            run.density_limit_reached = true;
+            break;
+        }
+        std::vector<Image> images = device.capture(insertion.directions, LightKernel::Narrow);
+        for (std::size_t k = 0; k < images.size(); ++k) {
+            run.field.directions.push_back(insertion.directions[k]);
+            run.field.images.push_back(std::move(images[k]));
+            run.iteration.push_back(iteration);
+        }
+        run.images_after.push_back(run.field.size());
+        if (after_iteration) after_iteration(run);
+    }
+    return run;
+}
+
+std::vector<std::size_t> make_two_level(ReflectanceField& field, std::size_t initial_count,
+                                        CaptureDevice& device, const Triangulate& triangulate,
+                                        double threshold) {
+    RFD_CHECK(initial_count <= field.size());
+    const auto rings = one_rings(field.size(), triangulate(field.directions));
+    std::vector<std::size_t> candidates(initial_count);
+    std::iota(candidates.begin(), candidates.end(), std::size_t{0});
+    const std::vector<std::size_t> replaced =
+        sparse_directions(field.directions, rings, candidates, threshold);
+    std::vector<Eigen::Vector3d> directions;
+    for (const std::size_t i : replaced) directions.push_back(field.directions[i]);
+    const std::vector<Image> wide = device.capture(directions, LightKernel::Wide);
+    if (field.kernel_radii.empty())
+        field.kernel_radii.assign(field.size(), device.kernel_radius(LightKernel::Narrow));
+    for (std::size_t k = 0; k < replaced.size(); ++k) {
+        const std::size_t i = replaced[k];
+        field.images[i] = matched_to_mean(wide[k], field.images[i]);
+        field.kernel_radii[i] = device.kernel_radius(LightKernel::Wide);
+    }
+    return replaced;
 }
 
 }  // namespace rfd::relight

@@ -25,6 +25,7 @@
 // Example: ProjectionErrors errors; auto e = errors.update(field.images, one_rings(n, tris));
 
 #include <array>
+#include <functional>
 #include <cstddef>
 #include <map>
 #include <utility>
@@ -33,10 +34,18 @@
 #include <Eigen/Core>
 
 #include "core/image.hpp"
+#include "relight/capture_device.hpp"
+#include "relight/field.hpp"
 
 namespace rfd::relight {
 
 using Triangle = std::array<std::size_t, 3>;
+
+/// The same triangles in an order that depends only on the triangles themselves: each
+/// rotated (orientation kept) so that its smallest index comes first, then sorted.
+/// Triangulators may list faces in an order that depends on hidden state (CGAL's
+/// randomised point location); ranking and ties must not.
+std::vector<Triangle> canonical_order(std::vector<Triangle> triangles);
 
 /// The one-ring of every vertex: the vertices it shares a triangle edge with, ascending.
 std::vector<std::vector<std::size_t>> one_rings(std::size_t vertex_count,
@@ -100,5 +109,40 @@ std::vector<std::size_t> sparse_directions(const std::vector<Eigen::Vector3d>& d
 /// `wide` scaled so that its mean over all samples equals `narrow`'s (5.4). A black wide
 /// image stays black.
 Image matched_to_mean(const Image& wide, const Image& narrow);
+
+/// The interpolation triangulation of a direction set (hull triangles of the upper
+/// hemisphere, thesis 4.4), supplied by the caller so this file does not depend on how it
+/// is computed.
+using Triangulate = std::function<std::vector<Triangle>(const std::vector<Eigen::Vector3d>&)>;
+
+struct AdaptiveOptions {
+    std::size_t per_iteration = 16;  ///< m
+    std::size_t total = 1024;        ///< stop at this many images
+    double min_separation = 0.034906585039886591;  ///< density limit, radians (2 degrees)
+};
+
+/// The state after an iteration, for progress reports, error-versus-count charts and tests.
+struct AdaptiveRun {
+    ReflectanceField field;                  ///< all images so far, initial set first
+    std::vector<std::size_t> iteration;      ///< per image: 0 for the initial set, then 1, 2...
+    std::vector<std::size_t> images_after;   ///< image count after each iteration (0 = initial)
+    std::vector<double> analysis_seconds;    ///< analysis + insertion time per iteration
+    bool density_limit_reached = false;      ///< stopped because nothing could be inserted
+};
+
+/// Adaptive capture (5.3): captures `initial` with the device's narrow light, then iterates
+/// analysis and insertion until `options.total` images or the density limit. Calls
+/// `after_iteration` (may be empty) after the initial capture and every iteration.
+AdaptiveRun adaptive_capture(CaptureDevice& device, const std::vector<Eigen::Vector3d>& initial,
+                             const Triangulate& triangulate, const AdaptiveOptions& options,
+                             const std::function<void(const AdaptiveRun&)>& after_iteration = {});
+
+/// Two-level field (5.4): for the first `initial_count` directions of `field` whose one-ring
+/// neighbours (in the triangulation of all its directions) are all farther than
+/// `threshold`, captures a wide-kernel image, scales it to the narrow image's mean and
+/// replaces the narrow image; records the wide kernel radius. Returns the replaced indices.
+std::vector<std::size_t> make_two_level(ReflectanceField& field, std::size_t initial_count,
+                                        CaptureDevice& device, const Triangulate& triangulate,
+                                        double threshold);
 
 }  // namespace rfd::relight

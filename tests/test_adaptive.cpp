@@ -5,6 +5,9 @@
 #include <numeric>
 #include <random>
 
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Surface_mesh.h>
+#include <CGAL/convex_hull_3.h>
 #include <Eigen/QR>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -214,6 +217,157 @@ TEST(Adaptive, WideImageIsScaledToTheNarrowMean) {
     EXPECT_NEAR(sum_matched, sum_narrow, 1e-5 * sum_narrow);
     EXPECT_NEAR(matched.at(1, 2, 0) / matched.at(3, 1, 2), wide.at(1, 2, 0) / wide.at(3, 1, 2), 1e-5);  // shape kept
     EXPECT_EQ(matched_to_mean(Image(6, 5, 3, 0.0f), narrow), Image(6, 5, 3, 0.0f));
+}
+
+
+// ---- the capture loop, with a synthetic scene and an independent triangulation ----
+
+// The hull of the directions plus a guardian below the horizon (CGAL's convex hull, not the
+// relighting code's Delaunay), minus the facets touching the guardian.
+std::vector<Triangle> hull_triangles(const std::vector<Eigen::Vector3d>& directions) {
+    using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+    using Point = Kernel::Point_3;
+    std::vector<Point> points;
+    std::map<Point, std::size_t> index;
+    for (std::size_t i = 0; i < directions.size(); ++i) {
+        points.emplace_back(directions[i].x(), directions[i].y(), directions[i].z());
+        index[points.back()] = i;
+    }
+    const Point guardian(0, 0, -1);
+    points.push_back(guardian);
+    CGAL::Surface_mesh<Point> hull;
+    CGAL::convex_hull_3(points.begin(), points.end(), hull);
+    std::vector<Triangle> triangles;
+    for (const auto face : hull.faces()) {
+        Triangle t{};
+        int corner = 0;
+        bool has_guardian = false;
+        for (const auto v : CGAL::vertices_around_face(hull.halfedge(face), hull)) {
+            const Point& p = hull.point(v);
+            if (p == guardian) has_guardian = true;
+            else t[corner] = index.at(p);
+            ++corner;
+        }
+        if (!has_guardian) triangles.push_back(t);
+    }
+    return triangles;
+}
+
+// A scene whose appearance changes quickly only for lights near `hot`: every pixel has a
+// narrow highlight at a direction within 25 degrees of it, and a dull diffuse term.
+class HighlightScene : public CaptureDevice {
+public:
+    explicit HighlightScene(Eigen::Vector3d hot) : hot_(hot.normalized()) {
+        std::mt19937 random(5);
+        std::normal_distribution<double> jitter(0.0, 0.2);
+        for (int p = 0; p < 48; ++p) peaks_.push_back((hot_ + Eigen::Vector3d(jitter(random), jitter(random), jitter(random))).normalized());
+    }
+    std::vector<Image> capture(const std::vector<Eigen::Vector3d>& directions, LightKernel kernel) override {
+        std::vector<Image> images;
+        const double width = kernel == LightKernel::Narrow ? 0.05 : 0.3;
+        for (const auto& d : directions) {
+            Image image(8, 6, 1);
+            for (int p = 0; p < 48; ++p) {
+                const double a = angle_between(d, peaks_[p]);
+                image.at(p % 8, p / 8, 0) = static_cast<float>(0.2 * std::max(d.z(), 0.0) + std::exp(-a * a / (width * width)));
+            }
+            images.push_back(image);
+        }
+        ++calls;
+        return images;
+    }
+    double kernel_radius(LightKernel kernel) const override { return kernel == LightKernel::Narrow ? 0.05 : 0.3; }
+    int calls = 0;
+
+private:
+    Eigen::Vector3d hot_;
+    std::vector<Eigen::Vector3d> peaks_;
+};
+
+std::vector<Eigen::Vector3d> initial_directions(std::size_t count) {
+    // Fibonacci hemisphere: near-uniform and independent of the code under test.
+    std::vector<Eigen::Vector3d> directions;
+    const double golden = kPi * (3.0 - std::sqrt(5.0));
+    for (std::size_t k = 0; k < count; ++k) {
+        const double z = 1.0 - (static_cast<double>(k) + 0.5) / static_cast<double>(count);
+        const double r = std::sqrt(1.0 - z * z);
+        directions.emplace_back(r * std::cos(golden * static_cast<double>(k)), r * std::sin(golden * static_cast<double>(k)), z);
+    }
+    return directions;
+}
+
+TEST(AdaptiveCapture, InsertsWhereTheSceneChangesUntilTheBudget) {
+    const Eigen::Vector3d hot = direction_from_angles(degrees_to_radians(45), degrees_to_radians(60));
+    HighlightScene scene(hot);
+    AdaptiveOptions options;
+    options.per_iteration = 8;
+    options.total = 96;
+    std::size_t reports = 0;
+    const AdaptiveRun run = adaptive_capture(scene, initial_directions(48), hull_triangles, options,
+                                             [&](const AdaptiveRun&) { ++reports; });
+    ASSERT_EQ(run.field.size(), 96u);
+    EXPECT_EQ(run.images_after.front(), 48u);
+    EXPECT_EQ(run.images_after.back(), 96u);
+    EXPECT_EQ(reports, run.images_after.size());
+    EXPECT_EQ(run.iteration[47], 0u);
+    EXPECT_EQ(run.iteration[48], 1u);
+    // The inserted directions crowd around the highlights; the initial ones do not.
+    auto mean_angle = [&](std::size_t begin, std::size_t end) {
+        double sum = 0;
+        for (std::size_t i = begin; i < end; ++i) sum += angle_between(run.field.directions[i], hot);
+        return sum / static_cast<double>(end - begin);
+    };
+    EXPECT_LT(mean_angle(48, 96), 0.5 * mean_angle(0, 48));
+    for (std::size_t i = 48; i < 96; ++i)
+        for (std::size_t j = 0; j < i; ++j)
+            EXPECT_GE(angle_between(run.field.directions[i], run.field.directions[j]), options.min_separation);
+    // Same inputs, same run.
+    HighlightScene again(hot);
+    const AdaptiveRun second = adaptive_capture(again, initial_directions(48), hull_triangles, options);
+    EXPECT_EQ(second.field.directions, run.field.directions);
+}
+
+TEST(AdaptiveCapture, StopsAtTheDensityLimit) {
+    HighlightScene scene(Eigen::Vector3d::UnitZ());
+    AdaptiveOptions options;
+    options.per_iteration = 64;
+    options.total = 100000;
+    options.min_separation = degrees_to_radians(25);  // a coarse limit the run soon reaches
+    const AdaptiveRun run = adaptive_capture(scene, initial_directions(12), hull_triangles, options);
+    EXPECT_TRUE(run.density_limit_reached);
+    EXPECT_LT(run.field.size(), 100u);
+}
+
+TEST(AdaptiveCapture, TwoLevelReplacesIsolatedInitialImagesByScaledWideOnes) {
+    HighlightScene scene(direction_from_angles(degrees_to_radians(45), 0.0));
+    AdaptiveOptions options;
+    options.per_iteration = 8;
+    options.total = 80;
+    AdaptiveRun run = adaptive_capture(scene, initial_directions(32), hull_triangles, options);
+    const ReflectanceField narrow = run.field;
+    const auto replaced = make_two_level(run.field, 32, scene, hull_triangles, degrees_to_radians(9));
+    ASSERT_FALSE(replaced.empty());
+    const auto rings = one_rings(narrow.size(), hull_triangles(narrow.directions));
+    for (std::size_t i = 0; i < narrow.size(); ++i) {
+        const bool was_replaced = std::find(replaced.begin(), replaced.end(), i) != replaced.end();
+        if (!was_replaced) {
+            EXPECT_EQ(run.field.images[i], narrow.images[i]);
+            EXPECT_EQ(run.field.kernel_radius(i), 0.05);
+            continue;
+        }
+        EXPECT_LT(i, 32u);
+        for (const std::size_t k : rings[i]) EXPECT_GT(angle_between(narrow.directions[i], narrow.directions[k]), degrees_to_radians(9));
+        EXPECT_EQ(run.field.kernel_radius(i), 0.3);
+        EXPECT_NEAR(image_dot(run.field.images[i], Image(8, 6, 1, 1.0f)), image_dot(narrow.images[i], Image(8, 6, 1, 1.0f)), 1e-4);
+    }
+}
+
+TEST(Adaptive, CanonicalOrderKeepsOrientationAndIgnoresListingOrder) {
+    const std::vector<Triangle> listed = {{7, 2, 5}, {3, 9, 1}, {4, 0, 8}};
+    const std::vector<Triangle> shuffled = {{1, 3, 9}, {8, 4, 0}, {2, 5, 7}};
+    const std::vector<Triangle> expected = {{0, 8, 4}, {1, 3, 9}, {2, 5, 7}};
+    EXPECT_EQ(canonical_order(listed), expected);
+    EXPECT_EQ(canonical_order(shuffled), expected);
 }
 
 }  // namespace
