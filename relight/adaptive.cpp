@@ -204,7 +204,7 @@ AdaptiveRun adaptive_capture(CaptureDevice& device, const std::vector<Eigen::Vec
     AdaptiveRun run;
     const std::size_t first = std::min(initial.size(), options.total);
     run.field.directions.assign(initial.begin(), initial.begin() + static_cast<std::ptrdiff_t>(first));
-    run.field.images = device.capture(run.field.directions, LightKernel::Narrow);
+    run.field.images = device.capture(run.field.directions, KernelChoice::Narrow);
     run.iteration.assign(first, 0);
     run.images_after.push_back(first);
     if (after_iteration) after_iteration(run);
@@ -225,7 +225,7 @@ AdaptiveRun adaptive_capture(CaptureDevice& device, const std::vector<Eigen::Vec
             run.density_limit_reached = true;
             break;
         }
-        std::vector<Image> images = device.capture(insertion.directions, LightKernel::Narrow);
+        std::vector<Image> images = device.capture(insertion.directions, KernelChoice::Narrow);
         for (std::size_t k = 0; k < images.size(); ++k) {
             run.field.directions.push_back(insertion.directions[k]);
             run.field.images.push_back(std::move(images[k]));
@@ -248,13 +248,13 @@ std::vector<std::size_t> make_two_level(ReflectanceField& field, std::size_t ini
         sparse_directions(field.directions, rings, candidates, threshold);
     std::vector<Eigen::Vector3d> directions;
     for (const std::size_t i : replaced) directions.push_back(field.directions[i]);
-    const std::vector<Image> wide = device.capture(directions, LightKernel::Wide);
+    const std::vector<Image> wide = device.capture(directions, KernelChoice::Wide);
     if (field.kernel_radii.empty())
-        field.kernel_radii.assign(field.size(), device.kernel_radius(LightKernel::Narrow));
+        field.kernel_radii.assign(field.size(), device.kernel_radius(KernelChoice::Narrow));
     for (std::size_t k = 0; k < replaced.size(); ++k) {
         const std::size_t i = replaced[k];
         field.images[i] = matched_to_mean(wide[k], field.images[i]);
-        field.kernel_radii[i] = device.kernel_radius(LightKernel::Wide);
+        field.kernel_radii[i] = device.kernel_radius(KernelChoice::Wide);
     }
     return replaced;
 }

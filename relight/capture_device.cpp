@@ -46,7 +46,7 @@ CommandCaptureDevice::CommandCaptureDevice(std::string command_template,
     ensure_directory(scratch_);
 }
 
-std::string CommandCaptureDevice::command_for(const Eigen::Vector3d& direction, LightKernel kernel,
+std::string CommandCaptureDevice::command_for(const Eigen::Vector3d& direction, KernelChoice kernel,
                                               const std::filesystem::path& out) const {
     const SphericalAngles angles = angles_of(direction);
     std::string command = template_;
@@ -55,13 +55,13 @@ std::string CommandCaptureDevice::command_for(const Eigen::Vector3d& direction, 
     replace_all(command, "{z}", number(direction.z()));
     replace_all(command, "{theta}", number(radians_to_degrees(angles.theta)));
     replace_all(command, "{phi}", number(radians_to_degrees(angles.phi)));
-    replace_all(command, "{kernel}", kernel == LightKernel::Narrow ? "narrow" : "wide");
+    replace_all(command, "{kernel}", kernel == KernelChoice::Narrow ? "narrow" : "wide");
     replace_all(command, "{out}", shell_quoted(out.string()));
     return command;
 }
 
 std::vector<Image> CommandCaptureDevice::capture(const std::vector<Eigen::Vector3d>& directions,
-                                                 LightKernel kernel) {
+                                                 KernelChoice kernel) {
     std::vector<Image> images;
     for (const Eigen::Vector3d& direction : directions) {
         char name[32];

@@ -21,16 +21,17 @@
 
 namespace rfd::relight {
 
-enum class LightKernel { Narrow, Wide };
+/// Which of the device's two lights an image is taken with (two-level fields, 5.4).
+enum class KernelChoice { Narrow, Wide };
 
 class CaptureDevice {
 public:
     virtual ~CaptureDevice() = default;
     /// One linear image per direction, in order, under the narrow or the wide light.
     virtual std::vector<Image> capture(const std::vector<Eigen::Vector3d>& directions,
-                                       LightKernel kernel) = 0;
+                                       KernelChoice kernel) = 0;
     /// Angular radius (radians) of the light each kernel gives, as recorded in the field.
-    virtual double kernel_radius(LightKernel kernel) const = 0;
+    virtual double kernel_radius(KernelChoice kernel) const = 0;
 };
 
 class CommandCaptureDevice : public CaptureDevice {
@@ -39,12 +40,12 @@ public:
     CommandCaptureDevice(std::string command_template, std::filesystem::path scratch,
                          double narrow_radius = 0.0, double wide_radius = 0.0);
     std::vector<Image> capture(const std::vector<Eigen::Vector3d>& directions,
-                               LightKernel kernel) override;
-    double kernel_radius(LightKernel kernel) const override {
-        return kernel == LightKernel::Narrow ? narrow_radius_ : wide_radius_;
+                               KernelChoice kernel) override;
+    double kernel_radius(KernelChoice kernel) const override {
+        return kernel == KernelChoice::Narrow ? narrow_radius_ : wide_radius_;
     }
     /// The command line for one direction (exposed for tests and --dry-run reports).
-    std::string command_for(const Eigen::Vector3d& direction, LightKernel kernel,
+    std::string command_for(const Eigen::Vector3d& direction, KernelChoice kernel,
                             const std::filesystem::path& out) const;
 
 private:

@@ -262,9 +262,9 @@ public:
         std::normal_distribution<double> jitter(0.0, 0.2);
         for (int p = 0; p < 48; ++p) peaks_.push_back((hot_ + Eigen::Vector3d(jitter(random), jitter(random), jitter(random))).normalized());
     }
-    std::vector<Image> capture(const std::vector<Eigen::Vector3d>& directions, LightKernel kernel) override {
+    std::vector<Image> capture(const std::vector<Eigen::Vector3d>& directions, KernelChoice kernel) override {
         std::vector<Image> images;
-        const double width = kernel == LightKernel::Narrow ? 0.05 : 0.3;
+        const double width = kernel == KernelChoice::Narrow ? 0.05 : 0.3;
         for (const auto& d : directions) {
             Image image(8, 6, 1);
             for (int p = 0; p < 48; ++p) {
@@ -276,7 +276,7 @@ public:
         ++calls;
         return images;
     }
-    double kernel_radius(LightKernel kernel) const override { return kernel == LightKernel::Narrow ? 0.05 : 0.3; }
+    double kernel_radius(KernelChoice kernel) const override { return kernel == KernelChoice::Narrow ? 0.05 : 0.3; }
     int calls = 0;
 
 private:

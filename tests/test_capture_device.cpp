@@ -29,7 +29,7 @@ TEST(CommandCaptureDevice, FillsEveryPlaceholder) {
     TempDir dir;
     const CommandCaptureDevice device("shoot {theta} {phi} {x} {y} {z} {kernel} {out}", dir / "scratch");
     const std::string command = device.command_for(direction_from_angles(degrees_to_radians(30), degrees_to_radians(-90)),
-                                                   LightKernel::Wide, "/tmp/it's.exr");
+                                                   KernelChoice::Wide, "/tmp/it's.exr");
     EXPECT_THAT(command, HasSubstr("shoot 30 -90 "));
     EXPECT_THAT(command, HasSubstr(" wide '/tmp/it'\\''s.exr'"));
 }
@@ -41,7 +41,7 @@ TEST(CommandCaptureDevice, ReturnsTheImageTheCommandWrote) {
     for (std::size_t k = 0; k < image.samples().size(); ++k) image.samples()[k] = 0.1f * static_cast<float>(k);
     write_image(dir / "prepared.exr", image);
     CommandCaptureDevice device("cp " + (dir / "prepared.exr").string() + " {out}", dir / "scratch");
-    const auto images = device.capture({Eigen::Vector3d::UnitZ(), Eigen::Vector3d(1, 0, 1).normalized()}, LightKernel::Narrow);
+    const auto images = device.capture({Eigen::Vector3d::UnitZ(), Eigen::Vector3d(1, 0, 1).normalized()}, KernelChoice::Narrow);
     ASSERT_EQ(images.size(), 2u);
     EXPECT_EQ(images[0], image);
     EXPECT_EQ(images[1], image);
@@ -51,10 +51,10 @@ TEST(CommandCaptureDevice, FailuresAreNamed) {
     TempDir dir;
     EXPECT_THAT(error_of([&] { CommandCaptureDevice("shoot", dir / "s"); }), HasSubstr("must contain {out}"));
     CommandCaptureDevice failing("exit 3 # {out}", dir / "s");
-    EXPECT_THAT(error_of([&] { failing.capture({Eigen::Vector3d::UnitZ()}, LightKernel::Narrow); }),
+    EXPECT_THAT(error_of([&] { failing.capture({Eigen::Vector3d::UnitZ()}, KernelChoice::Narrow); }),
                 HasSubstr("capture command failed (exit status 3)"));
     CommandCaptureDevice silent("true {out}", dir / "s");
-    EXPECT_THAT(error_of([&] { silent.capture({Eigen::Vector3d::UnitZ()}, LightKernel::Narrow); }),
+    EXPECT_THAT(error_of([&] { silent.capture({Eigen::Vector3d::UnitZ()}, KernelChoice::Narrow); }),
                 HasSubstr("wrote no image"));
 }
 
