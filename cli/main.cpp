@@ -16,6 +16,8 @@ int main(int argc, char** argv) {
     app.parse_complete_callback([&] { rfd::Progress::set_quiet(global.quiet); });
     rfd::cli::add_optics_commands(app, global);
     rfd::cli::add_design_commands(app, global);
+    CLI::App* capture = app.add_subcommand("capture", "Capture reflectance fields: virtual light stage, HDR assembly, light calibration, sampling patterns")->require_subcommand(1);
+    rfd::cli::add_capture_commands(*capture, global);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& error) {

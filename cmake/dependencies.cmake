@@ -8,6 +8,8 @@ find_package(Threads REQUIRED)
 find_package(OpenImageIO 2.4 REQUIRED CONFIG)
 # CGAL is header-only here (5.x); relight/ uses its Delaunay triangulations.
 find_package(CGAL 5 REQUIRED CONFIG)
+# Embree 3: the CPU ray tracing kernels of the virtual light stage (relight/ray_scene).
+find_package(embree 3 REQUIRED CONFIG)
 
 if(RFD_BUILD_TESTS)
   find_package(GTest REQUIRED)

@@ -323,6 +323,25 @@ std::array<long long, 2> ConfigTable::integer_pair(const std::string& key, long 
     return result;
 }
 
+std::vector<double> ConfigTable::numbers(const std::string& key, std::size_t count, double min,
+                                         double max) {
+    const toml::node& node = require(key);
+    const toml::array* array = node.as_array();
+    if (!array || array->size() != count)
+        fail(key, "expected an array of " + std::to_string(count) + " numbers");
+    std::vector<double> result(count);
+    for (std::size_t i = 0; i < count; ++i) {
+        const auto value = as_number(*array->get(i));
+        if (!value || !std::isfinite(*value))
+            fail(key, "expected " + std::to_string(count) + " finite numbers");
+        if (*value < min || *value > max)
+            fail(key, "value " + format_number(*value) + " is outside the allowed range [" +
+                          format_number(min) + ", " + format_number(max) + "]");
+        result[i] = *value;
+    }
+    return result;
+}
+
 ConfigTable ConfigTable::table(const std::string& key) {
     const toml::node& node = require(key);
     const toml::table* sub = node.as_table();

@@ -73,6 +73,11 @@ public:
     std::array<long long, 2> integer_pair(const std::string& key, long long min,
                                           long long max);
 
+    /// Required array of exactly `count` numbers, each within [min, max] (points, directions,
+    /// colours: `center_mm = [0, 0, 20]`).
+    std::vector<double> numbers(const std::string& key, std::size_t count, double min,
+                                double max);
+
     /// Required sub-table.
     ConfigTable table(const std::string& key);
     std::optional<ConfigTable> optional_table(const std::string& key);

@@ -1,0 +1,236 @@
+// rfd capture render: the virtual light stage, from a scene file to a reflectance field.
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "cli/commands.hpp"
+#include "core/error.hpp"
+#include "core/files.hpp"
+#include "core/image_io.hpp"
+#include "core/progress.hpp"
+#include "core/units.hpp"
+#include "relight/field.hpp"
+#include "relight/scene.hpp"
+#include "relight/stage.hpp"
+
+namespace rfd::cli {
+namespace {
+
+// PLACEHOLDER until relight/sampling.hpp (repulsion_pattern(count, seed)) is merged: a
+// deterministic Fibonacci spiral over the upper hemisphere z > 0, equal area per point.
+// Swap this call for relight::repulsion_pattern(count, seed) then; `seed` is unused here.
+std::vector<Eigen::Vector3d> hemisphere_pattern(std::size_t count, std::uint64_t /*seed*/) {
+    std::vector<Eigen::Vector3d> directions;
+    const double golden_angle = kPi * (3.0 - std::sqrt(5.0));
+    for (std::size_t i = 0; i < count; ++i) {
+        const double z = 1.0 - (static_cast<double>(i) + 0.5) / static_cast<double>(count);
+        const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+        const double phi = golden_angle * static_cast<double>(i);
+        directions.emplace_back(r * std::cos(phi), r * std::sin(phi), z);
+    }
+    return directions;
+}
+
+relight::LightKernel parse_kernel(const std::string& text, const relight::LightKernel& scene_kernel) {
+    if (text == "narrow") return relight::LightKernel::narrow();
+    if (text == "wide") return relight::LightKernel::wide();
+    std::size_t used = 0;
+    double degrees = -1.0;
+    try {
+        degrees = std::stod(text, &used);
+    } catch (const std::exception&) {
+        used = 0;
+    }
+    if (used != text.size() || !(degrees >= 0.0 && degrees <= 90.0))
+        throw InputError("--kernel: expected 'narrow', 'wide' or an angular radius in degrees "
+                         "within [0, 90], got '" + text + "'");
+    if (degrees == 0.0) return relight::LightKernel::directional();
+    const double radius = degrees_to_radians(degrees);
+    switch (scene_kernel.profile) {
+        case relight::KernelProfile::smooth: return relight::LightKernel::smooth(radius);
+        case relight::KernelProfile::gaussian: return relight::LightKernel::gaussian(radius / 3.0);
+        case relight::KernelProfile::constant: break;
+    }
+    return {relight::KernelProfile::constant, radius, 0.0};
+}
+
+std::pair<int, int> parse_resolution(const std::string& text) {
+    int w = 0, h = 0;
+    char x = 0, extra = 0;
+    if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') ||
+        w < 1 || h < 1 || w > 16384 || h > 16384)
+        throw InputError("--resolution: expected WIDTHxHEIGHT such as 256x128, got '" + text + "'");
+    return {w, h};
+}
+
+struct Lights {
+    std::vector<Eigen::Vector3d> directions;
+    std::vector<double> radii;  // per light from a light file, 0 = the command's kernel
+    std::string source;
+};
+
+Lights read_lights(const std::string& text, std::uint64_t seed) {
+    Lights lights;
+    const bool is_count = !text.empty() && text.find_first_not_of("0123456789") == std::string::npos;
+    if (is_count) {
+        const unsigned long long count = std::stoull(text);
+        if (count < 1 || count > 1000000)
+            throw InputError("--lights: expected a count within [1, 1000000] or a .lp file, got " + text);
+        lights.directions = hemisphere_pattern(count, seed);
+        lights.radii.assign(lights.directions.size(), 0.0);
+        lights.source = "hemisphere pattern of " + text;
+        return lights;
+    }
+    for (const auto& entry : relight::read_light_file(text)) {
+        lights.directions.push_back(entry.direction);
+        lights.radii.push_back(entry.kernel_radius);
+    }
+    if (lights.directions.empty()) throw InputError(SourceLocation{text}, "the light file lists no light");
+    lights.source = text;
+    return lights;
+}
+
+}  // namespace
+
+void add_capture_commands(CLI::App& capture, const GlobalOptions&) {
+    auto* cmd = capture.add_subcommand(
+        "render", "Render a scene under one light at a time into a reflectance field (virtual light stage)");
+    struct Options {
+        std::string scene;
+        std::string lights;
+        std::string out;
+        std::string kernel;
+        std::string resolution;
+        std::uint64_t seed = 0;
+        int samples = 0;
+        bool json = false;
+    };
+    auto opt = std::make_shared<Options>();
+    cmd->add_option("SCENE", opt->scene, "Scene TOML file (docs/formats.md)")->required();
+    cmd->add_option("--lights", opt->lights,
+                    "Light count N (near-uniform upper hemisphere) or a .lp light file")->required();
+    cmd->add_option("--out", opt->out, "Output field folder (view_XX/ sub-folders for several cameras)")
+        ->required();
+    auto* seed = cmd->add_option("--seed", opt->seed, "Seed of the sampling patterns (default: the scene's)");
+    cmd->add_option("--kernel", opt->kernel,
+                    "Light kernel: narrow (2 deg, constant), wide (15 deg, frost-like), or a radius "
+                    "in degrees with the scene's profile (0: directional)");
+    cmd->add_option("--resolution", opt->resolution, "Image size WxH (default: the scene's)");
+    cmd->add_option("--samples-per-pixel", opt->samples, "Camera rays per pixel (default: the scene's)")
+        ->check(CLI::Range(1, 4096));
+    cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
+    cmd->callback([opt, seed] {
+        using Clock = std::chrono::steady_clock;
+        relight::Scene scene = relight::load_scene(opt->scene);
+        if (seed->count() > 0) scene.seed = opt->seed;
+        if (!opt->resolution.empty()) {
+            const auto [w, h] = parse_resolution(opt->resolution);
+            for (auto& camera : scene.cameras) {
+                camera.width = w;
+                camera.height = h;
+            }
+        }
+        if (opt->samples > 0) scene.samples_per_pixel = opt->samples;
+        const relight::LightKernel kernel =
+            opt->kernel.empty() ? scene.kernel : parse_kernel(opt->kernel, scene.kernel);
+        if (!opt->kernel.empty() && kernel.radius != scene.kernel.radius)
+            scene.shadow_samples = std::max(scene.shadow_samples, relight::default_shadow_samples(kernel));
+        const Lights lights = read_lights(opt->lights, scene.seed);
+
+        std::vector<relight::LightKernel> kernels;
+        for (const double radius : lights.radii) {
+            relight::LightKernel k = kernel;
+            if (radius > 0.0) {  // a light file's own kernel radius, with the same profile
+                k.radius = radius;
+                if (k.profile == relight::KernelProfile::gaussian) k.sigma = radius / 3.0;
+                if (kernel.is_directional()) k.profile = relight::KernelProfile::constant;
+            }
+            kernels.push_back(k);
+        }
+
+        const std::filesystem::path out(opt->out);
+        ensure_directory(out);
+        const std::size_t views = scene.cameras.size();
+        double camera_seconds = 0.0, light_seconds = 0.0;
+        std::size_t shading_points = 0, escaped = 0;
+        for (std::size_t v = 0; v < views; ++v) {
+            char name[32];
+            std::snprintf(name, sizeof name, "view_%02zu", v);
+            const std::filesystem::path folder = views == 1 ? out : out / name;
+            ensure_directory(folder);
+            // A light file from an earlier run would describe images being replaced: remove it
+            // first, write it last.
+            std::error_code ec;
+            std::filesystem::remove(folder / "field.lp", ec);
+
+            const auto t0 = Clock::now();
+            const relight::LightStage stage(scene, v);
+            const auto t1 = Clock::now();
+            camera_seconds += std::chrono::duration<double>(t1 - t0).count();
+            shading_points += stage.shading_point_count();
+            escaped += stage.escaped_path_count();
+
+            std::vector<std::string> files;
+            std::vector<Eigen::Vector3d> directions;
+            std::vector<double> radii;
+            bool any_radius = false;
+            Progress progress(views == 1 ? "lights" : std::string("lights, ") + name, lights.directions.size());
+            for (std::size_t i = 0; i < lights.directions.size(); ++i) {
+                char file[32];
+                std::snprintf(file, sizeof file, "field_%04zu.exr", i);
+                write_image(folder / file, stage.render(lights.directions[i], kernels[i]));
+                files.emplace_back(file);
+                directions.push_back((stage.to_view_frame() * lights.directions[i]).normalized());
+                radii.push_back(kernels[i].radius);
+                any_radius = any_radius || kernels[i].radius > 0.0;
+                progress.advance();
+            }
+            progress.finish();
+            light_seconds += std::chrono::duration<double>(Clock::now() - t1).count();
+            relight::write_light_file(folder / "field.lp", files, directions,
+                                      any_radius ? radii : std::vector<double>{});
+        }
+
+        const double per_light = light_seconds / static_cast<double>(views * lights.directions.size());
+        const auto& camera = scene.cameras.front();
+        if (opt->json) {
+            const nlohmann::json summary = {
+                {"scene", opt->scene},
+                {"out", opt->out},
+                {"views", views},
+                {"lights", lights.directions.size()},
+                {"light_source", lights.source},
+                {"resolution", {camera.width, camera.height}},
+                {"samples_per_pixel", scene.samples_per_pixel},
+                {"shadow_samples", scene.shadow_samples},
+                {"seed", scene.seed},
+                {"kernel", {{"profile", relight::to_string(kernel.profile)},
+                            {"radius_deg", radians_to_degrees(kernel.radius)},
+                            {"directional", kernel.is_directional()}}},
+                {"shading_points", shading_points},
+                {"escaped_paths", escaped},
+                {"camera_paths_seconds", camera_seconds},
+                {"seconds_per_light", per_light}};
+            std::printf("%s\n", summary.dump(2).c_str());
+        } else {
+            std::printf("rendered %zu light(s) x %zu view(s) of %s into %s\n", lights.directions.size(),
+                        views, opt->scene.c_str(), opt->out.c_str());
+            std::printf("  image              %d x %d, %d camera ray(s) per pixel\n", camera.width,
+                        camera.height, scene.samples_per_pixel);
+            std::printf("  kernel             %s, radius %.3g deg, %d shadow sample(s) per ray\n",
+                        kernel.is_directional() ? "directional" : relight::to_string(kernel.profile).c_str(),
+                        radians_to_degrees(kernel.radius), scene.shadow_samples);
+            std::printf("  cache              %zu shading points, %zu escaped paths\n", shading_points, escaped);
+            std::printf("  time               %.3f s camera paths, %.4f s per light\n", camera_seconds, per_light);
+        }
+    });
+}
+
+}  // namespace rfd::cli
