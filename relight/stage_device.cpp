@@ -3,8 +3,6 @@
 #include <algorithm>
 #include <utility>
 
-#include "core/progress.hpp"
-
 namespace rfd::relight {
 
 StageCaptureDevice::StageCaptureDevice(Scene scene, LightKernel wide)
@@ -34,12 +32,7 @@ std::vector<Image> StageCaptureDevice::capture(const std::vector<Eigen::Vector3d
     }
     std::vector<Image> images;
     images.reserve(directions.size());
-    Progress progress(choice == KernelChoice::Narrow ? "capturing" : "capturing (wide)", directions.size());
-    for (const Eigen::Vector3d& d : directions) {
-        images.push_back(stage->render(d, kernel(choice)));
-        progress.advance();
-    }
-    progress.finish();
+    for (const Eigen::Vector3d& d : directions) images.push_back(stage->render(d, kernel(choice)));
     (choice == KernelChoice::Narrow ? narrow_taken_ : wide_taken_) += directions.size();
     return images;
 }

@@ -6,7 +6,7 @@
 // ones the given wide kernel (default LightKernel::wide(), the thesis's frost-filtered
 // light). Wide images are rendered by a second LightStage whose scene takes at least the
 // shadow samples the wide kernel needs; it is built on the first wide request, since most
-// runs never make one.
+// runs never make one. No progress output: callers know how much work a run holds.
 //
 // Example: StageCaptureDevice device(load_scene("scenes/bottle.toml"));
 //          AdaptiveRun run = adaptive_capture(device, initial, delaunay_triangles, options);
