@@ -778,6 +778,19 @@ TEST(SceneFile, BundledScenesLoad) {
         const Scene scene = load_scene(std::filesystem::path(RFD_SOURCE_DIR) / "scenes" / (std::string(name) + ".toml"));
         EXPECT_FALSE(scene.objects.empty()) << name;
         EXPECT_EQ(scene.cameras.size(), 1u) << name;
+        // A thumbnail under a light between the camera and the zenith: finite, non-negative,
+        // and something lit (the scene's objects are in view).
+        Scene thumbnail = scene;
+        thumbnail.cameras[0].width = 32;
+        thumbnail.cameras[0].height = 16;
+        thumbnail.samples_per_pixel = 1;
+        const Image image = LightStage(thumbnail).render(Eigen::Vector3d(0.2, 0.5, 0.8).normalized());
+        double total = 0;
+        for (const float v : image.samples()) {
+            ASSERT_TRUE(std::isfinite(v) && v >= 0.0f) << name;
+            total += v;
+        }
+        EXPECT_GT(total / static_cast<double>(image.samples().size()), 0.02) << name;
     }
 }
 
