@@ -88,6 +88,11 @@ Lights read_lights(const std::string& text, std::uint64_t seed) {
         lights.source = "hemisphere pattern of " + text;
         return lights;
     }
+    // Neither a count nor an existing file: most likely a mistyped count ("12x", "-5").
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(text, ec))
+        throw InputError("--lights: expected a count within [1, 1000000] or an existing .lp light "
+                         "file, got '" + text + "'");
     for (const auto& entry : relight::read_light_file(text)) {
         lights.directions.push_back(entry.direction);
         lights.radii.push_back(entry.kernel_radius);

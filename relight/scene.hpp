@@ -4,9 +4,10 @@
 //
 // World frame: right-handed, millimetres, as the scene file writes it. The field frame of
 // light directions (core/sphere.hpp) is the first camera's: x right and y up in its image,
-// z toward it. The bundled scenes put the table in the plane z = 0 and the camera above it
-// looking down -z with +y up, so their world and field frames coincide, and the light
-// hemisphere z > 0 is the one above the table.
+// z toward it. The bundled scenes put the table in the plane z = 0. spheres.toml looks
+// straight down -z with +y up, so its world and field frames coincide and the light
+// hemisphere z > 0 is the one above the table; bottle.toml and figure.toml look from the
+// front and above, so their field frame is the world frame tilted about x.
 //
 // Example: Scene scene = load_scene("scenes/bottle.toml"); scene.cameras[0].width;
 
