@@ -1,5 +1,7 @@
 // rfd capture render: the virtual light stage, from a scene file to a reflectance field.
+// rfd capture pattern: near-uniform light directions for a real or virtual stage.
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -17,26 +19,12 @@
 #include "core/progress.hpp"
 #include "core/units.hpp"
 #include "relight/field.hpp"
+#include "relight/sampling.hpp"
 #include "relight/scene.hpp"
 #include "relight/stage.hpp"
 
 namespace rfd::cli {
 namespace {
-
-// PLACEHOLDER until relight/sampling.hpp (repulsion_pattern(count, seed)) is merged: a
-// deterministic Fibonacci spiral over the upper hemisphere z > 0, equal area per point.
-// Swap this call for relight::repulsion_pattern(count, seed) then; `seed` is unused here.
-std::vector<Eigen::Vector3d> hemisphere_pattern(std::size_t count, std::uint64_t /*seed*/) {
-    std::vector<Eigen::Vector3d> directions;
-    const double golden_angle = kPi * (3.0 - std::sqrt(5.0));
-    for (std::size_t i = 0; i < count; ++i) {
-        const double z = 1.0 - (static_cast<double>(i) + 0.5) / static_cast<double>(count);
-        const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
-        const double phi = golden_angle * static_cast<double>(i);
-        directions.emplace_back(r * std::cos(phi), r * std::sin(phi), z);
-    }
-    return directions;
-}
 
 relight::LightKernel parse_kernel(const std::string& text, const relight::LightKernel& scene_kernel) {
     if (text == "narrow") return relight::LightKernel::narrow();
@@ -83,9 +71,9 @@ Lights read_lights(const std::string& text, std::uint64_t seed) {
         const unsigned long long count = std::stoull(text);
         if (count < 1 || count > 1000000)
             throw InputError("--lights: expected a count within [1, 1000000] or a .lp file, got " + text);
-        lights.directions = hemisphere_pattern(count, seed);
+        lights.directions = relight::repulsion_pattern(count, seed);
         lights.radii.assign(lights.directions.size(), 0.0);
-        lights.source = "hemisphere pattern of " + text;
+        lights.source = "repulsion pattern of " + text;
         return lights;
     }
     // Neither a count nor an existing file: most likely a mistyped count ("12x", "-5").
@@ -102,9 +90,64 @@ Lights read_lights(const std::string& text, std::uint64_t seed) {
     return lights;
 }
 
+void add_pattern_command(CLI::App& capture) {
+    auto* cmd = capture.add_subcommand(
+        "pattern", "Near-uniform light directions on the upper hemisphere by electrostatic repulsion (5.2)");
+    struct Options {
+        std::size_t count = 0;
+        std::uint64_t seed = 1;
+        std::string out;
+        std::string image_prefix = "img_";
+        bool json = false;
+    };
+    auto opt = std::make_shared<Options>();
+    cmd->add_option("--count", opt->count, "Number of directions")->required()->check(CLI::Range(1, 100000));
+    cmd->add_option("--seed", opt->seed, "Seed of the starting positions (default 1)");
+    cmd->add_option("--out", opt->out, "Light file to write (.lp)")->required();
+    cmd->add_option("--image-prefix", opt->image_prefix,
+                    "Image names listed in the light file are PREFIX0000.exr, PREFIX0001.exr... (default img_)");
+    cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
+    cmd->callback([opt] {
+        const auto directions = relight::repulsion_pattern(opt->count, opt->seed);
+        std::vector<std::string> files;
+        for (std::size_t i = 0; i < directions.size(); ++i) {
+            char name[32];
+            std::snprintf(name, sizeof name, "%04zu.exr", i);
+            files.push_back(opt->image_prefix + name);
+        }
+        relight::write_light_file(opt->out, files, directions, {});
+        const auto nearest = relight::nearest_neighbour_angles(directions);
+        double smallest = 0.0, mean = 0.0, lowest = kPi / 2;
+        if (directions.size() > 1) {
+            smallest = *std::min_element(nearest.begin(), nearest.end());
+            for (double a : nearest) mean += a / static_cast<double>(nearest.size());
+        }
+        for (const auto& d : directions) lowest = std::min(lowest, std::asin(d.z()));
+        const double ideal = relight::ideal_spacing(directions.size());
+        if (opt->json) {
+            const nlohmann::json summary = {
+                {"out", opt->out},
+                {"count", directions.size()},
+                {"seed", opt->seed},
+                {"ideal_spacing_deg", radians_to_degrees(ideal)},
+                {"nearest_neighbour_min_deg", radians_to_degrees(smallest)},
+                {"nearest_neighbour_mean_deg", radians_to_degrees(mean)},
+                {"lowest_elevation_deg", radians_to_degrees(lowest)}};
+            std::printf("%s\n", summary.dump(2).c_str());
+        } else {
+            std::printf("wrote %zu direction(s) to %s\n", directions.size(), opt->out.c_str());
+            if (directions.size() > 1)
+                std::printf("  nearest neighbour  min %.2f deg, mean %.2f deg (hexagonal lattice: %.2f deg)\n",
+                            radians_to_degrees(smallest), radians_to_degrees(mean), radians_to_degrees(ideal));
+            std::printf("  lowest elevation   %.2f deg above the horizon\n", radians_to_degrees(lowest));
+        }
+    });
+}
+
 }  // namespace
 
 void add_capture_commands(CLI::App& capture, const GlobalOptions&) {
+    add_pattern_command(capture);
     auto* cmd = capture.add_subcommand(
         "render", "Render a scene under one light at a time into a reflectance field (virtual light stage)");
     struct Options {
