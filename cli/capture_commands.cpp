@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "core/error.hpp"
 #include "core/files.hpp"
@@ -47,15 +48,6 @@ relight::LightKernel parse_kernel(const std::string& text, const relight::LightK
         case relight::KernelProfile::constant: break;
     }
     return {relight::KernelProfile::constant, radius, 0.0};
-}
-
-std::pair<int, int> parse_resolution(const std::string& text) {
-    int w = 0, h = 0;
-    char x = 0, extra = 0;
-    if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') ||
-        w < 1 || h < 1 || w > 16384 || h > 16384)
-        throw InputError("--resolution: expected WIDTHxHEIGHT such as 256x128, got '" + text + "'");
-    return {w, h};
 }
 
 struct Lights {
@@ -178,14 +170,7 @@ void add_capture_commands(CLI::App& capture, const GlobalOptions&) {
         using Clock = std::chrono::steady_clock;
         relight::Scene scene = relight::load_scene(opt->scene);
         if (seed->count() > 0) scene.seed = opt->seed;
-        if (!opt->resolution.empty()) {
-            const auto [w, h] = parse_resolution(opt->resolution);
-            for (auto& camera : scene.cameras) {
-                camera.width = w;
-                camera.height = h;
-            }
-        }
-        if (opt->samples > 0) scene.samples_per_pixel = opt->samples;
+        apply_scene_overrides(scene, opt->resolution, opt->samples);
         const relight::LightKernel kernel =
             opt->kernel.empty() ? scene.kernel : parse_kernel(opt->kernel, scene.kernel);
         if (!opt->kernel.empty() && kernel.radius != scene.kernel.radius)
