@@ -251,8 +251,13 @@ bool SphericalInterpolator::locate(const Eigen::Vector3d& d, std::size_t cell, I
         }
         if (!inside) continue;
         for (double& v : w) v = std::max(v, 0.0);
-        const double sum = w[0] + w[1] + w[2];
+        double sum = w[0] + w[1] + w[2];
         if (!(sum > 0.0)) continue;  // the antipodal cone of a triangle
+        // Rounding-size weights (a query at a vertex or on an edge) become exact zeros, so a
+        // measured direction reproduces its image bit for bit.
+        for (double& v : w)
+            if (v < 1e-12 * sum) v = 0.0;
+        sum = w[0] + w[1] + w[2];
         out.count = 3;
         for (std::size_t j = 0; j < 3; ++j) {
             out.index[j] = triangles_[t][j];
