@@ -77,13 +77,7 @@ std::size_t add_disk(Eigen::MatrixX3d& k, const SphericalInterpolator& interp, c
 std::size_t add_environment(Eigen::MatrixX3d& k, const SphericalInterpolator& interp, const EnvironmentMap& map,
                             Interpolation method) {
     const Image& image = map.radiance;
-    if (image.empty() || (image.channels() != 1 && image.channels() != 3))
-        throw InputError("environment map: expected a latitude-longitude image with 1 or 3 channels, got " +
-                         std::to_string(image.channels()) + " channel(s)");
-    for (const float s : image.samples())
-        if (!(s >= 0.0f) || !std::isfinite(s))
-            throw InputError("environment map: radiance must be finite and non-negative (found " +
-                             std::to_string(s) + ")");
+    check_environment_map(image);
     const int width = image.width(), height = image.height();
     const double pixel_phi = 2.0 * kPi / width, pixel_theta = kPi / height;
     const double step = 0.25 * mean_spacing(interp.size());
@@ -125,6 +119,16 @@ std::size_t add_environment(Eigen::MatrixX3d& k, const SphericalInterpolator& in
 }
 
 }  // namespace
+
+void check_environment_map(const Image& radiance) {
+    if (radiance.empty() || (radiance.channels() != 1 && radiance.channels() != 3))
+        throw InputError("environment map: expected a latitude-longitude image with 1 or 3 channels, got " +
+                         std::to_string(radiance.channels()) + " channel(s)");
+    for (const float s : radiance.samples())
+        if (!(s >= 0.0f) || !std::isfinite(s))
+            throw InputError("environment map: radiance must be finite and non-negative (found " +
+                             std::to_string(s) + ")");
+}
 
 LightCoefficients light_coefficients(const SphericalInterpolator& interpolator, const std::vector<Light>& lights,
                                      Interpolation method) {

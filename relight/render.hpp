@@ -54,6 +54,9 @@ struct EnvironmentMap {
     Image radiance;
 };
 
+/// Throws InputError unless `radiance` has 1 or 3 channels of finite, non-negative samples.
+void check_environment_map(const Image& radiance);
+
 using Light = std::variant<DirectionalLight, DiskLight, EnvironmentMap>;
 
 /// k_i per direction and channel (n x 3), and what was computed.
