@@ -189,9 +189,28 @@ Image relight(const ReflectanceField& field, const LightCoefficients& coefficien
             const std::size_t first = block * kBlock, count = std::min(kBlock, pixels - first);
             for (int c = 0; c < channels; ++c) {
                 float* __restrict acc = out.plane(c).data() + first;
-                for (const Term& term : terms[static_cast<std::size_t>(c)]) {
-                    const float* __restrict src = term.plane + first;
-                    const float k = term.k;
+                const auto& list = terms[static_cast<std::size_t>(c)];
+                // Four images per sweep of the accumulator (a quarter of its loads and
+                // stores); the additions stay in image order, so the bits do not change.
+                std::size_t t = 0;
+                for (; t + 4 <= list.size(); t += 4) {
+                    const float* __restrict s0 = list[t].plane + first;
+                    const float* __restrict s1 = list[t + 1].plane + first;
+                    const float* __restrict s2 = list[t + 2].plane + first;
+                    const float* __restrict s3 = list[t + 3].plane + first;
+                    const float k0 = list[t].k, k1 = list[t + 1].k, k2 = list[t + 2].k, k3 = list[t + 3].k;
+                    for (std::size_t p = 0; p < count; ++p) {
+                        float a = acc[p];
+                        a += k0 * s0[p];
+                        a += k1 * s1[p];
+                        a += k2 * s2[p];
+                        a += k3 * s3[p];
+                        acc[p] = a;
+                    }
+                }
+                for (; t < list.size(); ++t) {
+                    const float* __restrict src = list[t].plane + first;
+                    const float k = list[t].k;
                     for (std::size_t p = 0; p < count; ++p) acc[p] += k * src[p];
                 }
             }
