@@ -1,14 +1,17 @@
 #include "core/plot.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <sstream>
 
 #include <sys/wait.h>
 
 #include "core/error.hpp"
 #include "core/files.hpp"
+#include "core/units.hpp"
 
 namespace rfd {
 namespace {
@@ -30,6 +33,49 @@ std::string shell_quoted(const std::string& text) {
     std::string out = "'";
     for (char c : text) out += (c == '\'') ? std::string("'\\''") : std::string(1, c);
     return out + "'";
+}
+
+// Runs gnuplot on `plot_commands` for an SVG and a PNG, each rendered to a temporary file
+// and moved into place. Throws ToolError when gnuplot is missing or fails.
+void render_with_gnuplot(const std::function<void(std::ostream&)>& plot_commands,
+                         const std::filesystem::path& svg, const std::filesystem::path& png,
+                         const std::string& size = "900,560") {
+    namespace fs = std::filesystem;
+    const auto gnuplot = find_gnuplot();
+    if (!gnuplot)
+        throw ToolError(SourceLocation{svg.string()},
+                        "gnuplot is not installed (scripts/install-deps.sh installs it); "
+                        "the CSV and the gnuplot script are written");
+    // Render into temporary files, then move them into place.
+    for (const auto& [target, terminal] :
+         {std::pair{svg, "svg size " + size + " dynamic font 'sans,12'"},
+          std::pair{png, "pngcairo size " + size + " font 'sans,10'"}}) {
+        const fs::path temporary = fs::path(target).concat(".tmp");
+        std::ostringstream commands;
+        commands << "set terminal " << terminal << "\nset output " << quoted(temporary.filename().string())
+                 << "\n";
+        plot_commands(commands);
+        const fs::path commands_file = fs::path(target).concat(".gp.tmp");
+        write_text_file(commands_file, commands.str());
+        const std::string command = "cd " + shell_quoted(fs::absolute(target).parent_path().string()) +
+                                    " && " + shell_quoted(gnuplot->string()) + " " +
+                                    shell_quoted(commands_file.filename().string()) + " 2>&1";
+        FILE* pipe = popen(command.c_str(), "r");
+        std::string output;
+        if (pipe) {
+            char buffer[512];
+            while (fgets(buffer, sizeof buffer, pipe)) output += buffer;
+        }
+        const int status = pipe ? pclose(pipe) : -1;
+        std::error_code ec;
+        fs::remove(commands_file, ec);
+        if (status != 0 || !fs::exists(temporary)) {
+            fs::remove(temporary, ec);
+            throw ToolError(SourceLocation{target.string()}, "gnuplot failed: " + output);
+        }
+        fs::rename(temporary, target, ec);
+        if (ec) throw IoError(SourceLocation{target.string()}, "cannot move the chart into place");
+    }
 }
 
 }  // namespace
@@ -106,41 +152,62 @@ void write_line_chart(const LineChart& chart, const std::filesystem::path& stem)
         plot_commands(out);
     });
 
-    const auto gnuplot = find_gnuplot();
-    if (!gnuplot)
-        throw ToolError(SourceLocation{svg.string()},
-                        "gnuplot is not installed (scripts/install-deps.sh installs it); "
-                        "the CSV and the gnuplot script are written");
-    // Render into temporary files, then move them into place.
-    for (const auto& [target, terminal] :
-         {std::pair{svg, std::string("svg size 900,560 dynamic font 'sans,12'")},
-          std::pair{png, std::string("pngcairo size 900,560 font 'sans,10'")}}) {
-        const fs::path temporary = fs::path(target).concat(".tmp");
-        std::ostringstream commands;
-        commands << "set terminal " << terminal << "\nset output " << quoted(temporary.filename().string())
-                 << "\n";
-        plot_commands(commands);
-        const fs::path commands_file = fs::path(target).concat(".gp.tmp");
-        write_text_file(commands_file, commands.str());
-        const std::string command = "cd " + shell_quoted(fs::absolute(target).parent_path().string()) +
-                                    " && " + shell_quoted(gnuplot->string()) + " " +
-                                    shell_quoted(commands_file.filename().string()) + " 2>&1";
-        FILE* pipe = popen(command.c_str(), "r");
-        std::string output;
-        if (pipe) {
-            char buffer[512];
-            while (fgets(buffer, sizeof buffer, pipe)) output += buffer;
+    render_with_gnuplot(plot_commands, svg, png);
+}
+
+void write_polar_map(const PolarMap& map, const std::filesystem::path& stem) {
+    namespace fs = std::filesystem;
+    RFD_CHECK(map.directions.size() == map.values.size());
+    const fs::path csv = fs::path(stem).replace_extension(".csv");
+    const fs::path script = fs::path(stem).replace_extension(".gp");
+    const fs::path svg = fs::path(stem).replace_extension(".svg");
+    const fs::path png = fs::path(stem).replace_extension(".png");
+    write_file_atomically(csv, [&](std::ostream& out) {
+        out.precision(10);
+        out << "theta_deg,phi_deg,x,y," << quoted(map.colour_label) << "\n";
+        for (std::size_t i = 0; i < map.directions.size(); ++i) {
+            const Eigen::Vector3d& d = map.directions[i];
+            const double theta = std::acos(std::clamp(d.z() / d.norm(), -1.0, 1.0)) * 180.0 / kPi;
+            const double phi = std::atan2(d.y(), d.x());
+            out << theta << "," << phi * 180.0 / kPi << "," << theta * std::cos(phi) << ","
+                << theta * std::sin(phi) << ",";
+            if (std::isfinite(map.values[i])) out << map.values[i];
+            else out << "NaN";
+            out << "\n";
         }
-        const int status = pipe ? pclose(pipe) : -1;
-        std::error_code ec;
-        fs::remove(commands_file, ec);
-        if (status != 0 || !fs::exists(temporary)) {
-            fs::remove(temporary, ec);
-            throw ToolError(SourceLocation{target.string()}, "gnuplot failed: " + output);
+    });
+    auto plot_commands = [&](std::ostream& out) {
+        out << "set datafile separator ','\nset datafile missing 'NaN'\n";
+        out << "set title " << quoted(map.title) << "\n";
+        out << "set size ratio -1\nunset key\nunset border\nunset xtics\nunset ytics\n";
+        out << "set xrange [-100:100]\nset yrange [-100:100]\n";
+        out << "set cblabel " << quoted(map.colour_label) << "\n";
+        out << "set palette defined (0 '#000004', 1 '#51127c', 2 '#b73779', 3 '#fc8961', 4 '#fcfdbf')\n";
+        if (map.log_colour) out << "set logscale cb\n";
+        // Rings every 30 degrees of theta and spokes every 45 degrees of phi.
+        int object = 1;
+        for (const int ring : {30, 60, 90})
+            out << "set object " << object++ << " circle at 0,0 size " << ring
+                << " fillstyle empty border linecolor rgb '#999999' dashtype 2 back\n";
+        for (const int ring : {30, 60, 90})
+            out << "set label " << object++ << " '" << ring << "°' at " << ring * 0.707 + 1 << ","
+                << ring * 0.707 + 1 << " textcolor rgb '#666666'\n";
+        for (int spoke = 0; spoke < 360; spoke += 45) {
+            const double a = spoke * kPi / 180.0;
+            out << "set arrow from 0,0 to " << 90 * std::cos(a) << "," << 90 * std::sin(a)
+                << " nohead linecolor rgb '#cccccc' back\n";
+            out << "set label " << object++ << " 'phi " << spoke << "°' at " << 97 * std::cos(a) << ","
+                << 97 * std::sin(a) << " center textcolor rgb '#666666'\n";
         }
-        fs::rename(temporary, target, ec);
-        if (ec) throw IoError(SourceLocation{target.string()}, "cannot move the chart into place");
-    }
+        out << "plot " << quoted(csv.filename().string())
+            << " using 3:4:5 skip 1 with points pointtype 7 pointsize 1.2 linecolor palette\n";
+    };
+    write_file_atomically(script, [&](std::ostream& out) {
+        out << "# Re-render with: gnuplot -e \"set terminal svg\" " << script.filename().string()
+            << " > map.svg\n";
+        plot_commands(out);
+    });
+    render_with_gnuplot(plot_commands, svg, png, "760,680");
 }
 
 }  // namespace rfd

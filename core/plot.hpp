@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
+
 namespace rfd {
 
 struct PlotSeries {
@@ -29,6 +31,23 @@ struct LineChart {
 /// `stem`.png. All files are written atomically. Throws ToolError when gnuplot is missing
 /// or fails (after the CSV and script are in place).
 void write_line_chart(const LineChart& chart, const std::filesystem::path& stem);
+
+/// Values over the upper hemisphere of light directions, as in thesis figure 5.4: a polar
+/// plot with theta (degrees from the zenith) as the radius and phi as the angle (0 to the
+/// right, counter-clockwise, field frame of core/sphere.hpp), one dot per direction coloured
+/// by its value.
+/// Example: write_polar_map({"error per direction", field.directions, errors, "squared error"}, "out/error");
+struct PolarMap {
+    std::string title;
+    std::vector<Eigen::Vector3d> directions;  ///< unit, field frame
+    std::vector<double> values;               ///< one per direction; NaN draws no dot
+    std::string colour_label;
+    bool log_colour = false;                  ///< logarithmic colour scale (positive values)
+};
+
+/// Writes `stem`.csv (theta_deg, phi_deg, x, y, value), `stem`.gp, and renders `stem`.svg and
+/// `stem`.png, like write_line_chart (atomic writes, ToolError without gnuplot).
+void write_polar_map(const PolarMap& map, const std::filesystem::path& stem);
 
 /// Path of the gnuplot binary, or nullopt.
 std::optional<std::filesystem::path> find_gnuplot();

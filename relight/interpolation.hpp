@@ -1,0 +1,108 @@
+#pragma once
+// Interpolation of a reflectance field between its light directions (thesis 4.4).
+//
+// A novel light direction d is rendered as a non-negative combination of at most three
+// measured images, R(d) ~ sum_i l_i(d) R_i (eq. 4.1), with weights that are local, sum to one,
+// give weight 1 to a measured direction and change continuously with d.
+//
+// Triangulation (4.4): a CGAL Delaunay tetrahedralisation of the directions D plus a guardian
+// point g at the theta = pi pole. Its hull facets that do not touch g form the triangulation
+// T; the vertices sharing a hull edge with g are the boundary vertices, sorted by phi (the
+// tetrahedralisation of cospherical points also links g to vertices through the inside). Triangles
+// are oriented det(a, b, c) > 0 (counter-clockwise seen from outside the sphere) and listed
+// in canonical_order.
+//
+// Weights inside a triangle (a, b, c) of T: l_a = det(d, b, c) / S, l_b = det(a, d, c) / S,
+// l_c = det(a, b, d) / S, S the sum of the three: the barycentric coordinates of the point
+// where the ray d meets the flat hull triangle. Eq. 4.6 uses ratios of spherical solid
+// angles instead; those are NOT continuous across an edge (on a shared edge the ratio
+// depends on the opposite vertex: 0.780 vs 0.784 at a quarter of an edge of 60-degree
+// triangles, see tests/test_interpolation.cpp), while the coordinates above are (on an
+// edge they depend on its two ends only). spherical_triangle_solid_angle() is kept for that
+// comparison and for callers that need solid angles.
+//
+// Outside T (near the horizon) the arc interpolation of eq. 4.7/4.8 between the boundary
+// vertices b_j, b_k that bracket phi (wrap-around included), made continuous with T: the
+// weights are the ones of the boundary edge (b_j, b_k) at the point of the edge with d's
+// azimuth, l_j proportional to cross(d_xy, b_k,xy), l_k to cross(b_j,xy, d_xy). Where an
+// azimuth gap between consecutive boundary vertices reaches 180 degrees (a direction set
+// that does not surround the zenith) those weights are undefined and eq. 4.8 is used as
+// written (linear in phi; continuous in phi, but not with T).
+//
+// Nearest: weight 1 on the closest direction (ties: lowest index), the baseline.
+//
+// Input directions: unit vectors toward the light in the field frame (core/sphere.hpp).
+// Directions up to 5 degrees below the horizon are accepted (calibration noise of a real
+// stage); lower ones, fewer than three, non-finite ones, duplicates (closer than 1e-6 rad)
+// and sets that lie on one plane with the guardian are InputError.
+// Point location is a lat-long grid of cells, each listing the triangles and the directions
+// that may be found from a query in it: a query costs one cell lookup and a few tests.
+//
+// Example: SphericalInterpolator interp(field.directions);
+//          InterpolationWeights w = interp.weights(direction_from_angles(0.3, 1.0));
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "relight/adaptive.hpp"
+
+namespace rfd::relight {
+
+enum class Interpolation { delaunay, nearest };
+
+/// Weights of at most three directions; entries past `count` are unused (index 0, weight 0).
+struct InterpolationWeights {
+    std::array<std::size_t, 3> index{};  ///< direction indices
+    std::array<double, 3> weight{};      ///< >= 0, sum 1 over the first `count`
+    std::size_t count = 0;
+};
+
+/// Solid angle (steradians, >= 0) of the spherical triangle of three unit vectors, by the
+/// formula of Van Oosterom and Strackee (1983): tan(Omega/2) = |det(a,b,c)| /
+/// (1 + a.b + b.c + c.a), accurate for tiny and near-hemispherical triangles alike.
+double spherical_triangle_solid_angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                      const Eigen::Vector3d& c);
+
+class SphericalInterpolator {
+public:
+    /// Triangulates `directions` (normalised here). Throws InputError as described above.
+    explicit SphericalInterpolator(std::vector<Eigen::Vector3d> directions);
+    ~SphericalInterpolator();
+    SphericalInterpolator(SphericalInterpolator&&) noexcept;
+    SphericalInterpolator& operator=(SphericalInterpolator&&) noexcept;
+
+    /// l_i(direction) for a unit `direction` anywhere on the sphere. Thread-safe.
+    InterpolationWeights weights(const Eigen::Vector3d& direction,
+                                 Interpolation method = Interpolation::delaunay) const;
+
+    std::size_t size() const { return directions_.size(); }
+    const std::vector<Eigen::Vector3d>& directions() const { return directions_; }
+    /// T, canonical_order'ed, det(a, b, c) > 0.
+    const std::vector<Triangle>& triangles() const { return triangles_; }
+    /// Vertices sharing a hull edge with the guardian, by ascending phi (ties: index).
+    const std::vector<std::size_t>& boundary_vertices() const { return boundary_; }
+    /// One-ring neighbours of every direction in T.
+    std::vector<std::vector<std::size_t>> one_rings() const;
+
+private:
+    struct Grid;
+    bool locate(const Eigen::Vector3d& d, std::size_t cell, InterpolationWeights& out) const;
+    InterpolationWeights arc_weights(const Eigen::Vector3d& d) const;
+    InterpolationWeights nearest_weights(const Eigen::Vector3d& d, std::size_t cell) const;
+
+    std::vector<Eigen::Vector3d> directions_;
+    std::vector<Triangle> triangles_;
+    std::vector<std::size_t> boundary_;
+    std::vector<double> boundary_phi_;
+    std::unique_ptr<Grid> grid_;
+};
+
+/// The interpolation triangulation T of `directions` (a Triangulate for adaptive capture).
+std::vector<Triangle> delaunay_triangles(const std::vector<Eigen::Vector3d>& directions);
+
+}  // namespace rfd::relight

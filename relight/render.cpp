@@ -1,0 +1,229 @@
+#include "relight/render.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <type_traits>
+#include <utility>
+
+#include "core/error.hpp"
+#include "core/parallel.hpp"
+#include "core/progress.hpp"
+#include "core/sphere.hpp"
+#include "core/units.hpp"
+
+namespace rfd::relight {
+namespace {
+
+// Mean angular spacing of n directions over the hemisphere (2 pi sr), radians.
+double mean_spacing(std::size_t n) { return std::sqrt(2.0 * kPi / static_cast<double>(n)); }
+
+void check_irradiance(const Eigen::Vector3d& irradiance, const char* what) {
+    if (!irradiance.allFinite() || (irradiance.array() < 0.0).any())
+        throw InputError(std::string(what) + ": the colour must be finite and non-negative");
+}
+
+void add_weights(Eigen::MatrixX3d& k, const InterpolationWeights& w, const Eigen::Vector3d& scale) {
+    for (std::size_t j = 0; j < w.count; ++j)
+        k.row(static_cast<Eigen::Index>(w.index[j])) += w.weight[j] * scale.transpose();
+}
+
+// Two unit vectors completing d to a right-handed orthonormal frame.
+std::pair<Eigen::Vector3d, Eigen::Vector3d> frame_around(const Eigen::Vector3d& d) {
+    const Eigen::Vector3d helper = std::abs(d.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    const Eigen::Vector3d u = d.cross(helper).normalized();
+    return {u, d.cross(u)};
+}
+
+std::size_t add_directional(Eigen::MatrixX3d& k, const SphericalInterpolator& interp, const DirectionalLight& light,
+                            Interpolation method) {
+    check_irradiance(light.irradiance, "directional light");
+    const Eigen::Vector3d d = light.direction.normalized();
+    if (!d.allFinite()) throw InputError("directional light: the direction must be a non-zero vector");
+    if (d.z() < 0.0) return 0;  // below the horizon: dropped
+    add_weights(k, interp.weights(d, method), light.irradiance);
+    return 1;
+}
+
+std::size_t add_disk(Eigen::MatrixX3d& k, const SphericalInterpolator& interp, const DiskLight& light,
+                     Interpolation method) {
+    check_irradiance(light.irradiance, "disk light");
+    if (!(light.radius > 0.0 && light.radius <= 0.5 * kPi))
+        throw InputError("disk light: the angular radius must be within (0, 90] degrees, got " +
+                         std::to_string(radians_to_degrees(light.radius)));
+    const Eigen::Vector3d d = light.direction.normalized();
+    if (!d.allFinite()) throw InputError("disk light: the direction must be a non-zero vector");
+    const double solid_angle = 2.0 * kPi * (1.0 - std::cos(light.radius));
+    const double step = 0.25 * mean_spacing(interp.size());
+    const auto count = static_cast<std::size_t>(
+        std::clamp(std::ceil(solid_angle / (step * step)), 16.0, 4096.0));
+    const auto [u, v] = frame_around(d);
+    const double golden_angle = kPi * (3.0 - std::sqrt(5.0));
+    const Eigen::Vector3d share = light.irradiance / static_cast<double>(count);
+    for (std::size_t s = 0; s < count; ++s) {
+        // Equal solid angle per point: cos(alpha) uniform over [cos r, 1].
+        const double cos_alpha = 1.0 - (static_cast<double>(s) + 0.5) / static_cast<double>(count) *
+                                           (1.0 - std::cos(light.radius));
+        const double sin_alpha = std::sqrt(std::max(0.0, 1.0 - cos_alpha * cos_alpha));
+        const double beta = golden_angle * static_cast<double>(s);
+        const Eigen::Vector3d p =
+            cos_alpha * d + sin_alpha * (std::cos(beta) * u + std::sin(beta) * v);
+        if (p.z() < 0.0) continue;
+        add_weights(k, interp.weights(p, method), share);
+    }
+    return count;
+}
+
+std::size_t add_environment(Eigen::MatrixX3d& k, const SphericalInterpolator& interp, const EnvironmentMap& map,
+                            Interpolation method) {
+    const Image& image = map.radiance;
+    check_environment_map(image);
+    const int width = image.width(), height = image.height();
+    const double pixel_phi = 2.0 * kPi / width, pixel_theta = kPi / height;
+    const double step = 0.25 * mean_spacing(interp.size());
+    const int sub_theta = static_cast<int>(std::clamp(std::ceil(pixel_theta / step), 1.0, 16.0));
+    const int sub_phi = static_cast<int>(std::clamp(std::ceil(pixel_phi / step), 1.0, 16.0));
+    // Rows above the horizon only; each row accumulates its own k, summed in row order.
+    const int rows = std::min(height, static_cast<int>(std::ceil(0.5 * height - 1e-9)));
+    std::vector<Eigen::MatrixX3d> row_k(static_cast<std::size_t>(rows));
+    Progress progress("environment map", static_cast<std::size_t>(rows));
+    parallel_for_chunks(static_cast<std::size_t>(rows), 1, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t row = begin; row < end; ++row) {
+            Eigen::MatrixX3d& kr = row_k[row];
+            kr.setZero(k.rows(), 3);
+            const double theta0 = pixel_theta * static_cast<double>(row);
+            const double theta1 = std::min(theta0 + pixel_theta, 0.5 * kPi);
+            const double sub_height = (theta1 - theta0) / sub_theta, sub_width = pixel_phi / sub_phi;
+            for (int a = 0; a < sub_theta; ++a) {
+                const double ta = theta0 + a * sub_height, tb = ta + sub_height;
+                const double solid_angle = sub_width * (std::cos(ta) - std::cos(tb));
+                const double theta = 0.5 * (ta + tb);
+                for (int u = 0; u < width; ++u) {
+                    Eigen::Vector3d radiance;
+                    for (int c = 0; c < 3; ++c)
+                        radiance[c] = image.at(u, static_cast<int>(row), image.channels() == 1 ? 0 : c);
+                    if (radiance.isZero()) continue;
+                    for (int b = 0; b < sub_phi; ++b) {
+                        const double phi = -kPi + u * pixel_phi + (b + 0.5) * sub_width;
+                        add_weights(kr, interp.weights(direction_from_angles(theta, phi), method),
+                                    solid_angle * radiance);
+                    }
+                }
+            }
+            progress.advance();
+        }
+    });
+    progress.finish();
+    for (const auto& kr : row_k) k += kr;
+    return static_cast<std::size_t>(rows) * static_cast<std::size_t>(width * sub_theta * sub_phi);
+}
+
+}  // namespace
+
+void check_environment_map(const Image& radiance) {
+    if (radiance.empty() || (radiance.channels() != 1 && radiance.channels() != 3))
+        throw InputError("environment map: expected a latitude-longitude image with 1 or 3 channels, got " +
+                         std::to_string(radiance.channels()) + " channel(s)");
+    for (const float s : radiance.samples())
+        if (!(s >= 0.0f) || !std::isfinite(s))
+            throw InputError("environment map: radiance must be finite and non-negative (found " +
+                             std::to_string(s) + ")");
+}
+
+LightCoefficients light_coefficients(const SphericalInterpolator& interpolator, const std::vector<Light>& lights,
+                                     Interpolation method) {
+    LightCoefficients out;
+    out.k.setZero(static_cast<Eigen::Index>(interpolator.size()), 3);
+    for (const Light& light : lights) {
+        out.weight_evaluations += std::visit(
+            [&](const auto& l) -> std::size_t {
+                using T = std::decay_t<decltype(l)>;
+                if constexpr (std::is_same_v<T, DirectionalLight>) return add_directional(out.k, interpolator, l, method);
+                else if constexpr (std::is_same_v<T, DiskLight>) return add_disk(out.k, interpolator, l, method);
+                else return add_environment(out.k, interpolator, l, method);
+            },
+            light);
+    }
+    for (Eigen::Index i = 0; i < out.k.rows(); ++i) {
+        if ((out.k.row(i).array() != 0.0).any()) ++out.nonzero;
+        out.grey = out.grey && out.k(i, 0) == out.k(i, 1) && out.k(i, 1) == out.k(i, 2);
+    }
+    return out;
+}
+
+Image relight(const ReflectanceField& field, const LightCoefficients& coefficients) {
+    RFD_CHECK(static_cast<std::size_t>(coefficients.k.rows()) == field.size());
+    RFD_CHECK(!field.images.empty());
+    const int field_channels = field.channels();
+    const bool colour_light = !coefficients.grey;
+    if (colour_light && field_channels != 1 && field_channels != 3)
+        throw InputError("coloured light needs a field with 1 or 3 channels; this one has " +
+                         std::to_string(field_channels));
+    const int channels = colour_light ? 3 : field_channels;
+    Image out(field.width(), field.height(), channels);
+
+    // Per output channel, the images with a non-zero coefficient, in image order.
+    struct Term {
+        const float* plane;
+        float k;
+    };
+    std::vector<std::vector<Term>> terms(static_cast<std::size_t>(channels));
+    for (int c = 0; c < channels; ++c) {
+        const int light_channel = colour_light ? c : (field_channels == 3 ? c : 0);
+        const int field_channel = field_channels == 1 ? 0 : c;
+        for (std::size_t i = 0; i < field.size(); ++i) {
+            const double k = coefficients.k(static_cast<Eigen::Index>(i), light_channel);
+            if (k != 0.0) terms[static_cast<std::size_t>(c)].push_back({field.images[i].plane(field_channel).data(),
+                                                                        static_cast<float>(k)});
+        }
+    }
+
+    // Blocks small enough that the accumulator stays in the L1 cache while every image
+    // streams through it once.
+    constexpr std::size_t kBlock = 4096;
+    const std::size_t pixels = out.pixel_count();
+    const std::size_t blocks = (pixels + kBlock - 1) / kBlock;
+    Progress progress("relighting", blocks);
+    parallel_for_chunks(blocks, 1, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t block = begin; block < end; ++block) {
+            const std::size_t first = block * kBlock, count = std::min(kBlock, pixels - first);
+            for (int c = 0; c < channels; ++c) {
+                float* __restrict acc = out.plane(c).data() + first;
+                const auto& list = terms[static_cast<std::size_t>(c)];
+                // Four images per sweep of the accumulator (a quarter of its loads and
+                // stores); the additions stay in image order, so the bits do not change.
+                std::size_t t = 0;
+                for (; t + 4 <= list.size(); t += 4) {
+                    const float* __restrict s0 = list[t].plane + first;
+                    const float* __restrict s1 = list[t + 1].plane + first;
+                    const float* __restrict s2 = list[t + 2].plane + first;
+                    const float* __restrict s3 = list[t + 3].plane + first;
+                    const float k0 = list[t].k, k1 = list[t + 1].k, k2 = list[t + 2].k, k3 = list[t + 3].k;
+                    for (std::size_t p = 0; p < count; ++p) {
+                        float a = acc[p];
+                        a += k0 * s0[p];
+                        a += k1 * s1[p];
+                        a += k2 * s2[p];
+                        a += k3 * s3[p];
+                        acc[p] = a;
+                    }
+                }
+                for (; t < list.size(); ++t) {
+                    const float* __restrict src = list[t].plane + first;
+                    const float k = list[t].k;
+                    for (std::size_t p = 0; p < count; ++p) acc[p] += k * src[p];
+                }
+            }
+            progress.advance();
+        }
+    });
+    progress.finish();
+    return out;
+}
+
+Image render(const ReflectanceField& field, const std::vector<Light>& lights, Interpolation method) {
+    const SphericalInterpolator interpolator(field.directions);
+    return relight(field, light_coefficients(interpolator, lights, method));
+}
+
+}  // namespace rfd::relight
