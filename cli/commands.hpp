@@ -15,6 +15,8 @@ void add_optics_commands(CLI::App& app, const GlobalOptions& global);
 void add_chart_command(CLI::App& optics, const GlobalOptions& global);
 void add_design_commands(CLI::App& app, const GlobalOptions& global);
 void add_capture_commands(CLI::App& capture, const GlobalOptions& global);
+void add_adaptive_command(CLI::App& capture, const GlobalOptions& global);
+void add_study_command(CLI::App& capture, const GlobalOptions& global);
 /// The `relight` group: render, eval.
 void add_relight_commands(CLI::App& app, const GlobalOptions& global);
 
