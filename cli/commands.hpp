@@ -15,5 +15,7 @@ void add_optics_commands(CLI::App& app, const GlobalOptions& global);
 void add_chart_command(CLI::App& optics, const GlobalOptions& global);
 void add_design_commands(CLI::App& app, const GlobalOptions& global);
 void add_capture_commands(CLI::App& capture, const GlobalOptions& global);
+/// `capture hdr` (exposure brackets) and `capture calibrate` (mirror-sphere light directions).
+void add_capture_tool_commands(CLI::App& capture, const GlobalOptions& global);
 
 }  // namespace rfd::cli

@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
     rfd::cli::add_design_commands(app, global);
     CLI::App* capture = app.add_subcommand("capture", "Capture reflectance fields: virtual light stage, HDR assembly, light calibration, sampling patterns")->require_subcommand(1);
     rfd::cli::add_capture_commands(*capture, global);
+    rfd::cli::add_capture_tool_commands(*capture, global);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& error) {

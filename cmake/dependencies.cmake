@@ -36,6 +36,8 @@ if(RFD_BUILD_BENCH)
 endif()
 
 # Programs we run rather than link.
+# oiiotool (openimageio-tools) draws the photographs the capture hdr/calibrate CLI tests read.
+find_program(RFD_OIIOTOOL oiiotool)
 find_program(RFD_GNUPLOT gnuplot)
 if(NOT RFD_GNUPLOT)
   message(WARNING "gnuplot not found: `rfd optics chart` will write CSV but no plots "

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include <opencv2/core.hpp>
@@ -16,6 +17,12 @@ namespace {
 // A highlight is a small spot; a blob over a quarter of the sphere is the sphere lit (or
 // clipped) all over, where a centroid means nothing.
 constexpr double kMaxCoverage = 0.25;
+
+std::string number(double value) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%g", value);
+    return text;
+}
 
 }  // namespace
 
@@ -139,17 +146,17 @@ std::vector<CalibratedLight> calibrate_lights(const std::vector<std::filesystem:
     if (!(std::isfinite(sphere.centre_x) && std::isfinite(sphere.centre_y) && std::isfinite(sphere.radius) &&
           sphere.radius > 0.0))
         throw InputError("mirror sphere: expected a finite centre and a positive radius in pixels, got (" +
-                         std::to_string(sphere.centre_x) + ", " + std::to_string(sphere.centre_y) +
-                         ") radius " + std::to_string(sphere.radius));
+                         number(sphere.centre_x) + ", " + number(sphere.centre_y) +
+                         ") radius " + number(sphere.radius));
     std::vector<CalibratedLight> lights;
     for (const auto& path : mirror_images) {
         const Image image = read_image(path);
         const SourceLocation where{path.string()};
         if (sphere.centre_x - sphere.radius < 0.0 || sphere.centre_y - sphere.radius < 0.0 ||
             sphere.centre_x + sphere.radius > image.width() || sphere.centre_y + sphere.radius > image.height())
-            throw InputError(where, "the mirror sphere (centre " + std::to_string(sphere.centre_x) + ", " +
-                                        std::to_string(sphere.centre_y) + ", radius " +
-                                        std::to_string(sphere.radius) + " px) does not fit inside this " +
+            throw InputError(where, "the mirror sphere (centre " + number(sphere.centre_x) + ", " +
+                                        number(sphere.centre_y) + ", radius " +
+                                        number(sphere.radius) + " px) does not fit inside this " +
                                         std::to_string(image.width()) + "x" + std::to_string(image.height()) +
                                         " image");
         const Highlight h = find_highlight(image, sphere);
@@ -157,7 +164,7 @@ std::vector<CalibratedLight> calibrate_lights(const std::vector<std::filesystem:
             case HighlightStatus::found: break;
             case HighlightStatus::none:
                 throw InputError(where, "no highlight on the mirror sphere: it shows no contrast (brightest " +
-                                            std::to_string(h.peak) + ", median " + std::to_string(h.background) +
+                                            number(h.peak) + ", median " + number(h.background) +
                                             "): black, uniform or saturated everywhere");
             case HighlightStatus::multiple:
                 throw InputError(where, std::to_string(h.blobs) +
