@@ -51,11 +51,15 @@ Eigen::Vector2d highlight_point(const MirrorSphere& sphere, const Eigen::Vector3
 
 Highlight find_highlight(const Image& image, const MirrorSphere& sphere) {
     Highlight result;
-    if (image.empty() || !(sphere.radius > 0.0)) return result;
-    const int x0 = std::max(0, static_cast<int>(std::floor(sphere.centre_x - sphere.radius)));
-    const int x1 = std::min(image.width(), static_cast<int>(std::ceil(sphere.centre_x + sphere.radius)) + 1);
-    const int y0 = std::max(0, static_cast<int>(std::floor(sphere.centre_y - sphere.radius)));
-    const int y1 = std::min(image.height(), static_cast<int>(std::ceil(sphere.centre_y + sphere.radius)) + 1);
+    if (image.empty() || !(sphere.radius > 0.0) || !std::isfinite(sphere.radius) ||
+        !std::isfinite(sphere.centre_x) || !std::isfinite(sphere.centre_y))
+        return result;
+    // Clamped in floating point first: a far-off outline must not overflow the int casts.
+    const auto clamp_to = [](double v, int size) { return static_cast<int>(std::clamp(v, 0.0, static_cast<double>(size))); };
+    const int x0 = clamp_to(std::floor(sphere.centre_x - sphere.radius), image.width());
+    const int x1 = clamp_to(std::ceil(sphere.centre_x + sphere.radius) + 1.0, image.width());
+    const int y0 = clamp_to(std::floor(sphere.centre_y - sphere.radius), image.height());
+    const int y1 = clamp_to(std::ceil(sphere.centre_y + sphere.radius) + 1.0, image.height());
     if (x0 >= x1 || y0 >= y1) return result;
 
     // Channel-mean brightness of the pixels whose centres lie inside the outline.

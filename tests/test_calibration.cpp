@@ -141,6 +141,11 @@ TEST(Calibration, ReportsPhotographsWithoutOneUsableHighlight) {
     const Eigen::Vector3d a = direction_from_angles(degrees_to_radians(30.0), 0.0);
     const Eigen::Vector3d b = direction_from_angles(degrees_to_radians(50.0), degrees_to_radians(180.0));
     EXPECT_EQ(find_highlight(Image(kSize, kSize, 3, 0.0f), kSphere).status, HighlightStatus::none);
+    // Outlines off the image or meaningless find nothing (and must not overflow or crash).
+    const Image lit = render(kSize, kSize, kSphere, {{a}});
+    EXPECT_EQ(find_highlight(lit, MirrorSphere{1e300, -1e300, 1e300}).status, HighlightStatus::none);
+    EXPECT_EQ(find_highlight(lit, MirrorSphere{NAN, 64, 60}).status, HighlightStatus::none);
+    EXPECT_EQ(find_highlight(lit, MirrorSphere{-500, 64, 60}).status, HighlightStatus::none);
     EXPECT_EQ(find_highlight(Image(kSize, kSize, 3, 1.0f), kSphere).status, HighlightStatus::none);  // all clipped
     const Highlight two = find_highlight(render(kSize, kSize, kSphere, {{a}, {b}}), kSphere);
     EXPECT_EQ(two.status, HighlightStatus::multiple);
