@@ -112,7 +112,9 @@ void write_image(const std::filesystem::path& path, const Image& image) {
         throw IoError(SourceLocation{path.string()}, "cannot write image: " + OIIO::geterror());
     OIIO::ImageSpec spec(image.width(), image.height(), channels, format);
     if (ext == ".exr") spec.attribute("compression", "zip");
-    // No timestamps or software tags that would make identical images differ byte-wise.
+    // Identical images must give identical files: OpenImageIO's EXR writer stamps the current
+    // time as capDate unless DateTime is set, so set it to a fixed, obviously neutral value.
+    spec.attribute("DateTime", "1970:01:01 00:00:00");
     const bool written = output->open(temporary.string(), spec) &&
                          output->write_image(OIIO::TypeDesc::FLOAT, interleaved.data()) &&
                          output->close();
