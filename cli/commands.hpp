@@ -19,5 +19,7 @@ void add_adaptive_command(CLI::App& capture, const GlobalOptions& global);
 void add_study_command(CLI::App& capture, const GlobalOptions& global);
 /// The `relight` group: render, eval.
 void add_relight_commands(CLI::App& app, const GlobalOptions& global);
+/// `capture hdr` (exposure brackets) and `capture calibrate` (mirror-sphere light directions).
+void add_capture_tool_commands(CLI::App& capture, const GlobalOptions& global);
 
 }  // namespace rfd::cli

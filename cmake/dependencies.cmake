@@ -10,6 +10,23 @@ find_package(OpenImageIO 2.4 REQUIRED CONFIG)
 find_package(CGAL 5 REQUIRED CONFIG)
 # Embree 3: the CPU ray tracing kernels of the virtual light stage (relight/ray_scene).
 find_package(embree 3 REQUIRED CONFIG)
+# OpenCV 4: HDR assembly (photo: Robertson calibration and merge) and the connected
+# components of light-calibration highlights (imgproc), in relight/. Link `rfd_opencv`.
+# Debian 12 ships OpenCVConfig.cmake only in libopencv-dev, a metapackage pulling every module
+# (76 packages: VTK, Qt, ...); the per-module -dev packages rfd installs hold headers and
+# libraries only, so without the config the three modules are found by hand.
+find_package(OpenCV 4 QUIET COMPONENTS core imgproc photo)
+add_library(rfd_opencv INTERFACE)
+if(OpenCV_FOUND)
+  target_link_libraries(rfd_opencv INTERFACE opencv_core opencv_imgproc opencv_photo)
+else()
+  find_path(RFD_OPENCV_INCLUDE_DIR opencv2/photo.hpp PATH_SUFFIXES opencv4 REQUIRED)
+  foreach(module photo imgproc core)  # link order: users first
+    find_library(RFD_OPENCV_${module} opencv_${module} REQUIRED)
+    target_link_libraries(rfd_opencv INTERFACE ${RFD_OPENCV_${module}})
+  endforeach()
+  target_include_directories(rfd_opencv SYSTEM INTERFACE ${RFD_OPENCV_INCLUDE_DIR})
+endif()
 
 if(RFD_BUILD_TESTS)
   find_package(GTest REQUIRED)
@@ -19,6 +36,8 @@ if(RFD_BUILD_BENCH)
 endif()
 
 # Programs we run rather than link.
+# oiiotool (openimageio-tools) draws the photographs the capture hdr/calibrate CLI tests read.
+find_program(RFD_OIIOTOOL oiiotool)
 find_program(RFD_GNUPLOT gnuplot)
 if(NOT RFD_GNUPLOT)
   message(WARNING "gnuplot not found: `rfd optics chart` will write CSV but no plots "

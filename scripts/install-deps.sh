@@ -10,6 +10,8 @@ packages=(
   # OpenCV's photo module: HDR assembly (Robertson et al. 2003). Its headers also satisfy
   # a path Debian's OpenImageIO CMake config insists on (/usr/include/opencv4).
   libopencv-photo-dev
+  # OpenCV's imgproc: connected components of mirror-sphere highlights (relight/calibration).
+  libopencv-imgproc-dev
   # Embree 3: ray intersection for the virtual light stage (relight/ray_scene.cpp).
   libembree-dev
   libtomlplusplus-dev libcli11-dev nlohmann-json3-dev

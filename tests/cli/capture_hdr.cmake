@@ -1,0 +1,52 @@
+# `rfd capture hdr` end to end on the bracket of capture_tools_data.cmake:
+#  - EXIF times and calibration give an EXR and a response CSV of 256 codes;
+#  - merging again with that CSV and the times on the command line (fractions allowed) gives a
+#    byte-identical EXR: the CSV round-trips and the assembly is deterministic;
+#  - nothing temporary is left behind.
+set(bracket ${DATA}/bracket_0.tif ${DATA}/bracket_1.tif ${DATA}/bracket_2.tif ${DATA}/bracket_3.tif)
+file(REMOVE_RECURSE ${OUT})
+file(MAKE_DIRECTORY ${OUT})
+execute_process(COMMAND ${RFD} capture hdr ${bracket} --exif --out ${OUT}/exif.exr --save-response ${OUT}/response.csv
+                RESULT_VARIABLE code OUTPUT_VARIABLE stdout ERROR_VARIABLE stderr)
+if(NOT code EQUAL 0)
+  message(FATAL_ERROR "rfd capture hdr --exif failed (${code}): ${stderr}")
+endif()
+if(NOT stdout MATCHES "merged 4 exposures" OR NOT stdout MATCHES "0.1 s  0.3 s  1 s  3.3 s")
+  message(FATAL_ERROR "unexpected summary: ${stdout}")
+endif()
+if(stderr MATCHES "warning")
+  message(FATAL_ERROR "an uneven bracket should not warn: ${stderr}")
+endif()
+file(READ ${OUT}/exif.exr magic LIMIT 4 HEX)
+if(NOT magic STREQUAL "762f3101")
+  message(FATAL_ERROR "exif.exr is not an OpenEXR file (starts with ${magic})")
+endif()
+file(STRINGS ${OUT}/response.csv lines)
+list(FILTER lines EXCLUDE REGEX "^#")
+list(LENGTH lines count)
+list(GET lines 0 header)
+list(GET lines 129 mid)
+if(NOT count EQUAL 257 OR NOT header STREQUAL "code,red,green,blue" OR NOT mid MATCHES "^128,1,1,1$")
+  message(FATAL_ERROR "response.csv: ${count} lines, header '${header}', code 128 '${mid}'")
+endif()
+
+execute_process(COMMAND ${RFD} capture hdr ${bracket} --exposures 1/10,0.3,1,3.3 --response ${OUT}/response.csv
+                        --out ${OUT}/again.exr --json
+                RESULT_VARIABLE code OUTPUT_VARIABLE stdout ERROR_VARIABLE stderr)
+if(NOT code EQUAL 0)
+  message(FATAL_ERROR "rfd capture hdr --response failed (${code}): ${stderr}")
+endif()
+string(JSON saturated GET "${stdout}" saturated_samples)
+string(JSON channels GET "${stdout}" channels)
+if(NOT saturated EQUAL 0 OR NOT channels EQUAL 3)
+  message(FATAL_ERROR "unexpected JSON summary: ${stdout}")
+endif()
+file(SHA256 ${OUT}/exif.exr first)
+file(SHA256 ${OUT}/again.exr second)
+if(NOT first STREQUAL second)
+  message(FATAL_ERROR "merging with the saved response differs from merging with the calibrated one")
+endif()
+file(GLOB leftovers ${OUT}/*.tmp* ${OUT}/.*.tmp* ${OUT}/.tmp*)
+if(leftovers)
+  message(FATAL_ERROR "temporary files left behind: ${leftovers}")
+endif()
