@@ -125,6 +125,22 @@ bool spherical_circumcentre(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
     return true;
 }
 
+std::vector<std::array<std::size_t, 2>> boundary_edges(const std::vector<Triangle>& triangles) {
+    std::map<std::pair<std::size_t, std::size_t>, int> uses;
+    for (const Triangle& t : triangles)
+        for (int k = 0; k < 3; ++k) {
+            const std::size_t a = t[k], b = t[(k + 1) % 3];
+            ++uses[{std::min(a, b), std::max(a, b)}];
+        }
+    std::vector<std::array<std::size_t, 2>> rim;
+    for (const Triangle& t : triangles)
+        for (int k = 0; k < 3; ++k) {
+            const std::size_t a = t[k], b = t[(k + 1) % 3];
+            if (uses[{std::min(a, b), std::max(a, b)}] == 1) rim.push_back({a, b});
+        }
+    return rim;
+}
+
 Insertion choose_new_directions(const std::vector<Eigen::Vector3d>& directions,
                                 const std::vector<Triangle>& triangles,
                                 const std::vector<double>& vertex_errors,
@@ -134,7 +150,11 @@ Insertion choose_new_directions(const std::vector<Eigen::Vector3d>& directions,
     for (std::size_t t = 0; t < triangles.size(); ++t)
         triangle_errors[t] = vertex_errors[triangles[t][0]] + vertex_errors[triangles[t][1]] +
                              vertex_errors[triangles[t][2]];
-    std::vector<std::size_t> order(triangles.size());
+    const std::vector<std::array<std::size_t, 2>> rim =
+        options.horizon_band ? boundary_edges(triangles) : std::vector<std::array<std::size_t, 2>>{};
+    for (const auto& [a, b] : rim)
+        triangle_errors.push_back(1.5 * (vertex_errors[a] + vertex_errors[b]));
+    std::vector<std::size_t> order(triangle_errors.size());
     std::iota(order.begin(), order.end(), std::size_t{0});
     std::stable_sort(order.begin(), order.end(), [&](std::size_t l, std::size_t r) {
         return triangle_errors[l] > triangle_errors[r];
@@ -149,12 +169,32 @@ Insertion choose_new_directions(const std::vector<Eigen::Vector3d>& directions,
     Insertion result;
     for (const std::size_t t : order) {
         if (result.directions.size() >= options.count) break;
-        const Triangle& tri = triangles[t];
         Eigen::Vector3d centre;
-        if (!spherical_circumcentre(directions[tri[0]], directions[tri[1]], directions[tri[2]], centre) ||
-            angle_between(centre, directions[tri[0]]) < options.min_separation) {
-            ++result.skipped_small;
-            continue;
+        if (t < triangles.size()) {
+            const Triangle& tri = triangles[t];
+            if (!spherical_circumcentre(directions[tri[0]], directions[tri[1]], directions[tri[2]], centre) ||
+                angle_between(centre, directions[tri[0]]) < options.min_separation) {
+                ++result.skipped_small;
+                continue;
+            }
+        } else {
+            const auto& [a, b] = rim[t - triangles.size()];
+            const Eigen::Vector3d middle = directions[a] + directions[b];
+            if (middle.head<2>().norm() == 0.0) {  // the edge spans the pole: no horizon below
+                ++result.skipped_small;
+                continue;
+            }
+            // A rim within the density limit of the horizon leaves no band to sample.
+            if (std::min(directions[a].z(), directions[b].z()) < std::sin(options.min_separation)) {
+                ++result.skipped_small;
+                continue;
+            }
+            const Eigen::Vector3d horizon(middle.x(), middle.y(), 0.0);
+            centre = (directions[a] + directions[b] + horizon.normalized()).normalized();
+            if (angle_between(centre, directions[a]) < options.min_separation) {
+                ++result.skipped_small;
+                continue;
+            }
         }
         if (centre.z() < 0.0) {
             ++result.skipped_below_horizon;
@@ -217,6 +257,7 @@ AdaptiveRun adaptive_capture(CaptureDevice& device, const std::vector<Eigen::Vec
         InsertionOptions insertion_options;
         insertion_options.count = std::min(options.per_iteration, options.total - run.field.size());
         insertion_options.min_separation = options.min_separation;
+        insertion_options.horizon_band = options.horizon_band;
         const Insertion insertion =
             choose_new_directions(run.field.directions, triangles, vertex_errors, insertion_options);
         run.analysis_seconds.push_back(

@@ -16,6 +16,13 @@
 //     circumradius is under the density limit (2 degrees in the thesis), circumcentres
 //     below the horizon, and any closer than the limit to an existing or newly chosen
 //     direction (the next worst triangle is taken instead).
+//     Beyond the thesis: the band between the triangulation and the horizon (interpolated
+//     along arcs, 4.4) holds no triangles, so as written the method can never sample it,
+//     although grazing light is where shadows are longest. Each boundary edge (a, b) of the
+//     triangulation therefore also ranks as a horizon triangle (a, b, h), h the horizon
+//     point below the edge's midpoint, with error e_a + e_b + (e_a + e_b) / 2 (h taking its
+//     neighbours' mean); its new direction is the triangle's centroid, which lies above the
+//     horizon. InsertionOptions::horizon_band turns this off.
 // Two-level fields: directions of the initial set whose one-ring neighbours are all farther
 // than a threshold (9 degrees in the thesis) are re-captured with a wide kernel, scaled to
 // the narrow image's mean, and replace it.
@@ -82,16 +89,23 @@ bool spherical_circumcentre(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
 struct InsertionOptions {
     std::size_t count = 16;                            ///< m, directions per iteration
     double min_separation = 0.034906585039886591;      ///< 2 degrees, radians
+    bool horizon_band = true;                          ///< also rank horizon triangles
 };
 
 /// What the insertion step decided, for reports and tests.
 struct Insertion {
     std::vector<Eigen::Vector3d> directions;   ///< new directions, worst triangle first
-    std::vector<std::size_t> from_triangle;    ///< index of the triangle each came from
+    std::vector<std::size_t> from_triangle;    ///< index of the triangle each came from;
+                                               ///< triangles.size() + k: the k-th boundary edge
+                                               ///< of boundary_edges(triangles)
     std::size_t skipped_small = 0;             ///< triangles under the density limit
     std::size_t skipped_close = 0;             ///< circumcentres too close to a direction
     std::size_t skipped_below_horizon = 0;
 };
+
+/// Edges of exactly one triangle (the triangulation's rim), as (a, b) in the triangle's
+/// orientation, in the triangles' order.
+std::vector<std::array<std::size_t, 2>> boundary_edges(const std::vector<Triangle>& triangles);
 
 /// Step 3 and 4 above. Triangles are ranked by summed corner error, ties by index.
 Insertion choose_new_directions(const std::vector<Eigen::Vector3d>& directions,
@@ -119,6 +133,7 @@ struct AdaptiveOptions {
     std::size_t per_iteration = 16;  ///< m
     std::size_t total = 1024;        ///< stop at this many images
     double min_separation = 0.034906585039886591;  ///< density limit, radians (2 degrees)
+    bool horizon_band = true;                      ///< see InsertionOptions
 };
 
 /// The state after an iteration, for progress reports, error-versus-count charts and tests.

@@ -186,13 +186,56 @@ TEST(Adaptive, DensityLimitStopsInsertion) {
     options.min_separation = degrees_to_radians(20.0);  // every circumradius is below this
     const Insertion none = choose_new_directions(mesh.vertices, mesh.triangles, errors, options);
     EXPECT_TRUE(none.directions.empty());
-    EXPECT_EQ(none.skipped_small, mesh.triangles.size());
+    const std::size_t candidates = mesh.triangles.size() + boundary_edges(mesh.triangles).size();
+    EXPECT_EQ(none.skipped_small, candidates);
     options.min_separation = degrees_to_radians(2.0);
     const Insertion all = choose_new_directions(mesh.vertices, mesh.triangles, errors, options);
     // One per triangle, except where two circumcentres would fall within 2 degrees.
     EXPECT_GT(all.directions.size(), mesh.triangles.size() / 2);
     EXPECT_EQ(all.directions.size() + all.skipped_close + all.skipped_small + all.skipped_below_horizon,
-              mesh.triangles.size());
+              candidates);
+}
+
+// The band below the triangulation's rim: with the error on two neighbouring rim vertices,
+// the first new direction lies between them and below both, toward the horizon; without
+// the horizon band it can only come from a triangle above them.
+TEST(Adaptive, HorizonBandIsSampledBelowTheRim) {
+    // The subdivided hemisphere without the triangles touching the horizon: a rim about
+    // 11 to 22 degrees up (a rim on the horizon has no band below it and adds nothing).
+    Mesh mesh = hemisphere_mesh(3);
+    std::erase_if(mesh.triangles, [&](const Triangle& t) {
+        return mesh.vertices[t[0]].z() < 1e-9 || mesh.vertices[t[1]].z() < 1e-9 || mesh.vertices[t[2]].z() < 1e-9;
+    });
+    {
+        const Insertion on_horizon = choose_new_directions(hemisphere_mesh(3).vertices, hemisphere_mesh(3).triangles,
+                                                           std::vector<double>(hemisphere_mesh(3).vertices.size(), 1.0),
+                                                           InsertionOptions{1000});
+        for (std::size_t t : on_horizon.from_triangle) EXPECT_LT(t, hemisphere_mesh(3).triangles.size());
+    }
+    const auto rim = boundary_edges(mesh.triangles);
+    ASSERT_FALSE(rim.empty());
+    // Every rim vertex has exactly two rim edges (a closed loop).
+    std::vector<int> degree(mesh.vertices.size(), 0);
+    for (const auto& [a, b] : rim) ++degree[a], ++degree[b];
+    for (std::size_t i = 0; i < degree.size(); ++i) EXPECT_TRUE(degree[i] == 0 || degree[i] == 2) << i;
+
+    const auto [a, b] = rim.front();
+    std::vector<double> errors(mesh.vertices.size(), 0.0);
+    errors[a] = errors[b] = 1.0;
+    InsertionOptions options;
+    options.count = 1;
+    const Insertion with_band = choose_new_directions(mesh.vertices, mesh.triangles, errors, options);
+    ASSERT_EQ(with_band.directions.size(), 1u);
+    const Eigen::Vector3d d = with_band.directions.front();
+    EXPECT_GT(d.z(), 0.0);
+    EXPECT_LT(d.z(), std::min(mesh.vertices[a].z(), mesh.vertices[b].z()));
+    EXPECT_LT(angle_between(d, mesh.vertices[a]), angle_between(mesh.vertices[a], mesh.vertices[b]));
+    EXPECT_EQ(with_band.from_triangle.front(), mesh.triangles.size());
+
+    options.horizon_band = false;
+    const Insertion without = choose_new_directions(mesh.vertices, mesh.triangles, errors, options);
+    ASSERT_EQ(without.directions.size(), 1u);
+    EXPECT_LT(without.from_triangle.front(), mesh.triangles.size());
 }
 
 TEST(Adaptive, TwoLevelPicksIsolatedDirectionsOnly) {
