@@ -56,6 +56,7 @@ LineChart error_chart(const relight::SamplingStudy& study, const std::string& sc
     chart.x_label = "images n";
     chart.y_label = "summed squared error";
     chart.log_y = true;
+    chart.key_position = "top right";  // the error falls from the top left
     PlotSeries fixed{"fixed (repulsion pattern)", {}, {}, false};
     for (const auto& p : study.fixed) {
         fixed.x.push_back(static_cast<double>(p.images));

@@ -122,7 +122,7 @@ void write_line_chart(const LineChart& chart, const std::filesystem::path& stem)
 
     auto plot_commands = [&](std::ostream& out) {
         out << "set datafile separator ','\nset datafile missing 'NaN'\n";
-        out << "set key top left box opaque\nset grid\n";
+        out << "set key " << chart.key_position << " box opaque\nset grid\n";
         out << "set title " << quoted(chart.title) << "\n";
         out << "set xlabel " << quoted(chart.x_label) << "\n";
         out << "set ylabel " << quoted(chart.y_label) << "\n";

@@ -25,6 +25,7 @@ struct LineChart {
     std::vector<PlotSeries> series;
     std::vector<std::pair<double, std::string>> vertical_markers;  ///< x position, label
     bool log_y = false;
+    std::string key_position = "top left";  ///< gnuplot's words: "top right", "bottom left"...
 };
 
 /// Writes `stem`.csv (one x column per series), `stem`.gp, and renders `stem`.svg and
