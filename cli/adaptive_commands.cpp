@@ -59,9 +59,6 @@ std::vector<Eigen::Vector3d> initial_directions(const AdaptiveCommandOptions& op
 }
 
 std::unique_ptr<relight::CaptureDevice> make_device(const AdaptiveCommandOptions& opt) {
-    if (opt.scene.empty() == opt.device.empty())
-        throw InputError("rfd capture adaptive: give either a SCENE file (virtual light stage) or --device "
-                         "COMMAND (a real rig), not both or neither");
     if (!opt.scene.empty()) {
         relight::Scene scene = relight::load_scene(opt.scene);
         apply_scene_overrides(scene, opt.resolution, opt.samples);
@@ -120,6 +117,9 @@ void add_adaptive_command(CLI::App& capture, const GlobalOptions&) {
     cmd->add_option("--out", opt->out, "Output field folder")->required();
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
     cmd->callback([opt] {
+        if (opt->scene.empty() == opt->device.empty())
+            throw InputError("rfd capture adaptive: give either a SCENE file (virtual light stage) or --device "
+                             "COMMAND (a real rig), not both or neither");
         const std::vector<Eigen::Vector3d> initial = initial_directions(*opt);
         if (initial.size() > opt->total)
             throw InputError("--total " + std::to_string(opt->total) + " is below the " +
