@@ -80,8 +80,9 @@ relight::Light parse_light(const std::string& text) {
 
 relight::Interpolation parse_interpolation(const std::string& text) {
     if (text == "delaunay") return relight::Interpolation::delaunay;
+    if (text == "solid-angle") return relight::Interpolation::solid_angle;
     if (text == "nearest") return relight::Interpolation::nearest;
-    throw InputError("--interpolation: expected 'delaunay' or 'nearest', got '" + text + "'");
+    throw InputError("--interpolation: expected 'delaunay', 'solid-angle' or 'nearest', got '" + text + "'");
 }
 
 // JSON has no infinity: a perfect match is reported as null.
@@ -107,7 +108,7 @@ void add_render(CLI::App& relight) {
                                    "centre column toward +x)");
     light->excludes(envmap);
     cmd->add_option("--out", opt->out, "Output image (.exr linear, .png sRGB, ...)")->required();
-    cmd->add_option("--interpolation", opt->interpolation, "delaunay (default) or nearest");
+    cmd->add_option("--interpolation", opt->interpolation, "delaunay (default), solid-angle (eq. 4.6 as written) or nearest");
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
     cmd->callback([opt] {
         if (opt->lights.empty() && opt->envmap.empty())
@@ -180,7 +181,7 @@ void add_eval(CLI::App& relight) {
     auto opt = std::make_shared<Options>();
     cmd->add_option("FIELD", opt->field, "Sparse reflectance field (folder or .lp)")->required();
     cmd->add_option("--reference", opt->reference, "Reference field, same view and image size")->required();
-    cmd->add_option("--interpolation", opt->interpolation, "delaunay (default) or nearest");
+    cmd->add_option("--interpolation", opt->interpolation, "delaunay (default), solid-angle (eq. 4.6 as written) or nearest");
     cmd->add_option("--out", opt->out, "Folder for errors.csv and the polar error map error_map.{csv,gp,svg,png}");
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
     cmd->callback([opt] {

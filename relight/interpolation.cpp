@@ -322,8 +322,21 @@ InterpolationWeights SphericalInterpolator::weights(const Eigen::Vector3d& direc
     const std::size_t cell = grid_->cell_of(direction);
     if (method == Interpolation::nearest) return nearest_weights(direction, cell);
     InterpolationWeights out;
-    if (locate(direction, cell, out)) return out;
-    return arc_weights(direction);
+    if (!locate(direction, cell, out)) return arc_weights(direction);
+    // At a measured direction the coordinates are exactly (1, 0, 0); the solid angles of its
+    // degenerate sub-triangles are zero only up to rounding, so keep them.
+    const bool at_vertex = out.weight[0] == 1.0 || out.weight[1] == 1.0 || out.weight[2] == 1.0;
+    if (method == Interpolation::solid_angle && out.count == 3 && !at_vertex) {
+        const Eigen::Vector3d& a = directions_[out.index[0]];
+        const Eigen::Vector3d& b = directions_[out.index[1]];
+        const Eigen::Vector3d& c = directions_[out.index[2]];
+        const std::array<double, 3> omega = {spherical_triangle_solid_angle(direction, b, c),
+                                             spherical_triangle_solid_angle(a, direction, c),
+                                             spherical_triangle_solid_angle(a, b, direction)};
+        const double total = omega[0] + omega[1] + omega[2];
+        if (total > 0.0) out.weight = {omega[0] / total, omega[1] / total, omega[2] / total};
+    }
+    return out;
 }
 
 std::vector<Triangle> delaunay_triangles(const std::vector<Eigen::Vector3d>& directions) {

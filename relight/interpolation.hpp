@@ -53,7 +53,10 @@
 
 namespace rfd::relight {
 
-enum class Interpolation { delaunay, nearest };
+/// delaunay: the barycentric coordinates above (continuous); solid_angle: eq. 4.6 as the
+/// thesis writes it, l_a = Omega(d, b, c) / (Omega(d, b, c) + Omega(a, d, c) + Omega(a, b, d)),
+/// same triangles and horizon band (tiny jumps across edges); nearest: the baseline.
+enum class Interpolation { delaunay, solid_angle, nearest };
 
 /// Weights of at most three directions; entries past `count` are unused (index 0, weight 0).
 struct InterpolationWeights {

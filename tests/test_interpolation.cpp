@@ -232,6 +232,39 @@ TEST(Interpolation, SolidAngleRatiosOfEq46JumpAcrossAnEdge) {
     EXPECT_NEAR(dense(one.weights(p), 3)[0], dense(other.weights(p), 3)[0], 1e-14);
 }
 
+// Eq. 4.6 as written: the same triangle as the Delaunay weights, sub-triangle solid angles
+// (independent formula: l'Huilier through spherical_triangle_solid_angle's own tests) as
+// weights, a partition of unity that reproduces each direction, and within a few percent
+// of the continuous coordinates on triangles of about 10 degrees.
+TEST(Interpolation, SolidAngleWeightsOfEq46) {
+    const auto directions = random_hemisphere(300, 4);
+    const SphericalInterpolator interp(directions);
+    std::mt19937_64 random(8);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    double largest_difference = 0.0;
+    for (int q = 0; q < 2000; ++q) {
+        const double z = unit(random), phi = 2.0 * kPi * unit(random);
+        const Eigen::Vector3d d(std::sqrt(1 - z * z) * std::cos(phi), std::sqrt(1 - z * z) * std::sin(phi), z);
+        const auto planar = interp.weights(d);
+        const auto solid = interp.weights(d, Interpolation::solid_angle);
+        expect_partition_of_unity(solid, directions.size());
+        ASSERT_EQ(solid.count, planar.count);
+        ASSERT_EQ(solid.index, planar.index);
+        if (solid.count != 3) continue;
+        const auto& a = directions[solid.index[0]];
+        const auto& b = directions[solid.index[1]];
+        const auto& c = directions[solid.index[2]];
+        const double total = spherical_triangle_solid_angle(a, b, c);
+        EXPECT_NEAR(solid.weight[0], spherical_triangle_solid_angle(d, b, c) / total, 1e-9);
+        for (std::size_t k = 0; k < 3; ++k)
+            largest_difference = std::max(largest_difference, std::abs(solid.weight[k] - planar.weight[k]));
+    }
+    EXPECT_GT(largest_difference, 0.0);
+    EXPECT_LT(largest_difference, 0.05);
+    for (std::size_t i = 0; i < directions.size(); ++i)
+        EXPECT_EQ(dense(interp.weights(directions[i], Interpolation::solid_angle), directions.size())[i], 1.0);
+}
+
 TEST(Interpolation, ThreeDirections) {
     const std::vector<Eigen::Vector3d> directions{direction_from_angles(0.3, 0.0), direction_from_angles(0.3, 2.0),
                                                   direction_from_angles(0.3, 4.0)};
