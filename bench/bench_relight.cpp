@@ -14,23 +14,13 @@
 #include <benchmark/benchmark.h>
 
 #include "core/parallel.hpp"
+#include "core/sphere.hpp"
 #include "core/units.hpp"
 #include "relight/interpolation.hpp"
 #include "relight/render.hpp"
 
 namespace rfd::relight {
 namespace {
-
-std::vector<Eigen::Vector3d> fibonacci_hemisphere(std::size_t count) {
-    std::vector<Eigen::Vector3d> directions;
-    const double golden_angle = kPi * (3.0 - std::sqrt(5.0));
-    for (std::size_t i = 0; i < count; ++i) {
-        const double z = 1.0 - (static_cast<double>(i) + 0.5) / static_cast<double>(count);
-        const double r = std::sqrt(1.0 - z * z), phi = golden_angle * static_cast<double>(i);
-        directions.emplace_back(r * std::cos(phi), r * std::sin(phi), z);
-    }
-    return directions;
-}
 
 std::vector<Eigen::Vector3d> random_queries(std::size_t count) {
     std::mt19937_64 random(2026);

@@ -12,6 +12,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
+#include <vector>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -38,6 +40,19 @@ inline SphericalAngles angles_of(const Eigen::Vector3d& d) {
 /// Angle between two unit vectors, radians; accurate for tiny and near-pi angles alike.
 inline double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
     return std::atan2(a.cross(b).norm(), a.dot(b));
+}
+
+/// `count` near-uniform upper-hemisphere directions on a Fibonacci spiral (equal area per
+/// point, z in (0, 1)): a quick, deterministic set for tests, benchmarks and probes.
+inline std::vector<Eigen::Vector3d> fibonacci_hemisphere(std::size_t count) {
+    std::vector<Eigen::Vector3d> directions;
+    const double golden_angle = std::numbers::pi * (3.0 - std::sqrt(5.0));
+    for (std::size_t i = 0; i < count; ++i) {
+        const double z = 1.0 - (static_cast<double>(i) + 0.5) / static_cast<double>(count);
+        const double r = std::sqrt(1.0 - z * z), phi = golden_angle * static_cast<double>(i);
+        directions.emplace_back(r * std::cos(phi), r * std::sin(phi), z);
+    }
+    return directions;
 }
 
 }  // namespace rfd

@@ -5,9 +5,6 @@
 #include <numeric>
 #include <random>
 
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/Surface_mesh.h>
-#include <CGAL/convex_hull_3.h>
 #include <Eigen/QR>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -15,6 +12,7 @@
 #include "core/sphere.hpp"
 #include "core/units.hpp"
 #include "relight/adaptive.hpp"
+#include "tests/support/hull_triangles.hpp"
 
 namespace rfd::relight {
 namespace {
@@ -265,36 +263,7 @@ TEST(Adaptive, WideImageIsScaledToTheNarrowMean) {
 
 // ---- the capture loop, with a synthetic scene and an independent triangulation ----
 
-// The hull of the directions plus a guardian below the horizon (CGAL's convex hull, not the
-// relighting code's Delaunay), minus the facets touching the guardian.
-std::vector<Triangle> hull_triangles(const std::vector<Eigen::Vector3d>& directions) {
-    using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
-    using Point = Kernel::Point_3;
-    std::vector<Point> points;
-    std::map<Point, std::size_t> index;
-    for (std::size_t i = 0; i < directions.size(); ++i) {
-        points.emplace_back(directions[i].x(), directions[i].y(), directions[i].z());
-        index[points.back()] = i;
-    }
-    const Point guardian(0, 0, -1);
-    points.push_back(guardian);
-    CGAL::Surface_mesh<Point> hull;
-    CGAL::convex_hull_3(points.begin(), points.end(), hull);
-    std::vector<Triangle> triangles;
-    for (const auto face : hull.faces()) {
-        Triangle t{};
-        int corner = 0;
-        bool has_guardian = false;
-        for (const auto v : CGAL::vertices_around_face(hull.halfedge(face), hull)) {
-            const Point& p = hull.point(v);
-            if (p == guardian) has_guardian = true;
-            else t[corner] = index.at(p);
-            ++corner;
-        }
-        if (!has_guardian) triangles.push_back(t);
-    }
-    return triangles;
-}
+using rfd::testing::hull_triangles;
 
 // A scene whose appearance changes quickly only for lights near `hot`: every pixel has a
 // narrow highlight at a direction within 25 degrees of it, and a dull diffuse term.

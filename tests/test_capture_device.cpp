@@ -8,6 +8,7 @@
 #include "core/sphere.hpp"
 #include "core/units.hpp"
 #include "relight/capture_device.hpp"
+#include "tests/support/error_of.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace rfd::relight {
@@ -16,14 +17,7 @@ namespace {
 using ::testing::HasSubstr;
 using rfd::testing::TempDir;
 
-std::string error_of(const std::function<void()>& action) {
-    try {
-        action();
-    } catch (const Error& error) {
-        return error.what();
-    }
-    return "";
-}
+using rfd::testing::error_of;
 
 TEST(CommandCaptureDevice, FillsEveryPlaceholder) {
     TempDir dir;

@@ -11,6 +11,7 @@
 #include "core/image_io.hpp"
 #include "core/sphere.hpp"
 #include "relight/field.hpp"
+#include "tests/support/error_of.hpp"
 #include "tests/support/temp_dir.hpp"
 
 #include <OpenImageIO/imageio.h>
@@ -29,14 +30,7 @@ Image random_image(int w, int h, int c, unsigned seed, float scale = 4.0f) {
     return image;
 }
 
-std::string error_of(const std::function<void()>& action) {
-    try {
-        action();
-    } catch (const Error& error) {
-        return error.what();
-    }
-    return "";
-}
+using rfd::testing::error_of;
 
 void write(const std::filesystem::path& path, const std::string& text) {
     std::ofstream(path) << text;

@@ -7,15 +7,13 @@
 #include <random>
 #include <set>
 
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/Surface_mesh.h>
-#include <CGAL/convex_hull_3.h>
 #include <gtest/gtest.h>
 
 #include "core/error.hpp"
 #include "core/sphere.hpp"
 #include "core/units.hpp"
 #include "relight/interpolation.hpp"
+#include "tests/support/hull_triangles.hpp"
 
 namespace rfd::relight {
 namespace {
@@ -74,34 +72,9 @@ std::set<Triangle> as_sorted_set(const std::vector<Triangle>& triangles) {
     return out;
 }
 
-// The hull of the directions plus the guardian by CGAL's convex_hull_3 (not the Delaunay
-// code under test), minus the facets touching the guardian.
+// The triangulation computed independently (tests/support/hull_triangles.hpp).
 std::set<Triangle> hull_reference(const std::vector<Eigen::Vector3d>& directions) {
-    using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
-    using Point = Kernel::Point_3;
-    std::vector<Point> points;
-    std::map<Point, std::size_t> index;
-    for (std::size_t i = 0; i < directions.size(); ++i) {
-        points.emplace_back(directions[i].x(), directions[i].y(), directions[i].z());
-        index[points.back()] = i;
-    }
-    const Point guardian(0, 0, -1);
-    points.push_back(guardian);
-    CGAL::Surface_mesh<Point> hull;
-    CGAL::convex_hull_3(points.begin(), points.end(), hull);
-    std::vector<Triangle> triangles;
-    for (const auto face : hull.faces()) {
-        Triangle t{};
-        std::size_t corner = 0;
-        bool has_guardian = false;
-        for (const auto v : CGAL::vertices_around_face(hull.halfedge(face), hull)) {
-            if (hull.point(v) == guardian) has_guardian = true;
-            else t[corner] = index.at(hull.point(v));
-            ++corner;
-        }
-        if (!has_guardian) triangles.push_back(t);
-    }
-    return as_sorted_set(triangles);
+    return as_sorted_set(rfd::testing::hull_triangles(directions));
 }
 
 TEST(Interpolation, TrianglesAreTheHullOfDirectionsAndGuardian) {

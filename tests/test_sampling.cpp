@@ -16,14 +16,8 @@ namespace {
 // The largest angle from any point of the hemisphere (z >= 0) to its nearest pattern
 // direction, estimated on a dense Fibonacci probe set.
 double covering_radius(const std::vector<Eigen::Vector3d>& pattern) {
-    const std::size_t probes = 20000;
-    const double golden_angle = kPi * (3.0 - std::sqrt(5.0));
     double worst = 0.0;
-    for (std::size_t k = 0; k < probes; ++k) {
-        const double z = 1.0 - (static_cast<double>(k) + 0.5) / static_cast<double>(probes);
-        const double r = std::sqrt(1.0 - z * z);
-        const double phi = golden_angle * static_cast<double>(k);
-        const Eigen::Vector3d probe(r * std::cos(phi), r * std::sin(phi), z);
+    for (const Eigen::Vector3d& probe : fibonacci_hemisphere(20000)) {
         double nearest = kPi;
         for (const auto& d : pattern) nearest = std::min(nearest, angle_between(probe, d));
         worst = std::max(worst, nearest);

@@ -24,6 +24,7 @@
 #include "relight/ray_scene.hpp"
 #include "relight/scene.hpp"
 #include "relight/stage.hpp"
+#include "tests/support/error_of.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace rfd::relight {
@@ -33,14 +34,7 @@ using ::testing::HasSubstr;
 using ::testing::MatchesRegex;
 using rfd::testing::TempDir;
 
-std::string error_of(const std::function<void()>& action) {
-    try {
-        action();
-    } catch (const Error& error) {
-        return error.what();
-    }
-    return "";
-}
+using rfd::testing::error_of;
 
 // ---- independent geometry, written apart from the renderer ----
 

@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 
+#include "core/sphere.hpp"
 #include "core/units.hpp"
 #include "relight/field.hpp"
 
@@ -38,16 +39,6 @@ inline relight::ReflectanceField lambertian_sphere_field(const std::vector<Eigen
     return field;
 }
 
-/// Near-uniform upper-hemisphere directions (Fibonacci spiral), z in (0, 1).
-inline std::vector<Eigen::Vector3d> fibonacci_hemisphere(std::size_t count) {
-    std::vector<Eigen::Vector3d> directions;
-    const double golden_angle = kPi * (3.0 - std::sqrt(5.0));
-    for (std::size_t i = 0; i < count; ++i) {
-        const double z = 1.0 - (static_cast<double>(i) + 0.5) / static_cast<double>(count);
-        const double r = std::sqrt(1.0 - z * z), phi = golden_angle * static_cast<double>(i);
-        directions.emplace_back(r * std::cos(phi), r * std::sin(phi), z);
-    }
-    return directions;
-}
+using rfd::fibonacci_hemisphere;
 
 }  // namespace rfd::testing
