@@ -6,6 +6,9 @@ find_package(nlohmann_json 3 REQUIRED)
 find_package(TBB REQUIRED)
 find_package(Threads REQUIRED)
 find_package(OpenImageIO 2.4 REQUIRED CONFIG)
+# Cairo: PDF print sheets (print/) and the glyphs of procedural letter fields (patterns/).
+find_package(PkgConfig REQUIRED)
+pkg_check_modules(Cairo REQUIRED IMPORTED_TARGET cairo)
 # CGAL is header-only here (5.x); relight/ uses its Delaunay triangulations.
 find_package(CGAL 5 REQUIRED CONFIG)
 # Embree 3: the CPU ray tracing kernels of the virtual light stage (relight/ray_scene).

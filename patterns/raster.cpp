@@ -1,0 +1,274 @@
+#include "patterns/raster.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include <OpenImageIO/imageio.h>
+
+#include "core/error.hpp"
+#include "core/files.hpp"
+#include "core/image.hpp"
+#include "core/parallel.hpp"
+#include "core/progress.hpp"
+
+namespace rfd::patterns {
+namespace {
+
+constexpr const char* kAttributePrefix = "rfd:";
+
+std::string lower_extension(const std::filesystem::path& path) {
+    std::string ext = path.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return ext;
+}
+
+// Half-extent of what the pattern must cover, mm.
+Eigen::Vector2d covered_half_extent(const optics::Design& design) {
+    if (design.macro)
+        return {0.5 * design.macro->count_x * design.macro->pitch_x,
+                0.5 * design.macro->count_y * design.macro->pitch_y};
+    const optics::Plane& plane = design.pattern_plane();
+    if (plane.part) {
+        if (const auto* array = std::get_if<optics::LensletArrayPart>(&*plane.part))
+            return array->lattice.half_extent();
+    }
+    // The pattern lies on a sheet: the extent of the first lenslet array of the design.
+    for (const optics::Plane& p : design.planes)
+        if (p.part)
+            if (const auto* array = std::get_if<optics::LensletArrayPart>(&*p.part))
+                return array->lattice.half_extent();
+    throw InputError(SourceLocation{design.file}, "design has no lenslet array to print a pattern for");
+}
+
+// Removes the temporary file unless released: nothing half-written survives an exception.
+class TemporaryFile {
+public:
+    explicit TemporaryFile(std::filesystem::path path) : path_(std::move(path)) {}
+    ~TemporaryFile() {
+        if (!path_.empty()) {
+            std::error_code ec;
+            std::filesystem::remove(path_, ec);
+        }
+    }
+    TemporaryFile(const TemporaryFile&) = delete;
+    TemporaryFile& operator=(const TemporaryFile&) = delete;
+    const std::filesystem::path& path() const { return path_; }
+    void release() { path_.clear(); }
+
+private:
+    std::filesystem::path path_;
+};
+
+}  // namespace
+
+PatternGeometry pattern_geometry(const optics::Design& design, Dpi dpi_x, Dpi dpi_y,
+                                 double margin_mm) {
+    const SourceLocation where{design.file, 0, 0, "printer"};
+    if (!(dpi_x.value > 0.0) || !(dpi_y.value > 0.0) || !std::isfinite(dpi_x.value) ||
+        !std::isfinite(dpi_y.value))
+        throw InputError(where, "print resolution must be positive, got " +
+                                    std::to_string(dpi_x.value) + " x " + std::to_string(dpi_y.value) +
+                                    " dpi");
+    if (!(margin_mm >= 0.0)) throw InputError(where, "pattern margin must not be negative");
+    const Eigen::Vector2d half = covered_half_extent(design);
+    PatternGeometry g;
+    g.dpi_x = dpi_x.value;
+    g.dpi_y = dpi_y.value;
+    g.dot_x = dpi_x.dot_mm();
+    g.dot_y = dpi_y.dot_mm();
+    // Whole dots; a hair of tolerance so an extent that is a whole number of dots in exact
+    // arithmetic does not gain one from rounding.
+    const double w = std::ceil(2.0 * (half.x() + margin_mm) / g.dot_x - 1e-9);
+    const double h = std::ceil(2.0 * (half.y() + margin_mm) / g.dot_y - 1e-9);
+    constexpr double kMaxSide = std::numeric_limits<int>::max();
+    if (w > kMaxSide || h > kMaxSide)
+        throw InputError(where, "a pattern of " + std::to_string(w) + " x " + std::to_string(h) +
+                                    " dots is too large");
+    g.width = static_cast<int>(w);
+    g.height = static_cast<int>(h);
+    return g;
+}
+
+void write_pattern(const std::filesystem::path& path, const PatternSource& source,
+                   const PatternAttributes& attributes, const WriteOptions& options) {
+    const PatternGeometry& g = source.geometry();
+    const int channels = source.channels();
+    RFD_CHECK(g.width > 0 && g.height > 0 && channels > 0 && options.rows_per_strip > 0);
+    const std::string ext = lower_extension(path);
+    OIIO::TypeDesc format;
+    bool srgb = false;
+    if (ext == ".exr") {
+        format = options.half_float ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT;
+    } else if (ext == ".tif" || ext == ".tiff") {
+        format = OIIO::TypeDesc::UINT16;
+        srgb = true;
+    } else if (ext == ".png") {
+        format = OIIO::TypeDesc::UINT8;
+        srgb = true;
+    } else {
+        throw InputError(SourceLocation{path.string()},
+                         "unknown pattern extension '" + ext + "' (expected .exr, .tif or .png)");
+    }
+
+    TemporaryFile temporary(temporary_sibling(path));
+    auto output = OIIO::ImageOutput::create(temporary.path().string());
+    if (!output)
+        throw IoError(SourceLocation{path.string()}, "cannot write pattern: " + OIIO::geterror());
+    OIIO::ImageSpec spec(g.width, g.height, channels, format);
+    spec.attribute("XResolution", static_cast<float>(g.dpi_x));
+    spec.attribute("YResolution", static_cast<float>(g.dpi_y));
+    spec.attribute("ResolutionUnit", "in");
+    // Pixel width over height, i.e. dpi_y / dpi_x: OpenImageIO's TIFF writer stores the y
+    // resolution as XResolution times this, and drops YResolution without it.
+    spec.attribute("PixelAspectRatio", static_cast<float>(g.dpi_y / g.dpi_x));
+    spec.attribute("DateTime", "1970:01:01 00:00:00");  // byte-identical reruns
+    if (ext == ".exr") spec.attribute("compression", "zips");
+    if (ext == ".tif" || ext == ".tiff") spec.attribute("compression", "zip");
+    if (ext == ".exr") {
+        for (const auto& [key, value] : attributes) spec.attribute(kAttributePrefix + key, value);
+    } else {
+        // TIFF and PNG keep no custom attributes: one "rfd:key=value" line each in the
+        // image description instead.
+        std::string description;
+        for (const auto& [key, value] : attributes) {
+            RFD_CHECK(key.find('=') == std::string::npos && value.find('\n') == std::string::npos);
+            description += kAttributePrefix + key + "=" + value + "\n";
+        }
+        if (!description.empty()) spec.attribute("ImageDescription", description);
+    }
+    if (!output->open(temporary.path().string(), spec))
+        throw IoError(SourceLocation{path.string()}, "cannot write pattern: " + output->geterror());
+
+    const std::size_t row_floats = static_cast<std::size_t>(g.width) * static_cast<std::size_t>(channels);
+    const int strip_rows = std::min(options.rows_per_strip, g.height);
+    std::vector<float> strip(row_floats * static_cast<std::size_t>(strip_rows));
+    Progress progress(options.progress_label, static_cast<std::size_t>(g.height));
+    for (int y0 = 0; y0 < g.height; y0 += strip_rows) {
+        const int y1 = std::min(g.height, y0 + strip_rows);
+        parallel_for_chunks(static_cast<std::size_t>(y1 - y0), 1, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t r = begin; r < end; ++r) {
+                std::span<float> row(strip.data() + r * row_floats, row_floats);
+                source.render_row(y0 + static_cast<int>(r), row);
+                for (std::size_t k = 0; k < row_floats; ++k) {
+                    float& v = row[k];
+                    if (!std::isfinite(v)) {
+                        // Reported after the loop: exceptions do not cross TBB tasks cleanly.
+                        v = std::numeric_limits<float>::quiet_NaN();
+                        continue;
+                    }
+                    if (srgb) v = linear_to_srgb(std::clamp(v, 0.0f, 1.0f));
+                }
+            }
+        });
+        const std::size_t used = row_floats * static_cast<std::size_t>(y1 - y0);
+        for (std::size_t k = 0; k < used; ++k)
+            if (std::isnan(strip[k])) {
+                const std::size_t row = k / row_floats, column = (k % row_floats) / static_cast<std::size_t>(channels);
+                throw InputError(SourceLocation{path.string()},
+                                 "refusing to write dot (" + std::to_string(column) + ", " +
+                                     std::to_string(y0 + static_cast<int>(row)) +
+                                     "): the pattern value is not a finite number");
+            }
+        if (!output->write_scanlines(y0, y1, 0, OIIO::TypeDesc::FLOAT, strip.data()))
+            throw IoError(SourceLocation{path.string()}, "cannot write pattern: " + output->geterror());
+        progress.advance(static_cast<std::size_t>(y1 - y0));
+    }
+    if (!output->close())
+        throw IoError(SourceLocation{path.string()}, "cannot write pattern: " + output->geterror());
+    progress.finish();
+    move_into_place(temporary.path(), path);
+    temporary.release();
+}
+
+namespace {
+
+PatternFileInfo info_of(const OIIO::ImageSpec& spec) {
+    PatternFileInfo info;
+    info.width = spec.width;
+    info.height = spec.height;
+    info.channels = spec.alpha_channel >= 0 && spec.nchannels > 1 ? spec.nchannels - 1 : spec.nchannels;
+    const std::string unit = spec.get_string_attribute("ResolutionUnit");
+    const double per_inch = unit == "cm" ? kMillimetresPerInch / 10.0 : 1.0;
+    info.dpi_x = spec.get_float_attribute("XResolution", 0.0f) * per_inch;
+    info.dpi_y = spec.get_float_attribute("YResolution", 0.0f) * per_inch;
+    const std::string prefix = kAttributePrefix;
+    for (const OIIO::ParamValue& p : spec.extra_attribs) {
+        const std::string name = p.name().string();
+        if (name.rfind(prefix, 0) == 0) info.attributes[name.substr(prefix.size())] = p.get_string();
+    }
+    const std::string description = spec.get_string_attribute("ImageDescription");
+    std::size_t start = 0;
+    while (start < description.size()) {
+        std::size_t end = description.find('\n', start);
+        if (end == std::string::npos) end = description.size();
+        const std::string line = description.substr(start, end - start);
+        const std::size_t equals = line.find('=');
+        if (line.rfind(prefix, 0) == 0 && equals != std::string::npos)
+            info.attributes[line.substr(prefix.size(), equals - prefix.size())] = line.substr(equals + 1);
+        start = end + 1;
+    }
+    return info;
+}
+
+}  // namespace
+
+struct PatternReader::Input {
+    std::filesystem::path path;
+    std::unique_ptr<OIIO::ImageInput> image;
+    int file_channels = 0;
+    bool srgb = false;
+};
+
+PatternReader::PatternReader(const std::filesystem::path& path) : input_(std::make_unique<Input>()) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec))
+        throw IoError(SourceLocation{path.string()}, "cannot open: no such pattern file");
+    input_->path = path;
+    input_->image = OIIO::ImageInput::open(path.string());
+    if (!input_->image)
+        throw IoError(SourceLocation{path.string()}, "cannot read pattern: " + OIIO::geterror());
+    const OIIO::ImageSpec& spec = input_->image->spec();
+    info_ = info_of(spec);
+    input_->file_channels = spec.nchannels;
+    input_->srgb = !spec.format.is_floating_point();
+    if (info_.width <= 0 || info_.height <= 0 || info_.channels <= 0)
+        throw InputError(SourceLocation{path.string()}, "pattern has no pixels");
+}
+
+PatternReader::~PatternReader() = default;
+PatternReader::PatternReader(PatternReader&&) noexcept = default;
+PatternReader& PatternReader::operator=(PatternReader&&) noexcept = default;
+
+void PatternReader::read_rows(int y0, int y1, std::span<float> out) {
+    RFD_CHECK(0 <= y0 && y0 <= y1 && y1 <= info_.height);
+    const std::size_t row_floats = static_cast<std::size_t>(info_.width) * static_cast<std::size_t>(info_.channels);
+    RFD_CHECK(out.size() >= row_floats * static_cast<std::size_t>(y1 - y0));
+    if (y0 == y1) return;
+    // Only the colour channels: alpha, when present, is the last one.
+    if (!input_->image->read_scanlines(0, 0, y0, y1, 0, 0, info_.channels, OIIO::TypeDesc::FLOAT, out.data()))
+        throw IoError(SourceLocation{input_->path.string()},
+                      "cannot read pattern rows " + std::to_string(y0) + "-" + std::to_string(y1) +
+                          ": " + input_->image->geterror());
+    const std::size_t count = row_floats * static_cast<std::size_t>(y1 - y0);
+    for (std::size_t k = 0; k < count; ++k) {
+        float& v = out[k];
+        if (!std::isfinite(v)) {
+            const std::size_t row = k / row_floats;
+            const std::size_t column = (k % row_floats) / static_cast<std::size_t>(info_.channels);
+            throw InputError(SourceLocation{input_->path.string()},
+                             "dot (" + std::to_string(column) + ", " + std::to_string(y0 + static_cast<int>(row)) +
+                                 ") is not a finite number");
+        }
+        if (input_->srgb) v = srgb_to_linear(v);
+    }
+}
+
+PatternFileInfo read_pattern_info(const std::filesystem::path& path) {
+    return PatternReader(path).info();
+}
+
+}  // namespace rfd::patterns

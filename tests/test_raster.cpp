@@ -1,0 +1,132 @@
+// Pattern rasters: dot geometry against the lattice, and the streaming writer's round trip
+// (values, resolution tags, attributes), including refusing non-finite values without
+// leaving a file behind.
+
+#include <cmath>
+#include <filesystem>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "optics/design.hpp"
+#include "patterns/raster.hpp"
+#include "tests/support/error_of.hpp"
+#include "tests/support/temp_dir.hpp"
+
+namespace rfd::patterns {
+namespace {
+
+using ::testing::HasSubstr;
+using rfd::testing::error_of;
+using rfd::testing::TempDir;
+
+const std::filesystem::path kDesigns = std::filesystem::path(RFD_SOURCE_DIR) / "designs";
+
+// A value every dot can be checked against: distinct per dot and channel, exact in half floats.
+float expected_value(int x, int y, int c) { return static_cast<float>((x * 7 + y * 3 + c) % 64) / 64.0f; }
+
+class Ramp final : public PatternSource {
+public:
+    Ramp(PatternGeometry g, int channels, int bad_row = -1) : g_(g), channels_(channels), bad_row_(bad_row) {}
+    const PatternGeometry& geometry() const override { return g_; }
+    int channels() const override { return channels_; }
+    void render_row(int py, std::span<float> out) const override {
+        for (int x = 0; x < g_.width; ++x)
+            for (int c = 0; c < channels_; ++c)
+                out[static_cast<std::size_t>(x * channels_ + c)] = expected_value(x, py, c);
+        if (py == bad_row_) out[5 * static_cast<std::size_t>(channels_)] = std::nanf("");
+    }
+
+private:
+    PatternGeometry g_;
+    int channels_;
+    int bad_row_;
+};
+
+PatternGeometry small_geometry() {
+    PatternGeometry g;
+    g.width = 37;
+    g.height = 23;
+    g.dpi_x = 2880;
+    g.dpi_y = 1440;
+    g.dot_x = 25.4 / 2880;
+    g.dot_y = 25.4 / 1440;
+    return g;
+}
+
+TEST(PatternGeometry, CoversTheArrayCentredOnIt) {
+    const optics::Design design = optics::load_design(kDesigns / "design1.toml");
+    const PatternGeometry g = pattern_geometry(design, Dpi{2880}, Dpi{1440});
+    const auto& array = std::get<optics::LensletArrayPart>(*design.plane("A").part);
+    const Eigen::Vector2d half = array.lattice.half_extent();
+    // Whole dots covering the array, less than one dot more.
+    EXPECT_GE(g.width * g.dot_x, 2 * half.x());
+    EXPECT_LT(g.width * g.dot_x, 2 * half.x() + g.dot_x + 1e-9);
+    EXPECT_GE(g.height * g.dot_y, 2 * half.y());
+    EXPECT_LT(g.height * g.dot_y, 2 * half.y() + g.dot_y + 1e-9);
+    // The raster's centre is the array's centre, and dot positions invert.
+    const Eigen::Vector2d centre = g.dot_centre(0.5 * g.width - 0.5, 0.5 * g.height - 0.5);
+    EXPECT_NEAR(centre.norm(), 0.0, 1e-12);
+    const Eigen::Vector2d p = g.raster_position(g.dot_centre(1234, 567));
+    EXPECT_NEAR(p.x(), 1234, 1e-9);
+    EXPECT_NEAR(p.y(), 567, 1e-9);
+    // y runs down the raster and up the lattice.
+    EXPECT_GT(g.dot_centre(0, 0).y(), g.dot_centre(0, 1).y());
+    const PatternGeometry with_margin = pattern_geometry(design, Dpi{2880}, Dpi{1440}, 5.0);
+    EXPECT_NEAR((with_margin.width - g.width) * g.dot_x, 10.0, 2 * g.dot_x);
+}
+
+TEST(PatternGeometry, RejectsNonPositiveResolution) {
+    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    EXPECT_THAT(error_of([&] { pattern_geometry(design, Dpi{0}, Dpi{1440}); }),
+                HasSubstr("print resolution must be positive"));
+}
+
+TEST(WritePattern, RoundTripKeepsValuesResolutionAndAttributes) {
+    TempDir dir;
+    const Ramp ramp(small_geometry(), 3);
+    for (const char* name : {"p.exr", "p.tif"}) {
+        const auto path = dir / name;
+        WriteOptions options;
+        options.rows_per_strip = 5;  // strips that do not divide the height
+        write_pattern(path, ramp, {{"design", "test design"}, {"white", "0.75"}}, options);
+        PatternReader reader(path);
+        const PatternFileInfo& info = reader.info();
+        EXPECT_EQ(info.width, 37);
+        EXPECT_EQ(info.height, 23);
+        EXPECT_EQ(info.channels, 3);
+        EXPECT_DOUBLE_EQ(info.dpi_x, 2880.0) << name;
+        EXPECT_DOUBLE_EQ(info.dpi_y, 1440.0) << name;
+        EXPECT_EQ(info.attributes.at("design"), "test design") << name;
+        EXPECT_EQ(info.attributes.at("white"), "0.75") << name;
+        std::vector<float> rows(static_cast<std::size_t>(37 * 3 * 23));
+        reader.read_rows(0, 23, rows);
+        // EXR half floats hold these exactly; 16-bit sRGB to within its quantisation.
+        const double tolerance = std::string(name) == "p.exr" ? 0.0 : 2e-4;
+        double worst = 0;
+        for (int y = 0; y < 23; ++y)
+            for (int x = 0; x < 37; ++x)
+                for (int c = 0; c < 3; ++c)
+                    worst = std::max(worst, std::abs(rows[static_cast<std::size_t>((y * 37 + x) * 3 + c)] -
+                                                     static_cast<double>(expected_value(x, y, c))));
+        EXPECT_LE(worst, tolerance) << name;
+    }
+}
+
+TEST(WritePattern, NonFiniteValueLeavesNoFile) {
+    TempDir dir;
+    const Ramp ramp(small_geometry(), 3, /*bad_row=*/17);
+    const auto path = dir / "bad.exr";
+    EXPECT_THAT(error_of([&] { write_pattern(path, ramp, {}); }),
+                HasSubstr("dot (5, 17): the pattern value is not a finite number"));
+    EXPECT_TRUE(std::filesystem::is_empty(dir.path()));
+}
+
+TEST(WritePattern, UnwritableDirectoryIsAnIoError) {
+    const Ramp ramp(small_geometry(), 1);
+    EXPECT_THAT(error_of([&] { write_pattern("/proc/rfd-no/p.exr", ramp, {}); }),
+                HasSubstr("does not exist"));
+}
+
+}  // namespace
+}  // namespace rfd::patterns
