@@ -7,6 +7,8 @@ packages=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libglm-dev libcgal-dev libtbb-dev
   libopenimageio-dev openimageio-tools libcairo2-dev
+  # The font of procedural letter fields and sheet labels (patterns/glyphs.cpp).
+  fonts-dejavu-core
   # OpenCV's photo module: HDR assembly (Robertson et al. 2003). Its headers also satisfy
   # a path Debian's OpenImageIO CMake config insists on (/usr/include/opencv4).
   libopencv-photo-dev
