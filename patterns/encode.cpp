@@ -1,0 +1,613 @@
+#include "patterns/encode.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+#include "core/error.hpp"
+#include "core/image_io.hpp"
+#include "core/parallel.hpp"
+#include "core/sphere.hpp"
+
+namespace rfd::patterns {
+namespace {
+
+using optics::CellIndex;
+using optics::LatticeKind;
+
+// Offsets probed per cell to find the display's range: azimuths around the cell and
+// fractions of the way from the centre to the boundary.
+constexpr int kProbeAzimuths = 96;
+constexpr std::array<double, 5> kProbeRadii = {0.0, 0.35, 0.7, 0.9, 1.0};
+
+std::string format_angle(double radians) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.1f", radians_to_degrees(radians));
+    return text;
+}
+
+std::string describe(const Eigen::Vector3d& direction) {
+    const SphericalAngles a = angles_of(direction);
+    return "theta " + format_angle(a.theta) + ", phi " + format_angle(a.phi);
+}
+
+// A direction set's triangulation covers `v` when v lies in one of its triangles: outside
+// them (near the horizon) the interpolation only extrapolates along arcs.
+bool covered(const relight::SphericalInterpolator& interpolator, const Eigen::Vector3d& v) {
+    return interpolator.weights(v, relight::Interpolation::delaunay).count == 3;
+}
+
+const optics::Plane& check_design(const optics::Design& design) {
+    if (design.kind != optics::DesignKind::I && design.kind != optics::DesignKind::II)
+        throw InputError(SourceLocation{design.file, 0, 0, "design.kind"},
+                         "this encoder handles Designs I and II (spatial macro-pixels); Design " +
+                             std::string(optics::to_string(design.kind)) +
+                             " needs the angular encoder");
+    return design.pattern_plane();
+}
+
+// Incident directions from the paraxial map; the exact model refines them with a table.
+Eigen::Vector3d from_slopes(const Eigen::Vector2d& slopes) {
+    return Eigen::Vector3d(slopes.x(), slopes.y(), 1.0).normalized();
+}
+
+}  // namespace
+
+Eigen::Vector3d AngularMapping::field_direction(const Eigen::Vector3d& incident) const {
+    Eigen::Vector3d v(-incident.x(), -incident.y(), incident.z());
+    if (angle_scale != 1.0) {
+        const SphericalAngles a = angles_of(v);
+        v = direction_from_angles(angle_scale * a.theta, a.phi);
+    }
+    if (tilt_deg != 0.0) v = Eigen::AngleAxisd(-degrees_to_radians(tilt_deg), Eigen::Vector3d::UnitX()) * v;
+    if (turn_deg != 0.0) v = Eigen::AngleAxisd(degrees_to_radians(turn_deg), Eigen::Vector3d::UnitZ()) * v;
+    return v;
+}
+
+Eigen::Vector3d AngularMapping::display_direction(const Eigen::Vector3d& field) const {
+    Eigen::Vector3d v = field.normalized();
+    if (turn_deg != 0.0) v = Eigen::AngleAxisd(-degrees_to_radians(turn_deg), Eigen::Vector3d::UnitZ()) * v;
+    if (tilt_deg != 0.0) v = Eigen::AngleAxisd(degrees_to_radians(tilt_deg), Eigen::Vector3d::UnitX()) * v;
+    if (angle_scale != 1.0) {
+        const SphericalAngles a = angles_of(v);
+        v = direction_from_angles(a.theta / angle_scale, a.phi);
+    }
+    return {-v.x(), -v.y(), v.z()};
+}
+
+// ---------------------------------------------------------------------------------------
+
+struct Encoder::Tables {
+    explicit Tables(const optics::Design& design) : optics(design) {}
+
+    optics::DesignOptics optics;
+    CellIndex centre_cell{};
+    Eigen::Vector2d centre_of_centre_cell = Eigen::Vector2d::Zero();
+    double b = 0.0;  // paraxial offset per slope, mm
+
+    // Exact model: slopes at nodes (origin + k * step) over one cell, row-major, x fastest.
+    int nodes = 0;
+    double table_origin = 0.0, table_step = 0.0;
+    std::vector<Eigen::Vector2d> slopes;
+
+    std::unique_ptr<relight::SphericalInterpolator> interpolator;
+    // Full field index -> column in the lenslet table (-1: never needed).
+    std::vector<int> column_of;
+    int columns = 0;
+    // samples[(lenslet * columns + column) * channels + c]
+    std::vector<float> samples;
+    Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  // tilt and turn, when no scaling
+
+    Eigen::Vector2d table_slopes(const Eigen::Vector2d& offset) const {
+        const double fx = std::clamp((offset.x() - table_origin) / table_step, 0.0, nodes - 1.000001);
+        const double fy = std::clamp((offset.y() - table_origin) / table_step, 0.0, nodes - 1.000001);
+        const int ix = static_cast<int>(fx), iy = static_cast<int>(fy);
+        const double tx = fx - ix, ty = fy - iy;
+        const std::size_t k = static_cast<std::size_t>(iy) * static_cast<std::size_t>(nodes) + static_cast<std::size_t>(ix);
+        const std::size_t n = static_cast<std::size_t>(nodes);
+        return (1 - ty) * ((1 - tx) * slopes[k] + tx * slopes[k + 1]) +
+               ty * ((1 - tx) * slopes[k + n] + tx * slopes[k + n + 1]);
+    }
+};
+
+namespace {
+
+// The exact inverse map over one cell, from Newton solves at every node. Nodes where the
+// solve fails (outside the cell, beyond wrap-over) take the paraxial slopes plus the mean
+// exact-minus-paraxial correction of their solved neighbours, so bilinear lookups near the
+// boundary stay smooth.
+void tabulate_exact(Encoder::Tables& t, const optics::Lattice& lattice, int nodes) {
+    RFD_CHECK(nodes >= 3);
+    const double reach = 1.05 * lattice.circumradius();
+    t.nodes = nodes;
+    t.table_origin = -reach;
+    t.table_step = 2.0 * reach / (nodes - 1);
+    const std::size_t count = static_cast<std::size_t>(nodes) * static_cast<std::size_t>(nodes);
+    t.slopes.assign(count, Eigen::Vector2d::Zero());
+    std::vector<char> solved(count, 0);
+    parallel_for_chunks(count, 64, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t k = begin; k < end; ++k) {
+            const Eigen::Vector2d offset(t.table_origin + static_cast<double>(k % static_cast<std::size_t>(nodes)) * t.table_step,
+                                         t.table_origin + static_cast<double>(k / static_cast<std::size_t>(nodes)) * t.table_step);
+            const auto d = t.optics.direction_for(offset, t.centre_cell, optics::Model::Exact);
+            if (d) {
+                t.slopes[k] = {d->x() / d->z(), d->y() / d->z()};
+                solved[k] = 1;
+            }
+        }
+    });
+    // Grow the corrections outward, ring by ring, in a fixed order (deterministic).
+    std::vector<Eigen::Vector2d> correction(count, Eigen::Vector2d::Zero());
+    for (std::size_t k = 0; k < count; ++k) {
+        const Eigen::Vector2d offset(t.table_origin + static_cast<double>(k % static_cast<std::size_t>(nodes)) * t.table_step,
+                                     t.table_origin + static_cast<double>(k / static_cast<std::size_t>(nodes)) * t.table_step);
+        if (solved[k]) correction[k] = t.slopes[k] - offset / t.b;
+    }
+    bool any_unsolved = true;
+    while (any_unsolved) {
+        any_unsolved = false;
+        std::vector<char> next = solved;
+        bool progress = false;
+        for (int y = 0; y < nodes; ++y)
+            for (int x = 0; x < nodes; ++x) {
+                const std::size_t k = static_cast<std::size_t>(y * nodes + x);
+                if (solved[k]) continue;
+                Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+                int n = 0;
+                for (int dy = -1; dy <= 1; ++dy)
+                    for (int dx = -1; dx <= 1; ++dx) {
+                        const int xx = x + dx, yy = y + dy;
+                        if (xx < 0 || yy < 0 || xx >= nodes || yy >= nodes) continue;
+                        const std::size_t j = static_cast<std::size_t>(yy * nodes + xx);
+                        if (solved[j]) {
+                            sum += correction[j];
+                            ++n;
+                        }
+                    }
+                if (n == 0) {
+                    any_unsolved = true;
+                    continue;
+                }
+                correction[k] = sum / n;
+                next[k] = 1;
+                progress = true;
+            }
+        solved.swap(next);
+        if (!progress) break;  // nothing solved at all: stay paraxial
+    }
+    for (std::size_t k = 0; k < count; ++k) {
+        const Eigen::Vector2d offset(t.table_origin + static_cast<double>(k % static_cast<std::size_t>(nodes)) * t.table_step,
+                                     t.table_origin + static_cast<double>(k / static_cast<std::size_t>(nodes)) * t.table_step);
+        t.slopes[k] = offset / t.b + correction[k];
+    }
+}
+
+// Offsets probed over one cell: centre, rings toward the boundary, the boundary itself.
+std::vector<Eigen::Vector2d> probe_offsets(const optics::Lattice& lattice) {
+    std::vector<Eigen::Vector2d> offsets;
+    offsets.emplace_back(0.0, 0.0);
+    for (int a = 0; a < kProbeAzimuths; ++a) {
+        const double phi = 2.0 * kPi * (a + 0.5) / kProbeAzimuths;
+        const Eigen::Vector2d dir(std::cos(phi), std::sin(phi));
+        const double reach = lattice.boundary_distance(dir);
+        for (double r : kProbeRadii)
+            if (r > 0.0) offsets.push_back(r * reach * dir);
+    }
+    for (const Eigen::Vector2d& corner : lattice.cell_corners()) offsets.push_back(corner);
+    return offsets;
+}
+
+// The paraxial part of a design's inverse map, for needed_field_directions before any
+// table exists: it only needs a bound, and the exact map stays within a few percent of it
+// inside a cell.
+double paraxial_max_angle(const optics::DesignOptics& optics) {
+    double largest = 0.0;
+    for (const Eigen::Vector2d& offset : probe_offsets(optics.lattice()))
+        largest = std::max(largest, std::atan(offset.norm() / std::abs(optics.paraxial_b())));
+    return largest;
+}
+
+// Field directions within `radius` of the cone around the mapped display axis, plus the
+// longest triangle edge there (every triangle that can hold a needed direction).
+std::vector<std::size_t> directions_near_cone(const std::vector<Eigen::Vector3d>& directions,
+                                              const relight::SphericalInterpolator& interpolator,
+                                              const Eigen::Vector3d& axis, double radius) {
+    double longest = 0.0;
+    for (const relight::Triangle& t : interpolator.triangles()) {
+        bool near = false;
+        for (std::size_t v : t) near = near || angle_between(interpolator.directions()[v], axis) <= radius;
+        if (!near) continue;
+        for (int e = 0; e < 3; ++e)
+            longest = std::max(longest, angle_between(interpolator.directions()[t[static_cast<std::size_t>(e)]],
+                                                      interpolator.directions()[t[static_cast<std::size_t>((e + 1) % 3)]]));
+    }
+    std::vector<std::size_t> kept;
+    for (std::size_t i = 0; i < directions.size(); ++i)
+        if (angle_between(directions[i].normalized(), axis) <= radius + longest + 1e-9) kept.push_back(i);
+    return kept;
+}
+
+// Field-frame cone a design needs: its axis and half-angle, with a margin for the exact
+// map and the angle scale.
+std::pair<Eigen::Vector3d, double> needed_cone(const optics::DesignOptics& optics, const EncodeOptions& options) {
+    const double display_angle = 1.1 * paraxial_max_angle(optics) + degrees_to_radians(1.0);
+    const Eigen::Vector3d axis = options.mapping.field_direction(Eigen::Vector3d::UnitZ());
+    return {axis, std::abs(options.mapping.angle_scale) * display_angle};
+}
+
+// Fit of the field image onto the array: image coordinates (pixel centres at integers) of a
+// lattice-frame point.
+struct ImageFitTransform {
+    double mm_per_px_x = 1.0, mm_per_px_y = 1.0;
+    int width = 0, height = 0;
+    Eigen::Vector2d to_image(const Eigen::Vector2d& mm) const {
+        return {mm.x() / mm_per_px_x + 0.5 * width - 0.5, 0.5 * height - mm.y() / mm_per_px_y - 0.5};
+    }
+};
+
+ImageFitTransform fit_image(const Eigen::Vector2d& half_extent, int width, int height, ImageFit fit) {
+    ImageFitTransform t;
+    t.width = width;
+    t.height = height;
+    const double sx = 2.0 * half_extent.x() / width, sy = 2.0 * half_extent.y() / height;
+    switch (fit) {
+        case ImageFit::cover: t.mm_per_px_x = t.mm_per_px_y = std::max(sx, sy); break;
+        case ImageFit::contain: t.mm_per_px_x = t.mm_per_px_y = std::min(sx, sy); break;
+        case ImageFit::stretch: t.mm_per_px_x = sx; t.mm_per_px_y = sy; break;
+    }
+    return t;
+}
+
+// The field at one lenslet. Where a lenslet covers a pixel or more, a box filter of its
+// footprint: the pixels under an 8 x 8 grid of points over the cell's bounding box, those
+// inside the cell, each weighing what it covers (outside the image counts as black). Where
+// a lenslet is smaller than a pixel, a bilinear read at its centre.
+std::vector<std::pair<std::size_t, float>> footprint_taps(const optics::Lattice& lattice, CellIndex cell,
+                                                          const ImageFitTransform& fit) {
+    const Eigen::Vector2d centre = lattice.center(cell);
+    std::map<std::size_t, double> weights;
+    auto pixel = [&](int x, int y) {
+        return static_cast<std::size_t>(y) * static_cast<std::size_t>(fit.width) + static_cast<std::size_t>(x);
+    };
+    if (lattice.pitch_x() < fit.mm_per_px_x && lattice.pitch_y() < fit.mm_per_px_y) {
+        const Eigen::Vector2d uv = fit.to_image(centre);
+        if (uv.x() >= -0.5 && uv.y() >= -0.5 && uv.x() <= fit.width - 0.5 && uv.y() <= fit.height - 0.5) {
+            const double u = std::clamp(uv.x(), 0.0, fit.width - 1.0), v = std::clamp(uv.y(), 0.0, fit.height - 1.0);
+            const int x0 = static_cast<int>(u), y0 = static_cast<int>(v);
+            const int x1 = std::min(x0 + 1, fit.width - 1), y1 = std::min(y0 + 1, fit.height - 1);
+            const double tx = u - x0, ty = v - y0;
+            weights[pixel(x0, y0)] += (1 - tx) * (1 - ty);
+            weights[pixel(x1, y0)] += tx * (1 - ty);
+            weights[pixel(x0, y1)] += (1 - tx) * ty;
+            weights[pixel(x1, y1)] += tx * ty;
+        }
+    } else {
+        constexpr int kGrid = 8;
+        const double half_x = 0.5 * lattice.pitch_x();
+        const double half_y = lattice.kind() == LatticeKind::Hexagonal ? lattice.circumradius() : 0.5 * lattice.pitch_y();
+        int inside = 0;
+        for (int gy = 0; gy < kGrid; ++gy)
+            for (int gx = 0; gx < kGrid; ++gx) {
+                const Eigen::Vector2d p = centre + Eigen::Vector2d((2.0 * (gx + 0.5) / kGrid - 1.0) * half_x,
+                                                                   (2.0 * (gy + 0.5) / kGrid - 1.0) * half_y);
+                if (!lattice.cell_contains(cell, p)) continue;
+                ++inside;
+                const Eigen::Vector2d uv = fit.to_image(p);
+                const double x = std::floor(uv.x() + 0.5), y = std::floor(uv.y() + 0.5);
+                if (x < 0 || y < 0 || x >= fit.width || y >= fit.height) continue;
+                weights[pixel(static_cast<int>(x), static_cast<int>(y))] += 1.0;
+            }
+        for (auto& entry : weights) entry.second /= std::max(inside, 1);
+    }
+    std::vector<std::pair<std::size_t, float>> taps;
+    for (const auto& [index, w] : weights)
+        if (w > 0) taps.emplace_back(index, static_cast<float>(w));
+    return taps;
+}
+
+}  // namespace
+
+std::vector<std::size_t> needed_field_directions(const optics::Design& design,
+                                                 const std::vector<Eigen::Vector3d>& field_directions,
+                                                 const EncodeOptions& options) {
+    check_design(design);
+    const optics::DesignOptics optics(design);
+    const relight::SphericalInterpolator interpolator(field_directions);
+    const auto [axis, radius] = needed_cone(optics, options);
+    return directions_near_cone(field_directions, interpolator, axis, radius);
+}
+
+relight::ReflectanceField load_field_for(const optics::Design& design, const std::filesystem::path& field,
+                                         const EncodeOptions& options) {
+    const std::filesystem::path lp = relight::light_file_of(field);
+    const std::vector<relight::LightEntry> entries = relight::read_light_file(lp);
+    std::vector<Eigen::Vector3d> directions;
+    for (const auto& e : entries) directions.push_back(e.direction);
+    relight::ReflectanceField out;
+    for (std::size_t i : needed_field_directions(design, directions, options)) {
+        const relight::LightEntry& e = entries[i];
+        Image image = read_image(lp.parent_path() / e.file);
+        if (!out.images.empty() && !image.same_shape(out.images.front()))
+            throw InputError(SourceLocation{lp.string(), e.line},
+                             "image '" + e.file + "' differs in size or channels from the field's first image");
+        out.directions.push_back(e.direction);
+        out.images.push_back(std::move(image));
+    }
+    if (out.images.empty())
+        throw InputError(SourceLocation{lp.string()}, "no light direction of the field lies near the display's range");
+    return out;
+}
+
+Encoder::Encoder(const optics::Design& design, const relight::ReflectanceField& field,
+                 const PatternGeometry& geometry, const EncodeOptions& options)
+    : geometry_(geometry), options_(options) {
+    check_design(design);
+    if (field.size() < 3 || field.images.size() != field.size())
+        throw InputError(SourceLocation{options.field_name},
+                         "a field needs at least three light directions with one image each");
+    if (!(options.mapping.angle_scale > 0.0))
+        throw InputError(SourceLocation{options.field_name, 0, 0, "angle scale"}, "the angle scale must be positive");
+    tables_ = std::make_unique<Tables>(design);
+    Tables& t = *tables_;
+    channels_ = field.channels();
+    const optics::Lattice& lattice = t.optics.lattice();
+    t.centre_cell = t.optics.centre_cell();
+    t.centre_of_centre_cell = lattice.center(t.centre_cell);
+    t.b = t.optics.paraxial_b();
+    if (options.model == optics::Model::Exact) tabulate_exact(t, lattice, options.exact_table_nodes);
+
+    // The display's range: probes over one cell.
+    for (const Eigen::Vector2d& offset : probe_offsets(lattice)) {
+        const Eigen::Vector3d d = incident_direction(offset);
+        range_.probes.push_back(d);
+        range_.max_angle_rad = std::max(range_.max_angle_rad, std::acos(std::clamp(d.z(), -1.0, 1.0)));
+    }
+
+    t.interpolator = std::make_unique<relight::SphericalInterpolator>(field.directions);
+    std::vector<std::string> missing;
+    std::size_t missing_count = 0;
+    double lowest_needed = 0.0;
+    for (const Eigen::Vector3d& d : range_.probes) {
+        const Eigen::Vector3d v = options.mapping.field_direction(d);
+        lowest_needed = std::max(lowest_needed, angles_of(v).theta);
+        if (covered(*t.interpolator, v)) continue;
+        ++missing_count;
+        if (missing.size() < 4) missing.push_back("display " + describe(d) + " -> field " + describe(v));
+    }
+    if (missing_count > 0 && !options.allow_partial_coverage) {
+        double field_highest = 0.0;
+        for (const auto& v : field.directions) field_highest = std::max(field_highest, angles_of(v).theta);
+        std::string list;
+        for (const auto& m : missing) list += "\n  " + m;
+        throw InputError(SourceLocation{options.field_name},
+                         "the field does not cover the display's angular range: " + std::to_string(missing_count) +
+                             " of " + std::to_string(range_.probes.size()) +
+                             " probed incident directions (up to " + format_angle(range_.max_angle_rad) +
+                             " deg from the display axis; field theta up to " + format_angle(lowest_needed) +
+                             " deg) fall outside the field's light directions (theta up to " +
+                             format_angle(field_highest) + " deg), e.g.:" + list +
+                             "\n  capture those directions, change --tilt/--angle-scale, or pass --allow-partial");
+    }
+
+    // Which field directions any dot can need, and their samples at every lenslet.
+    const auto [axis, radius] = needed_cone(t.optics, options);
+    const double cone = std::max(radius, [&] {
+        double r = 0.0;
+        for (const auto& d : range_.probes) r = std::max(r, angle_between(options.mapping.field_direction(d), axis));
+        return r;
+    }());
+    std::vector<std::size_t> kept = options.allow_partial_coverage && missing_count > 0
+                                        ? std::vector<std::size_t>{}
+                                        : directions_near_cone(field.directions, *t.interpolator, axis, cone);
+    if (kept.empty())
+        for (std::size_t i = 0; i < field.size(); ++i) kept.push_back(i);
+    t.column_of.assign(field.size(), -1);
+    for (std::size_t c = 0; c < kept.size(); ++c) t.column_of[kept[c]] = static_cast<int>(c);
+    t.columns = static_cast<int>(kept.size());
+
+    const Eigen::Vector2d half = lattice.half_extent();
+    const ImageFitTransform fit = fit_image(half, field.width(), field.height(), options.fit);
+    const std::size_t lenslets = static_cast<std::size_t>(lattice.count_x()) * static_cast<std::size_t>(lattice.count_y());
+    const std::size_t columns = kept.size();
+    const std::size_t channels = static_cast<std::size_t>(channels_);
+    t.samples.assign(lenslets * columns * channels, 0.0f);
+    parallel_for_chunks(lenslets, 16, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t l = begin; l < end; ++l) {
+            const CellIndex cell{static_cast<int>(l % static_cast<std::size_t>(lattice.count_x())),
+                                 static_cast<int>(l / static_cast<std::size_t>(lattice.count_x()))};
+            const auto taps = footprint_taps(lattice, cell, fit);
+            float* row = t.samples.data() + l * columns * channels;
+            for (std::size_t c = 0; c < columns; ++c) {
+                const Image& image = field.images[kept[c]];
+                for (std::size_t ch = 0; ch < channels; ++ch) {
+                    const std::span<const float> plane = image.plane(static_cast<int>(ch));
+                    double sum = 0.0;
+                    for (const auto& [pixel, w] : taps) sum += static_cast<double>(w) * plane[pixel];
+                    row[c * channels + ch] = static_cast<float>(sum);
+                }
+            }
+        }
+    });
+
+    // White: the 99.5th percentile of the brightest channel over every 16th row and 4th dot.
+    const int rows = (geometry_.height + 15) / 16;
+    std::vector<std::vector<float>> per_row(static_cast<std::size_t>(rows));
+    parallel_for_chunks(static_cast<std::size_t>(rows), 1, [&](std::size_t begin, std::size_t end) {
+        std::vector<float> buffer(static_cast<std::size_t>(geometry_.width) * channels);
+        for (std::size_t r = begin; r < end; ++r) {
+            const int py = std::min(geometry_.height - 1, static_cast<int>(r) * 16 + 8);
+            render_row(py, buffer);
+            const double y = geometry_.dot_centre(0, py).y();
+            for (int px = 0; px < geometry_.width; px += 4) {
+                if (!lattice.contains(lattice.cell_at({geometry_.dot_centre(px, py).x(), y}))) continue;
+                float brightest = 0.0f;
+                for (std::size_t ch = 0; ch < channels; ++ch)
+                    brightest = std::max(brightest, buffer[static_cast<std::size_t>(px) * channels + ch]);
+                per_row[r].push_back(brightest);
+            }
+        }
+    });
+    std::vector<float> values;
+    for (const auto& v : per_row) values.insert(values.end(), v.begin(), v.end());
+    if (!values.empty()) {
+        const std::size_t k = std::min(values.size() - 1, static_cast<std::size_t>(0.995 * static_cast<double>(values.size())));
+        std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
+        white_ = values[k] > 0.0f ? values[k] : 1.0;
+    }
+}
+
+Encoder::~Encoder() = default;
+
+const optics::Lattice& Encoder::lattice() const { return tables_->optics.lattice(); }
+const optics::DesignOptics& Encoder::optics() const { return tables_->optics; }
+const relight::SphericalInterpolator& Encoder::interpolator() const { return *tables_->interpolator; }
+
+Eigen::Vector3d Encoder::incident_direction(const Eigen::Vector2d& offset) const {
+    const Tables& t = *tables_;
+    if (options_.model == optics::Model::Exact) return from_slopes(t.table_slopes(offset));
+    return from_slopes(offset / t.b);
+}
+
+double Encoder::exact_table_error(int samples) const {
+    if (options_.model != optics::Model::Exact) return 0.0;
+    const Tables& t = *tables_;
+    const optics::Lattice& lattice = t.optics.lattice();
+    double worst = 0.0;
+    // A deterministic low-discrepancy set over the cell (golden-ratio sequence).
+    for (int k = 0; k < samples; ++k) {
+        const double u = std::fmod(0.5 + k * 0.6180339887498949, 1.0);
+        const double v = std::fmod(0.5 + k * 0.7548776662466927, 1.0);
+        const double r = std::sqrt(v), phi = 2.0 * kPi * u;
+        const Eigen::Vector2d dir(std::cos(phi), std::sin(phi));
+        const Eigen::Vector2d offset = 0.999 * r * lattice.boundary_distance(dir) * dir;
+        const auto direct = t.optics.direction_for(offset, t.centre_cell, optics::Model::Exact);
+        if (!direct) continue;
+        worst = std::max(worst, angle_between(*direct, incident_direction(offset)));
+    }
+    return worst;
+}
+
+float Encoder::lenslet_sample(CellIndex cell, std::size_t index, int channel) const {
+    const Tables& t = *tables_;
+    const int column = t.column_of.at(index);
+    if (column < 0) return 0.0f;
+    const std::size_t l = lattice().linear_index(cell);
+    return t.samples[(l * static_cast<std::size_t>(t.columns) + static_cast<std::size_t>(column)) *
+                         static_cast<std::size_t>(channels_) +
+                     static_cast<std::size_t>(channel)];
+}
+
+void Encoder::render_row(int py, std::span<float> out) const {
+    const Tables& t = *tables_;
+    const optics::Lattice& lattice = t.optics.lattice();
+    const std::size_t channels = static_cast<std::size_t>(channels_);
+    const std::size_t stride = static_cast<std::size_t>(t.columns) * channels;
+    const double y = geometry_.dot_centre(0, py).y();
+    const bool exact = options_.model == optics::Model::Exact;
+    std::fill(out.begin(), out.end(), 0.0f);
+    for (int px = 0; px < geometry_.width; ++px) {
+        const Eigen::Vector2d p(geometry_.dot_centre(px, py).x(), y);
+        const CellIndex cell = lattice.cell_at(p);
+        if (!lattice.contains(cell)) continue;
+        const Eigen::Vector2d offset = p - lattice.center(cell);
+        const Eigen::Vector2d slopes = exact ? t.table_slopes(offset) : Eigen::Vector2d(offset / t.b);
+        const double inverse_cos = std::sqrt(1.0 + slopes.squaredNorm());  // 1 / cos(kappa)
+        const Eigen::Vector3d d = Eigen::Vector3d(slopes.x(), slopes.y(), 1.0) / inverse_cos;
+        const relight::InterpolationWeights w =
+            t.interpolator->weights(options_.mapping.field_direction(d), options_.interpolation);
+        const float* base = t.samples.data() + lattice.linear_index(cell) * stride;
+        float* dot = out.data() + static_cast<std::size_t>(px) * channels;
+        for (std::size_t k = 0; k < w.count; ++k) {
+            const int column = t.column_of[w.index[k]];
+            if (column < 0 || w.weight[k] == 0.0) continue;
+            const float weight = static_cast<float>(w.weight[k] * inverse_cos);
+            const float* sample = base + static_cast<std::size_t>(column) * channels;
+            for (std::size_t c = 0; c < channels; ++c) dot[c] += weight * sample[c];
+        }
+    }
+}
+
+PatternAttributes Encoder::attributes() const {
+    const optics::Design& design = tables_->optics.design();
+    char white[32];
+    std::snprintf(white, sizeof white, "%.9g", white_);
+    auto number = [](double v) {
+        char text[32];
+        std::snprintf(text, sizeof text, "%.6g", v);
+        return std::string(text);
+    };
+    return {{"design", design.name},
+            {"design_file", design.file},
+            {"kind", std::string(optics::to_string(design.kind))},
+            {"model", std::string(optics::to_string(options_.model))},
+            {"field", options_.field_name},
+            {"tilt_deg", number(options_.mapping.tilt_deg)},
+            {"turn_deg", number(options_.mapping.turn_deg)},
+            {"angle_scale", number(options_.mapping.angle_scale)},
+            {"white", white}};
+}
+
+DecodeComparison decode_and_compare(const Encoder& encoder, const std::vector<float>& pattern_rows,
+                                    double border_dots) {
+    const PatternGeometry& g = encoder.geometry();
+    const std::size_t channels = static_cast<std::size_t>(encoder.channels());
+    RFD_CHECK(pattern_rows.size() == g.dot_count() * channels);
+    const optics::Lattice& lattice = encoder.lattice();
+    const optics::DesignOptics& optics = encoder.optics();
+    const auto& directions = encoder.interpolator().directions();
+    const AngularMapping& mapping = encoder.options().mapping;
+    const double border = border_dots * std::max(g.dot_x, g.dot_y);
+
+    auto value_at = [&](const Eigen::Vector2d& raster, std::size_t c) {
+        const int x0 = static_cast<int>(std::floor(raster.x())), y0 = static_cast<int>(std::floor(raster.y()));
+        const double tx = raster.x() - x0, ty = raster.y() - y0;
+        auto at = [&](int x, int y) {
+            x = std::clamp(x, 0, g.width - 1);
+            y = std::clamp(y, 0, g.height - 1);
+            return static_cast<double>(
+                pattern_rows[(static_cast<std::size_t>(y) * static_cast<std::size_t>(g.width) + static_cast<std::size_t>(x)) *
+                                 channels + c]);
+        };
+        return (1 - ty) * ((1 - tx) * at(x0, y0) + tx * at(x0 + 1, y0)) +
+               ty * ((1 - tx) * at(x0, y0 + 1) + tx * at(x0 + 1, y0 + 1));
+    };
+
+    double sum = 0.0, peak = 0.0;
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < directions.size(); ++i) {
+        const Eigen::Vector3d d = mapping.display_direction(directions[i]);
+        if (!(d.z() > 0.0)) continue;
+        for (int cj = 0; cj < lattice.count_y(); ++cj)
+            for (int ci = 0; ci < lattice.count_x(); ++ci) {
+                const CellIndex cell{ci, cj};
+                const optics::DesignOptics::Landing landing = optics.land(d, cell, encoder.options().model);
+                if (landing.status != optics::RayStatus::Ok || !(landing.cell == cell)) continue;
+                const Eigen::Vector2d p = lattice.center(cell) + landing.offset;
+                // Far enough inside the cell that the bilinear read stays in it.
+                bool inside = true;
+                for (int k = 0; k < 8 && inside; ++k) {
+                    const double a = 2.0 * kPi * k / 8;
+                    inside = lattice.cell_contains(cell, p + border * Eigen::Vector2d(std::cos(a), std::sin(a)));
+                }
+                if (!inside) continue;
+                const Eigen::Vector2d raster = g.raster_position(p);
+                for (std::size_t c = 0; c < channels; ++c) {
+                    const double decoded = value_at(raster, c) * d.z();
+                    const double direct = encoder.lenslet_sample(cell, i, static_cast<int>(c));
+                    sum += (decoded - direct) * (decoded - direct);
+                    peak = std::max(peak, direct);
+                    ++n;
+                }
+            }
+    }
+    DecodeComparison result;
+    result.samples = n;
+    result.mse = n ? sum / static_cast<double>(n) : 0.0;
+    result.peak = peak;
+    result.psnr_db = result.mse > 0 ? 10.0 * std::log10(peak * peak / result.mse)
+                                    : std::numeric_limits<double>::infinity();
+    return result;
+}
+
+}  // namespace rfd::patterns

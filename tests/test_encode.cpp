@@ -1,0 +1,246 @@
+// The Design I/II pattern encoder (thesis 8.4): the display-to-field direction mapping, the
+// 1/cos(kappa) factor, lenslet sampling, the decode round trip (paraxial and exact), and
+// the error for a field that does not cover the display's range.
+
+#include <cmath>
+#include <fstream>
+#include <random>
+#include <regex>
+#include <sstream>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "core/sphere.hpp"
+#include "optics/design.hpp"
+#include "patterns/encode.hpp"
+#include "tests/support/error_of.hpp"
+
+namespace rfd::patterns {
+namespace {
+
+using ::testing::HasSubstr;
+using rfd::testing::error_of;
+
+const std::filesystem::path kDesigns = std::filesystem::path(RFD_SOURCE_DIR) / "designs";
+
+std::string read_text(const std::filesystem::path& path) {
+    std::ifstream in(path);
+    std::stringstream text;
+    text << in.rdbuf();
+    return text.str();
+}
+
+// Design I with a small array (the preset's 63 x 73 lenslets are 143 million dots).
+optics::Design small_design1(int count_x, int count_y) {
+    std::string text = read_text(kDesigns / "design1.toml");
+    text = std::regex_replace(text, std::regex(R"(count = \[63, 73\])"),
+                              "count = [" + std::to_string(count_x) + ", " + std::to_string(count_y) + "]");
+    return optics::parse_design(text, "design1-small.toml");
+}
+
+// A smooth, colourful field: every pixel a Lambertian patch with its own normal and colour.
+relight::ReflectanceField smooth_field(std::size_t lights, int width, int height) {
+    relight::ReflectanceField field;
+    field.directions = fibonacci_hemisphere(lights);
+    for (const Eigen::Vector3d& d : field.directions) {
+        Image image(width, height, 3);
+        for (int y = 0; y < height; ++y)
+            for (int x = 0; x < width; ++x) {
+                const Eigen::Vector3d normal = Eigen::Vector3d(0.6 * (x + 0.5) / width - 0.3,
+                                                               0.3 - 0.6 * (y + 0.5) / height, 1.0).normalized();
+                const double shade = std::max(0.0, normal.dot(d));
+                for (int c = 0; c < 3; ++c)
+                    image.at(x, y, c) = static_cast<float>(shade * (0.4 + 0.2 * c + 0.3 * ((x + y + c) % 3) / 2.0));
+            }
+        field.images.push_back(std::move(image));
+    }
+    return field;
+}
+
+std::vector<float> render_all(const Encoder& encoder) {
+    const PatternGeometry& g = encoder.geometry();
+    const std::size_t row = static_cast<std::size_t>(g.width * encoder.channels());
+    std::vector<float> rows(row * static_cast<std::size_t>(g.height));
+    for (int y = 0; y < g.height; ++y)
+        encoder.render_row(y, std::span<float>(rows.data() + row * static_cast<std::size_t>(y), row));
+    return rows;
+}
+
+TEST(AngularMapping, LightAboveTheDisplayLightsTheFieldFromAbove) {
+    const AngularMapping identity;
+    // Light from above and behind travels down (-y) through the display.
+    const Eigen::Vector3d down = Eigen::Vector3d(0.0, -0.3, 1.0).normalized();
+    const Eigen::Vector3d v = identity.field_direction(down);
+    EXPECT_GT(v.y(), 0.0);
+    EXPECT_NEAR(v.z(), down.z(), 1e-15);
+    // A 45-degree tilt sends the display axis to 45 degrees above the field's horizon, +y.
+    AngularMapping tilted;
+    tilted.tilt_deg = 45;
+    const Eigen::Vector3d axis = tilted.field_direction(Eigen::Vector3d::UnitZ());
+    EXPECT_NEAR(axis.y(), std::sqrt(0.5), 1e-12);
+    EXPECT_NEAR(axis.z(), std::sqrt(0.5), 1e-12);
+    // Scaling doubles the polar angle about the display axis.
+    AngularMapping scaled;
+    scaled.angle_scale = 2.0;
+    const Eigen::Vector3d ten = direction_from_angles(degrees_to_radians(10), 0.4);
+    EXPECT_NEAR(radians_to_degrees(angles_of(scaled.field_direction(ten)).theta), 20.0, 1e-9);
+}
+
+TEST(AngularMapping, DisplayDirectionInvertsFieldDirection) {
+    AngularMapping mapping;
+    mapping.tilt_deg = 30;
+    mapping.turn_deg = -70;
+    mapping.angle_scale = 1.7;
+    std::mt19937 random(5);
+    std::uniform_real_distribution<double> theta(0.0, 0.5), phi(-kPi, kPi);
+    for (int k = 0; k < 200; ++k) {
+        const Eigen::Vector3d d = direction_from_angles(theta(random), phi(random));
+        EXPECT_LT(angle_between(mapping.display_direction(mapping.field_direction(d)), d), 1e-12);
+    }
+}
+
+TEST(Encoder, ConstantFieldGivesOneOverCosKappa) {
+    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    relight::ReflectanceField field;
+    field.directions = fibonacci_hemisphere(200);
+    for (std::size_t i = 0; i < field.size(); ++i) field.images.emplace_back(6, 5, 1, 0.5f);
+    const PatternGeometry g = pattern_geometry(design, Dpi{720}, Dpi{360});
+    const Encoder encoder(design, field, g, EncodeOptions{});
+    const std::vector<float> rows = render_all(encoder);
+    const double b = encoder.optics().paraxial_b();
+    int checked = 0;
+    for (int py = 3; py < g.height; py += 37)
+        for (int px = 5; px < g.width; px += 41) {
+            const Eigen::Vector2d p = g.dot_centre(px, py);
+            const optics::CellIndex cell = encoder.lattice().cell_at(p);
+            const float value = rows[static_cast<std::size_t>(py * g.width + px)];
+            if (!encoder.lattice().contains(cell)) {
+                EXPECT_EQ(value, 0.0f);
+                continue;
+            }
+            const Eigen::Vector2d slopes = (p - encoder.lattice().center(cell)) / b;
+            EXPECT_NEAR(value, 0.5 * std::sqrt(1.0 + slopes.squaredNorm()), 1e-5) << px << ", " << py;
+            ++checked;
+        }
+    EXPECT_GT(checked, 100);
+}
+
+TEST(Encoder, LensletSamplesAreTheFieldPixelsWhenTheyAlign) {
+    // Design II's 6 x 5 rectangular array, a 6 x 5 image stretched over it: lenslet (i, j)
+    // sees exactly pixel (i, 4 - j) (rows run up the array and down the image).
+    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    relight::ReflectanceField field;
+    field.directions = fibonacci_hemisphere(64);
+    for (std::size_t i = 0; i < field.size(); ++i) {
+        Image image(6, 5, 1);
+        for (int y = 0; y < 5; ++y)
+            for (int x = 0; x < 6; ++x) image.at(x, y, 0) = static_cast<float>(i * 100 + static_cast<std::size_t>(y * 6 + x));
+        field.images.push_back(std::move(image));
+    }
+    EncodeOptions options;
+    options.fit = ImageFit::stretch;
+    const Encoder encoder(design, field, pattern_geometry(design, Dpi{360}, Dpi{360}), options);
+    int checked = 0;
+    for (std::size_t i = 0; i < field.size(); ++i) {
+        if (angle_between(field.directions[i], Eigen::Vector3d::UnitZ()) > 0.2) continue;
+        for (int j = 0; j < 5; ++j)
+            for (int k = 0; k < 6; ++k) {
+                EXPECT_EQ(encoder.lenslet_sample({k, j}, i, 0), static_cast<float>(i * 100 + static_cast<std::size_t>((4 - j) * 6 + k)));
+                ++checked;
+            }
+    }
+    EXPECT_GT(checked, 0);
+}
+
+struct RoundTripCase {
+    const char* name;
+    bool hexagonal;
+    optics::Model model;
+    double tilt_deg;
+};
+
+class DecodeRoundTrip : public ::testing::TestWithParam<RoundTripCase> {};
+
+TEST_P(DecodeRoundTrip, RecoversTheFieldSamplesAtEveryLenslet) {
+    const RoundTripCase& param = GetParam();
+    const optics::Design design = param.hexagonal ? small_design1(9, 10) : optics::load_design(kDesigns / "design2.toml");
+    const relight::ReflectanceField field = smooth_field(1024, 16, 12);
+    EncodeOptions options;
+    options.model = param.model;
+    options.mapping.tilt_deg = param.tilt_deg;
+    const PatternGeometry g = pattern_geometry(design, Dpi{2880}, Dpi{1440});
+    const Encoder encoder(design, field, g, options);
+    const DecodeComparison result = decode_and_compare(encoder, render_all(encoder));
+    // Every lenslet contributes: at least a handful of field directions each.
+    const std::size_t lenslets = static_cast<std::size_t>(encoder.lattice().count_x() * encoder.lattice().count_y());
+    EXPECT_GT(result.samples, 3 * 5 * lenslets);
+    RecordProperty("psnr_db", std::to_string(result.psnr_db));
+    EXPECT_GE(result.psnr_db, 40.0) << "samples " << result.samples << " mse " << result.mse;
+}
+
+INSTANTIATE_TEST_SUITE_P(Designs, DecodeRoundTrip,
+                         ::testing::Values(RoundTripCase{"hex_paraxial", true, optics::Model::Paraxial, 0.0},
+                                           RoundTripCase{"hex_exact_tilted", true, optics::Model::Exact, 45.0},
+                                           RoundTripCase{"rect_paraxial_tilted", false, optics::Model::Paraxial, 45.0},
+                                           RoundTripCase{"rect_exact", false, optics::Model::Exact, 0.0}),
+                         [](const auto& test) { return std::string(test.param.name); });
+
+TEST(Encoder, ExactTableMatchesDirectNewtonSolves) {
+    const optics::Design design = small_design1(5, 5);
+    const relight::ReflectanceField field = smooth_field(400, 4, 4);
+    EncodeOptions options;
+    options.model = optics::Model::Exact;
+    const Encoder encoder(design, field, pattern_geometry(design, Dpi{720}, Dpi{720}), options);
+    // A fraction of the angle one print dot spans (about 0.17 degrees at 2880 dpi, f = 3 mm).
+    EXPECT_LT(radians_to_degrees(encoder.exact_table_error(300)), 0.005);
+    // And the exact map differs from the paraxial one where the design says it does.
+    const Eigen::Vector2d corner = encoder.lattice().cell_corners().front() * 0.95;
+    const EncodeOptions paraxial;
+    const Encoder reference(design, field, pattern_geometry(design, Dpi{720}, Dpi{720}), paraxial);
+    EXPECT_GT(radians_to_degrees(angle_between(encoder.incident_direction(corner), reference.incident_direction(corner))), 0.1);
+}
+
+TEST(Encoder, FieldThatMissesTheDisplayRangeIsRefusedWithTheDirections) {
+    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    relight::ReflectanceField field;
+    for (const Eigen::Vector3d& d : fibonacci_hemisphere(400))
+        if (angle_between(d, Eigen::Vector3d::UnitZ()) < degrees_to_radians(8)) field.directions.push_back(d);
+    for (std::size_t i = 0; i < field.size(); ++i) field.images.emplace_back(4, 4, 1, 1.0f);
+    EncodeOptions options;
+    options.field_name = "narrow-field";
+    const PatternGeometry g = pattern_geometry(design, Dpi{360}, Dpi{360});
+    const std::string message = error_of([&] { Encoder(design, field, g, options); });
+    EXPECT_THAT(message, HasSubstr("narrow-field"));
+    EXPECT_THAT(message, HasSubstr("does not cover the display's angular range"));
+    EXPECT_THAT(message, HasSubstr("display theta"));
+    EXPECT_THAT(message, HasSubstr("-> field theta"));
+    options.allow_partial_coverage = true;
+    EXPECT_EQ(error_of([&] { Encoder(design, field, g, options); }), "");
+}
+
+TEST(Encoder, RefusesAngularDesigns) {
+    const optics::Design design = optics::load_design(kDesigns / "design3.toml");
+    const relight::ReflectanceField field = smooth_field(64, 2, 2);
+    EXPECT_THAT(error_of([&] { Encoder(design, field, PatternGeometry{}, EncodeOptions{}); }),
+                HasSubstr("Designs I and II"));
+}
+
+TEST(Encoder, NeededDirectionsAreEnoughForAnIdenticalPattern) {
+    const optics::Design design = small_design1(4, 4);
+    const relight::ReflectanceField field = smooth_field(1024, 8, 8);
+    EncodeOptions options;
+    options.mapping.tilt_deg = 30;
+    const std::vector<std::size_t> needed = needed_field_directions(design, field.directions, options);
+    EXPECT_LT(needed.size(), field.size() / 3);
+    relight::ReflectanceField subset;
+    for (std::size_t i : needed) {
+        subset.directions.push_back(field.directions[i]);
+        subset.images.push_back(field.images[i]);
+    }
+    const PatternGeometry g = pattern_geometry(design, Dpi{720}, Dpi{720});
+    EXPECT_EQ(render_all(Encoder(design, field, g, options)), render_all(Encoder(design, subset, g, options)));
+}
+
+}  // namespace
+}  // namespace rfd::patterns
