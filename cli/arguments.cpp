@@ -26,4 +26,11 @@ void apply_scene_overrides(relight::Scene& scene, const std::string& resolution,
     if (samples_per_pixel > 0) scene.samples_per_pixel = samples_per_pixel;
 }
 
+relight::Interpolation parse_interpolation(const std::string& text) {
+    if (text == "delaunay") return relight::Interpolation::delaunay;
+    if (text == "solid-angle") return relight::Interpolation::solid_angle;
+    if (text == "nearest") return relight::Interpolation::nearest;
+    throw InputError("--interpolation: expected 'delaunay', 'solid-angle' or 'nearest', got '" + text + "'");
+}
+
 }  // namespace rfd::cli

@@ -22,4 +22,7 @@ void add_relight_commands(CLI::App& app, const GlobalOptions& global);
 /// `capture hdr` (exposure brackets) and `capture calibrate` (mirror-sphere light directions).
 void add_capture_tool_commands(CLI::App& capture, const GlobalOptions& global);
 
+/// The `pattern` group: encode (Designs I/II), field (procedural test fields).
+void add_pattern_commands(CLI::App& app, const GlobalOptions& global);
+
 }  // namespace rfd::cli

@@ -14,6 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "core/error.hpp"
 #include "core/files.hpp"
@@ -76,13 +77,6 @@ relight::Light parse_light(const std::string& text) {
     if (!(radius > 0.0 && radius <= 90.0))
         throw InputError("--light '" + text + "': RADIUS must be within (0, 90] degrees, got " + parts[2]);
     return relight::DiskLight{direction, degrees_to_radians(radius), colour};
-}
-
-relight::Interpolation parse_interpolation(const std::string& text) {
-    if (text == "delaunay") return relight::Interpolation::delaunay;
-    if (text == "solid-angle") return relight::Interpolation::solid_angle;
-    if (text == "nearest") return relight::Interpolation::nearest;
-    throw InputError("--interpolation: expected 'delaunay', 'solid-angle' or 'nearest', got '" + text + "'");
 }
 
 // JSON has no infinity: a perfect match is reported as null.

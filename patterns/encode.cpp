@@ -54,15 +54,23 @@ Eigen::Vector3d from_slopes(const Eigen::Vector2d& slopes) {
 
 }  // namespace
 
+Eigen::Matrix3d AngularMapping::rotation() const {
+    return (Eigen::AngleAxisd(degrees_to_radians(turn_deg), Eigen::Vector3d::UnitZ()) *
+            Eigen::AngleAxisd(-degrees_to_radians(tilt_deg), Eigen::Vector3d::UnitX()))
+        .toRotationMatrix();
+}
+
 Eigen::Vector3d AngularMapping::field_direction(const Eigen::Vector3d& incident) const {
+    return field_direction(incident, rotation());
+}
+
+Eigen::Vector3d AngularMapping::field_direction(const Eigen::Vector3d& incident, const Eigen::Matrix3d& rotation) const {
     Eigen::Vector3d v(-incident.x(), -incident.y(), incident.z());
     if (angle_scale != 1.0) {
         const SphericalAngles a = angles_of(v);
         v = direction_from_angles(angle_scale * a.theta, a.phi);
     }
-    if (tilt_deg != 0.0) v = Eigen::AngleAxisd(-degrees_to_radians(tilt_deg), Eigen::Vector3d::UnitX()) * v;
-    if (turn_deg != 0.0) v = Eigen::AngleAxisd(degrees_to_radians(turn_deg), Eigen::Vector3d::UnitZ()) * v;
-    return v;
+    return rotation * v;
 }
 
 Eigen::Vector3d AngularMapping::display_direction(const Eigen::Vector3d& field) const {
@@ -97,7 +105,7 @@ struct Encoder::Tables {
     int columns = 0;
     // samples[(lenslet * columns + column) * channels + c]
     std::vector<float> samples;
-    Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  // tilt and turn, when no scaling
+    Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  // AngularMapping::rotation()
 
     Eigen::Vector2d table_slopes(const Eigen::Vector2d& offset) const {
         const double fx = std::clamp((offset.x() - table_origin) / table_step, 0.0, nodes - 1.000001);
@@ -350,6 +358,7 @@ Encoder::Encoder(const optics::Design& design, const relight::ReflectanceField& 
         throw InputError(SourceLocation{options.field_name, 0, 0, "angle scale"}, "the angle scale must be positive");
     tables_ = std::make_unique<Tables>(design);
     Tables& t = *tables_;
+    t.rotation = options.mapping.rotation();
     channels_ = field.channels();
     const optics::Lattice& lattice = t.optics.lattice();
     t.centre_cell = t.optics.centre_cell();
@@ -499,23 +508,44 @@ float Encoder::lenslet_sample(CellIndex cell, std::size_t index, int channel) co
 }
 
 void Encoder::render_row(int py, std::span<float> out) const {
+    if (tables_->optics.lattice().kind() == LatticeKind::Hexagonal)
+        render_row_of<LatticeKind::Hexagonal>(py, out);
+    else
+        render_row_of<LatticeKind::Rectangular>(py, out);
+}
+
+template <LatticeKind K>
+void Encoder::render_row_of(int py, std::span<float> out) const {
     const Tables& t = *tables_;
     const optics::Lattice& lattice = t.optics.lattice();
     const std::size_t channels = static_cast<std::size_t>(channels_);
     const std::size_t stride = static_cast<std::size_t>(t.columns) * channels;
     const double y = geometry_.dot_centre(0, py).y();
+    const double x0 = geometry_.dot_centre(0, py).x();
     const bool exact = options_.model == optics::Model::Exact;
+    const bool scaled = options_.mapping.angle_scale != 1.0;
+    const bool delaunay = options_.interpolation == relight::Interpolation::delaunay;
+    const Eigen::Matrix3d& rotation = t.rotation;
+    const double inverse_b = 1.0 / t.b;
+    std::size_t triangle = relight::SphericalInterpolator::kNoTriangle;
     std::fill(out.begin(), out.end(), 0.0f);
     for (int px = 0; px < geometry_.width; ++px) {
-        const Eigen::Vector2d p(geometry_.dot_centre(px, py).x(), y);
-        const CellIndex cell = lattice.cell_at(p);
+        const Eigen::Vector2d p(x0 + px * geometry_.dot_x, y);
+        const CellIndex cell = lattice.cell_at_of<K>(p);
         if (!lattice.contains(cell)) continue;
-        const Eigen::Vector2d offset = p - lattice.center(cell);
-        const Eigen::Vector2d slopes = exact ? t.table_slopes(offset) : Eigen::Vector2d(offset / t.b);
+        const Eigen::Vector2d offset = p - lattice.center_of<K>(cell);
+        const Eigen::Vector2d slopes = exact ? t.table_slopes(offset) : Eigen::Vector2d(offset * inverse_b);
         const double inverse_cos = std::sqrt(1.0 + slopes.squaredNorm());  // 1 / cos(kappa)
-        const Eigen::Vector3d d = Eigen::Vector3d(slopes.x(), slopes.y(), 1.0) / inverse_cos;
-        const relight::InterpolationWeights w =
-            t.interpolator->weights(options_.mapping.field_direction(d), options_.interpolation);
+        // The field direction, mirrored to the front, scaled and rotated (AngularMapping);
+        // the interpolation takes it unnormalised.
+        Eigen::Vector3d v(-slopes.x(), -slopes.y(), 1.0);
+        if (scaled) v = options_.mapping.field_direction(Eigen::Vector3d(slopes.x(), slopes.y(), 1.0).normalized(), rotation);
+        else v = rotation * v;
+        relight::InterpolationWeights w;
+        // Neighbouring dots mostly share a triangle: test it inline before the full search.
+        if (!(delaunay && triangle != relight::SphericalInterpolator::kNoTriangle &&
+              t.interpolator->in_triangle(v, triangle, w)))
+            w = t.interpolator->weights(v, options_.interpolation, triangle);
         const float* base = t.samples.data() + lattice.linear_index(cell) * stride;
         float* dot = out.data() + static_cast<std::size_t>(px) * channels;
         for (std::size_t k = 0; k < w.count; ++k) {

@@ -58,6 +58,10 @@ struct AngularMapping {
     /// Field direction (unit, toward the light) for a display incident direction (unit,
     /// direction of travel). May point below the field's horizon.
     Eigen::Vector3d field_direction(const Eigen::Vector3d& incident) const;
+    /// The same with rotation() computed once, for loops over many directions.
+    Eigen::Vector3d field_direction(const Eigen::Vector3d& incident, const Eigen::Matrix3d& rotation) const;
+    /// R_z(turn) R_x(-tilt).
+    Eigen::Matrix3d rotation() const;
     /// The inverse: the display incident direction a field direction comes from (z <= 0
     /// when no display direction maps there).
     Eigen::Vector3d display_direction(const Eigen::Vector3d& field) const;
@@ -134,6 +138,9 @@ public:
     struct Tables;  // the prepared optics, field and lenslet samples (encode.cpp)
 
 private:
+    template <optics::LatticeKind K>
+    void render_row_of(int py, std::span<float> out) const;
+
     std::unique_ptr<Tables> tables_;
     PatternGeometry geometry_;
     EncodeOptions options_;

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cctype>
+#include <array>
 #include <cmath>
+#include <future>
 #include <limits>
 #include <vector>
 
@@ -126,7 +128,7 @@ void write_pattern(const std::filesystem::path& path, const PatternSource& sourc
     // resolution as XResolution times this, and drops YResolution without it.
     spec.attribute("PixelAspectRatio", static_cast<float>(g.dpi_y / g.dpi_x));
     spec.attribute("DateTime", "1970:01:01 00:00:00");  // byte-identical reruns
-    if (ext == ".exr") spec.attribute("compression", "zips");
+    if (ext == ".exr") spec.attribute("compression", options.exr_compression);
     if (ext == ".tif" || ext == ".tiff") spec.attribute("compression", "zip");
     if (ext == ".exr") {
         for (const auto& [key, value] : attributes) spec.attribute(kAttributePrefix + key, value);
@@ -145,37 +147,52 @@ void write_pattern(const std::filesystem::path& path, const PatternSource& sourc
 
     const std::size_t row_floats = static_cast<std::size_t>(g.width) * static_cast<std::size_t>(channels);
     const int strip_rows = std::min(options.rows_per_strip, g.height);
-    std::vector<float> strip(row_floats * static_cast<std::size_t>(strip_rows));
+    // Two strips: one is written (on its own thread: conversion, compression, disk) while
+    // the next is rendered in parallel.
+    std::array<std::vector<float>, 2> strips;
+    for (auto& strip : strips) strip.resize(row_floats * static_cast<std::size_t>(strip_rows));
+    std::vector<int> first_bad(static_cast<std::size_t>(strip_rows));
+    std::future<void> writing;
     Progress progress(options.progress_label, static_cast<std::size_t>(g.height));
-    for (int y0 = 0; y0 < g.height; y0 += strip_rows) {
-        const int y1 = std::min(g.height, y0 + strip_rows);
-        parallel_for_chunks(static_cast<std::size_t>(y1 - y0), 1, [&](std::size_t begin, std::size_t end) {
-            for (std::size_t r = begin; r < end; ++r) {
-                std::span<float> row(strip.data() + r * row_floats, row_floats);
-                source.render_row(y0 + static_cast<int>(r), row);
-                for (std::size_t k = 0; k < row_floats; ++k) {
-                    float& v = row[k];
-                    if (!std::isfinite(v)) {
-                        // Reported after the loop: exceptions do not cross TBB tasks cleanly.
-                        v = std::numeric_limits<float>::quiet_NaN();
-                        continue;
+    auto finish_writing = [&] {
+        if (writing.valid()) writing.get();  // rethrows the writer's IoError
+    };
+    try {
+        for (int y0 = 0, k = 0; y0 < g.height; y0 += strip_rows, ++k) {
+            const int y1 = std::min(g.height, y0 + strip_rows);
+            std::vector<float>& strip = strips[static_cast<std::size_t>(k % 2)];
+            parallel_for_chunks(static_cast<std::size_t>(y1 - y0), 1, [&](std::size_t begin, std::size_t end) {
+                for (std::size_t r = begin; r < end; ++r) {
+                    std::span<float> row(strip.data() + r * row_floats, row_floats);
+                    source.render_row(y0 + static_cast<int>(r), row);
+                    int bad = -1;
+                    for (std::size_t i = 0; i < row_floats; ++i) {
+                        float& v = row[i];
+                        if (!std::isfinite(v)) {
+                            if (bad < 0) bad = static_cast<int>(i / static_cast<std::size_t>(channels));
+                            continue;
+                        }
+                        if (srgb) v = linear_to_srgb(std::clamp(v, 0.0f, 1.0f));
                     }
-                    if (srgb) v = linear_to_srgb(std::clamp(v, 0.0f, 1.0f));
+                    first_bad[r] = bad;
                 }
-            }
-        });
-        const std::size_t used = row_floats * static_cast<std::size_t>(y1 - y0);
-        for (std::size_t k = 0; k < used; ++k)
-            if (std::isnan(strip[k])) {
-                const std::size_t row = k / row_floats, column = (k % row_floats) / static_cast<std::size_t>(channels);
-                throw InputError(SourceLocation{path.string()},
-                                 "refusing to write dot (" + std::to_string(column) + ", " +
-                                     std::to_string(y0 + static_cast<int>(row)) +
-                                     "): the pattern value is not a finite number");
-            }
-        if (!output->write_scanlines(y0, y1, 0, OIIO::TypeDesc::FLOAT, strip.data()))
-            throw IoError(SourceLocation{path.string()}, "cannot write pattern: " + output->geterror());
-        progress.advance(static_cast<std::size_t>(y1 - y0));
+            });
+            for (int r = 0; r < y1 - y0; ++r)
+                if (first_bad[static_cast<std::size_t>(r)] >= 0)
+                    throw InputError(SourceLocation{path.string()},
+                                     "refusing to write dot (" + std::to_string(first_bad[static_cast<std::size_t>(r)]) +
+                                         ", " + std::to_string(y0 + r) + "): the pattern value is not a finite number");
+            finish_writing();  // the other strip's write, before this one starts
+            writing = std::async(std::launch::async, [&output, &path, &strip, y0, y1] {
+                if (!output->write_scanlines(y0, y1, 0, OIIO::TypeDesc::FLOAT, strip.data()))
+                    throw IoError(SourceLocation{path.string()}, "cannot write pattern: " + output->geterror());
+            });
+            progress.advance(static_cast<std::size_t>(y1 - y0));
+        }
+        finish_writing();
+    } catch (...) {
+        if (writing.valid()) writing.wait();  // never leave the writer running on freed strips
+        throw;
     }
     if (!output->close())
         throw IoError(SourceLocation{path.string()}, "cannot write pattern: " + output->geterror());

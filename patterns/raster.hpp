@@ -77,6 +77,7 @@ using PatternAttributes = std::map<std::string, std::string>;
 struct WriteOptions {
     int rows_per_strip = 64;        ///< rows rendered in parallel and written at once
     bool half_float = true;         ///< EXR: 16-bit half floats (relative error 5e-4)
+    std::string exr_compression = "rle";  ///< EXR, lossless: none, rle (cheap), zips/zip (4x smaller, 3x the CPU), piz
     std::string progress_label = "pattern rows";
 };
 

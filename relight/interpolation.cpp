@@ -27,7 +27,6 @@ using Delaunay = CGAL::Delaunay_triangulation_3<Kernel, DataStructure>;
 constexpr double kBelowHorizonTolerance = degrees_to_radians(5.0);
 constexpr double kDuplicateAngle = 1e-6;  // radians
 // A query on an edge gives a determinant of rounding size on that edge's side.
-constexpr double kInsideTolerance = 1e-14;
 
 double det(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
     return a.dot(b.cross(c));
@@ -93,8 +92,6 @@ struct SphericalInterpolator::Grid {
     int rows = 0, cols = 0;
     std::vector<std::uint32_t> triangle_offsets, triangle_list;
     std::vector<std::uint32_t> nearest_offsets, nearest_list;
-    // Per triangle, the edge normals whose dot products with d give its weights.
-    std::vector<std::array<Eigen::Vector3d, 3>> normals;
 
     std::size_t cell_of(const Eigen::Vector3d& d) const {
         const double theta = std::acos(std::clamp(d.z(), -1.0, 1.0));
@@ -161,12 +158,12 @@ SphericalInterpolator::SphericalInterpolator(std::vector<Eigen::Vector3d> direct
     std::vector<Eigen::Vector3d> cap_centre(triangle_count);
     std::vector<double> cap_radius(triangle_count), theta_low(triangle_count), theta_high(triangle_count);
     std::vector<bool> locatable(triangle_count);
-    grid.normals.resize(triangle_count);
+    planes_.resize(triangle_count);
     for (std::size_t t = 0; t < triangle_count; ++t) {
         const Eigen::Vector3d& a = directions_[triangles_[t][0]];
         const Eigen::Vector3d& b = directions_[triangles_[t][1]];
         const Eigen::Vector3d& c = directions_[triangles_[t][2]];
-        grid.normals[t] = {b.cross(c), c.cross(a), a.cross(b)};
+        planes_[t] = {b.cross(c), c.cross(a), a.cross(b)};
         // A triangle through the origin covers no direction (a flat fan of three points on
         // one great circle); it stays in T for the mesh but is never located.
         locatable[t] = det(a, b, c) > 0.0 && (a + b + c).norm() > 0.0;
@@ -238,31 +235,13 @@ std::vector<std::vector<std::size_t>> SphericalInterpolator::one_rings() const {
     return relight::one_rings(directions_.size(), triangles_);
 }
 
-bool SphericalInterpolator::locate(const Eigen::Vector3d& d, std::size_t cell, InterpolationWeights& out) const {
+bool SphericalInterpolator::locate(const Eigen::Vector3d& d, std::size_t cell, InterpolationWeights& out,
+                                   std::size_t* found) const {
     const Grid& grid = *grid_;
     for (std::uint32_t k = grid.triangle_offsets[cell]; k < grid.triangle_offsets[cell + 1]; ++k) {
         const std::uint32_t t = grid.triangle_list[k];
-        const auto& normals = grid.normals[t];
-        std::array<double, 3> w{};
-        bool inside = true;
-        for (std::size_t j = 0; j < 3; ++j) {
-            w[j] = d.dot(normals[j]);
-            inside = inside && w[j] >= -kInsideTolerance;
-        }
-        if (!inside) continue;
-        for (double& v : w) v = std::max(v, 0.0);
-        double sum = w[0] + w[1] + w[2];
-        if (!(sum > 0.0)) continue;  // the antipodal cone of a triangle
-        // Rounding-size weights (a query at a vertex or on an edge) become exact zeros, so a
-        // measured direction reproduces its image bit for bit.
-        for (double& v : w)
-            if (v < 1e-12 * sum) v = 0.0;
-        sum = w[0] + w[1] + w[2];
-        out.count = 3;
-        for (std::size_t j = 0; j < 3; ++j) {
-            out.index[j] = triangles_[t][j];
-            out.weight[j] = w[j] / sum;
-        }
+        if (!in_triangle(d, t, out)) continue;
+        if (found) *found = t;
         return true;
     }
     return false;
@@ -319,20 +298,36 @@ InterpolationWeights SphericalInterpolator::nearest_weights(const Eigen::Vector3
 }
 
 InterpolationWeights SphericalInterpolator::weights(const Eigen::Vector3d& direction, Interpolation method) const {
-    const std::size_t cell = grid_->cell_of(direction);
-    if (method == Interpolation::nearest) return nearest_weights(direction, cell);
+    std::size_t hint = kNoTriangle;
+    return weights(direction, method, hint);
+}
+
+InterpolationWeights SphericalInterpolator::weights(const Eigen::Vector3d& direction, Interpolation method,
+                                                    std::size_t& hint) const {
     InterpolationWeights out;
-    if (!locate(direction, cell, out)) return arc_weights(direction);
+    // The hinted triangle first: its three plane tests spare the grid cell's angles (and,
+    // being tests of sign and ratio, do not need a unit vector).
+    const bool hinted = method != Interpolation::nearest && hint < triangles_.size() && in_triangle(direction, hint, out);
+    if (!hinted) {
+        const Eigen::Vector3d unit = direction.normalized();
+        const std::size_t cell = grid_->cell_of(unit);
+        if (method == Interpolation::nearest) return nearest_weights(unit, cell);
+        if (!locate(unit, cell, out, &hint)) {
+            hint = kNoTriangle;
+            return arc_weights(unit);
+        }
+    }
     // At a measured direction the coordinates are exactly (1, 0, 0); the solid angles of its
     // degenerate sub-triangles are zero only up to rounding, so keep them.
     const bool at_vertex = out.weight[0] == 1.0 || out.weight[1] == 1.0 || out.weight[2] == 1.0;
     if (method == Interpolation::solid_angle && out.count == 3 && !at_vertex) {
+        const Eigen::Vector3d direction_unit = direction.normalized();
         const Eigen::Vector3d& a = directions_[out.index[0]];
         const Eigen::Vector3d& b = directions_[out.index[1]];
         const Eigen::Vector3d& c = directions_[out.index[2]];
-        const std::array<double, 3> omega = {spherical_triangle_solid_angle(direction, b, c),
-                                             spherical_triangle_solid_angle(a, direction, c),
-                                             spherical_triangle_solid_angle(a, b, direction)};
+        const std::array<double, 3> omega = {spherical_triangle_solid_angle(direction_unit, b, c),
+                                             spherical_triangle_solid_angle(a, direction_unit, c),
+                                             spherical_triangle_solid_angle(a, b, direction_unit)};
         const double total = omega[0] + omega[1] + omega[2];
         if (total > 0.0) out.weight = {omega[0] / total, omega[1] / total, omega[2] / total};
     }

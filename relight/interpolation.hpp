@@ -82,6 +82,13 @@ public:
     /// l_i(direction) for a unit `direction` anywhere on the sphere. Thread-safe.
     InterpolationWeights weights(const Eigen::Vector3d& direction,
                                  Interpolation method = Interpolation::delaunay) const;
+    /// The same, trying triangle `hint` first and leaving in it the triangle found
+    /// (kNoTriangle outside T): coherent queries, such as neighbouring print dots, then
+    /// skip the point location. The same weights as without a hint (on an edge shared by two
+    /// triangles, up to rounding). `direction` need not be unit here: any positive multiple
+    /// gives the same weights.
+    static constexpr std::size_t kNoTriangle = static_cast<std::size_t>(-1);
+    InterpolationWeights weights(const Eigen::Vector3d& direction, Interpolation method, std::size_t& hint) const;
 
     std::size_t size() const { return directions_.size(); }
     const std::vector<Eigen::Vector3d>& directions() const { return directions_; }
@@ -92,14 +99,45 @@ public:
     /// One-ring neighbours of every direction in T.
     std::vector<std::vector<std::size_t>> one_rings() const;
 
+    /// The weights of triangle `t` at d (any positive multiple of a direction) when d lies in
+    /// it; false otherwise. Inline: the pattern encoder calls it once per print dot.
+    bool in_triangle(const Eigen::Vector3d& d, std::size_t t, InterpolationWeights& out) const {
+        const auto& planes = planes_[t];
+        std::array<double, 3> w{};
+        bool inside = true;
+        for (std::size_t j = 0; j < 3; ++j) {
+            w[j] = d.dot(planes[j]);
+            inside = inside && w[j] >= -kInsideTolerance;
+        }
+        if (!inside) return false;
+        for (double& v : w) v = v > 0.0 ? v : 0.0;
+        double sum = w[0] + w[1] + w[2];
+        if (!(sum > 0.0)) return false;  // the antipodal cone of a triangle
+        // Rounding-size weights (a query at a vertex or on an edge) become exact zeros, so a
+        // measured direction reproduces its image bit for bit.
+        for (double& v : w)
+            if (v < 1e-12 * sum) v = 0.0;
+        sum = w[0] + w[1] + w[2];
+        out.count = 3;
+        for (std::size_t j = 0; j < 3; ++j) {
+            out.index[j] = triangles_[t][j];
+            out.weight[j] = w[j] / sum;
+        }
+        return true;
+    }
+
 private:
+    static constexpr double kInsideTolerance = 1e-14;
     struct Grid;
-    bool locate(const Eigen::Vector3d& d, std::size_t cell, InterpolationWeights& out) const;
+    bool locate(const Eigen::Vector3d& d, std::size_t cell, InterpolationWeights& out,
+                std::size_t* found = nullptr) const;
     InterpolationWeights arc_weights(const Eigen::Vector3d& d) const;
     InterpolationWeights nearest_weights(const Eigen::Vector3d& d, std::size_t cell) const;
 
     std::vector<Eigen::Vector3d> directions_;
     std::vector<Triangle> triangles_;
+    // Per triangle, the edge normals whose dot products with d give its weights.
+    std::vector<std::array<Eigen::Vector3d, 3>> planes_;
     std::vector<std::size_t> boundary_;
     std::vector<double> boundary_phi_;
     std::unique_ptr<Grid> grid_;

@@ -1,0 +1,174 @@
+// rfd pattern encode / field: reflectance fields into print-resolution transparencies
+// (thesis 8.4) and the procedural test fields of the thesis's demonstrations.
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "cli/arguments.hpp"
+#include "cli/commands.hpp"
+#include "core/error.hpp"
+#include "core/files.hpp"
+#include "optics/design.hpp"
+#include "patterns/encode.hpp"
+#include "patterns/procedural.hpp"
+#include "patterns/raster.hpp"
+#include "relight/field.hpp"
+
+namespace rfd::cli {
+namespace {
+
+optics::Model parse_model(const std::string& text) {
+    if (text == "paraxial") return optics::Model::Paraxial;
+    if (text == "exact") return optics::Model::Exact;
+    throw InputError("--model: expected 'paraxial' or 'exact', got '" + text + "'");
+}
+
+patterns::ImageFit parse_fit(const std::string& text) {
+    if (text == "cover") return patterns::ImageFit::cover;
+    if (text == "contain") return patterns::ImageFit::contain;
+    if (text == "stretch") return patterns::ImageFit::stretch;
+    throw InputError("--fit: expected 'cover', 'contain' or 'stretch', got '" + text + "'");
+}
+
+std::pair<double, double> parse_dpi(const std::string& text) {
+    double x = 0, y = 0;
+    char comma = 0, extra = 0;
+    const int read = std::sscanf(text.c_str(), "%lf%c%lf%c", &x, &comma, &y, &extra);
+    if (read == 1) y = x;
+    if ((read != 1 && (read != 3 || (comma != 'x' && comma != ','))) || !(x > 0) || !(y > 0) || x > 1e5 || y > 1e5)
+        throw InputError("--dpi: expected DPI or XDPIxYDPI such as 2880x1440, got '" + text + "'");
+    return {x, y};
+}
+
+void add_encode_command(CLI::App& pattern, const GlobalOptions& global) {
+    auto* cmd = pattern.add_subcommand("encode", "Encode a reflectance field into a print-resolution pattern (Designs I and II)");
+    struct Options {
+        std::string design, field, out, model = "paraxial", interpolation = "delaunay", fit = "cover", dpi;
+        double tilt = 0.0, turn = 0.0, angle_scale = 1.0, margin = 0.0;
+        bool allow_partial = false, json = false;
+    };
+    auto opt = std::make_shared<Options>();
+    cmd->add_option("DESIGN", opt->design, "Design file (designs/design1.toml, design2.toml)")->required();
+    cmd->add_option("FIELD", opt->field, "Reflectance field folder or .lp file")->required();
+    cmd->add_option("--out", opt->out, "Pattern file: .exr (linear, half float), .tif (16-bit sRGB) or .png")->required();
+    cmd->add_option("--model", opt->model, "Inverse map: paraxial (closed form) or exact (traced, tabulated)");
+    cmd->add_option("--interpolation", opt->interpolation, "Between light directions: delaunay, solid-angle or nearest");
+    cmd->add_option("--tilt", opt->tilt, "Rotate the display's axis this many degrees toward the field's up (the thesis used 45)")
+        ->check(CLI::Range(-90.0, 90.0));
+    cmd->add_option("--turn", opt->turn, "Then rotate about the field's axis, degrees")->check(CLI::Range(-360.0, 360.0));
+    cmd->add_option("--angle-scale", opt->angle_scale, "Field polar angle per display polar angle (re-parameterise the range)")
+        ->check(CLI::Range(0.05, 20.0));
+    cmd->add_option("--fit", opt->fit, "Field image on the array: cover (crop), contain (letterbox) or stretch");
+    cmd->add_option("--dpi", opt->dpi, "Printer resolution XDPIxYDPI (default: the design's [printer])");
+    cmd->add_option("--margin", opt->margin, "Blank border around the array, mm")->check(CLI::Range(0.0, 100.0));
+    cmd->add_flag("--allow-partial", opt->allow_partial, "Encode even where the field does not cover the display's range");
+    cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
+    cmd->callback([opt, &global] {
+        (void)global;
+        const optics::Design design = optics::load_design(opt->design);
+        patterns::EncodeOptions options;
+        options.model = parse_model(opt->model);
+        options.interpolation = parse_interpolation(opt->interpolation);
+        options.fit = parse_fit(opt->fit);
+        options.mapping = {opt->tilt, opt->turn, opt->angle_scale};
+        options.allow_partial_coverage = opt->allow_partial;
+        options.field_name = opt->field;
+        double dpi_x = design.printer.dpi_x.value, dpi_y = design.printer.dpi_y.value;
+        if (!opt->dpi.empty()) std::tie(dpi_x, dpi_y) = parse_dpi(opt->dpi);
+        const patterns::PatternGeometry geometry = patterns::pattern_geometry(design, Dpi{dpi_x}, Dpi{dpi_y}, opt->margin);
+
+        const auto start = std::chrono::steady_clock::now();
+        const relight::ReflectanceField field = patterns::load_field_for(design, opt->field, options);
+        const patterns::Encoder encoder(design, field, geometry, options);
+        const auto prepared = std::chrono::steady_clock::now();
+        patterns::write_pattern(opt->out, encoder, encoder.attributes());
+        const auto done = std::chrono::steady_clock::now();
+        const double prepare_s = std::chrono::duration<double>(prepared - start).count();
+        const double write_s = std::chrono::duration<double>(done - prepared).count();
+        const double dots = static_cast<double>(geometry.dot_count());
+        const double table_error_deg =
+            options.model == optics::Model::Exact ? radians_to_degrees(encoder.exact_table_error(200)) : 0.0;
+        if (opt->json) {
+            const nlohmann::json summary = {
+                {"pattern", opt->out},
+                {"design", design.name},
+                {"width", geometry.width},
+                {"height", geometry.height},
+                {"dpi", {geometry.dpi_x, geometry.dpi_y}},
+                {"size_mm", {geometry.size_mm().x(), geometry.size_mm().y()}},
+                {"lenslets", encoder.lattice().count_x() * encoder.lattice().count_y()},
+                {"field_directions_used", field.size()},
+                {"display_half_angle_deg", radians_to_degrees(encoder.display_range().max_angle_rad)},
+                {"model", opt->model},
+                {"exact_table_error_deg", table_error_deg},
+                {"white", encoder.white()},
+                {"prepare_seconds", prepare_s},
+                {"render_write_seconds", write_s},
+                {"dots_per_second", dots / std::max(write_s, 1e-9)},
+            };
+            std::printf("%s\n", summary.dump(2).c_str());
+            return;
+        }
+        std::printf("pattern %s: %d x %d dots at %g x %g dpi (%.1f x %.1f mm), %d lenslets\n", opt->out.c_str(),
+                    geometry.width, geometry.height, geometry.dpi_x, geometry.dpi_y, geometry.size_mm().x(),
+                    geometry.size_mm().y(), encoder.lattice().count_x() * encoder.lattice().count_y());
+        std::printf("  display range      up to %.1f deg from the axis, %s model", 
+                    radians_to_degrees(encoder.display_range().max_angle_rad), opt->model.c_str());
+        if (options.model == optics::Model::Exact) std::printf(" (table error %.2g deg)", table_error_deg);
+        std::printf("\n  field              %zu light direction(s) used, tilt %g deg, turn %g deg, angle scale %g\n",
+                    field.size(), opt->tilt, opt->turn, opt->angle_scale);
+        std::printf("  white              %.6g (the value printed as full transmittance)\n", encoder.white());
+        std::printf("  time               %.2f s to prepare, %.2f s to render and write (%.1f Mdots/s)\n", prepare_s,
+                    write_s, dots / std::max(write_s, 1e-9) / 1e6);
+    });
+}
+
+void add_field_command(CLI::App& pattern, const GlobalOptions& global) {
+    auto* cmd = pattern.add_subcommand("field", "Write a procedural test field: letters, bars or diamonds (thesis 8.2.4)");
+    struct Options {
+        std::string kind, text = "SIG08", out, resolution = "64x64";
+        double spread = 10.0;
+        int steps = 5;
+    };
+    auto opt = std::make_shared<Options>();
+    cmd->add_option("KIND", opt->kind, "letters, bars or diamonds")->required();
+    cmd->add_option("--text", opt->text, "letters: one character per light direction, left to right");
+    cmd->add_option("--spread", opt->spread, "Largest angle of a picture direction from the zenith, degrees");
+    cmd->add_option("--steps", opt->steps, "diamonds: light directions per side of the grid");
+    cmd->add_option("--resolution", opt->resolution, "Image size WIDTHxHEIGHT");
+    cmd->add_option("--out", opt->out, "Output field folder")->required();
+    cmd->callback([opt, &global] {
+        (void)global;
+        patterns::ProceduralOptions options;
+        if (opt->kind == "letters") options.kind = patterns::ProceduralKind::letters;
+        else if (opt->kind == "bars") options.kind = patterns::ProceduralKind::bars;
+        else if (opt->kind == "diamonds") options.kind = patterns::ProceduralKind::diamonds;
+        else throw InputError("KIND: expected 'letters', 'bars' or 'diamonds', got '" + opt->kind + "'");
+        options.text = opt->text;
+        options.spread_deg = opt->spread;
+        options.diamond_steps = opt->steps;
+        std::tie(options.width, options.height) = parse_resolution(opt->resolution);
+        const relight::ReflectanceField field = patterns::procedural_field(options);
+        ensure_directory(opt->out);
+        relight::write_field(opt->out, field, opt->kind);
+        std::printf("wrote %s field: %zu light directions of %d x %d into %s\n", opt->kind.c_str(), field.size(),
+                    options.width, options.height, opt->out.c_str());
+    });
+}
+
+}  // namespace
+
+void add_pattern_commands(CLI::App& app, const GlobalOptions& global) {
+    CLI::App* pattern = app.add_subcommand("pattern", "Encode reflectance fields into print-resolution patterns")
+                            ->require_subcommand(1);
+    add_encode_command(*pattern, global);
+    add_field_command(*pattern, global);
+}
+
+}  // namespace rfd::cli
