@@ -49,7 +49,8 @@ std::pair<double, double> parse_dpi(const std::string& text) {
 void add_encode_command(CLI::App& pattern, const GlobalOptions& global) {
     auto* cmd = pattern.add_subcommand("encode", "Encode a reflectance field into a print-resolution pattern (Designs I and II)");
     struct Options {
-        std::string design, field, out, model = "paraxial", interpolation = "delaunay", fit = "cover", dpi;
+        std::string design, field, out, model = "paraxial", interpolation = "delaunay", fit = "cover", dpi,
+            compression = "rle";
         double tilt = 0.0, turn = 0.0, angle_scale = 1.0, margin = 0.0;
         bool allow_partial = false, json = false;
     };
@@ -67,6 +68,8 @@ void add_encode_command(CLI::App& pattern, const GlobalOptions& global) {
     cmd->add_option("--fit", opt->fit, "Field image on the array: cover (crop), contain (letterbox) or stretch");
     cmd->add_option("--dpi", opt->dpi, "Printer resolution XDPIxYDPI (default: the design's [printer])");
     cmd->add_option("--margin", opt->margin, "Blank border around the array, mm")->check(CLI::Range(0.0, 100.0));
+    cmd->add_option("--compression", opt->compression, "EXR compression: rle (fast, default), zips (smaller), none")
+        ->check(CLI::IsMember({"none", "rle", "zips", "zip", "piz"}));
     cmd->add_flag("--allow-partial", opt->allow_partial, "Encode even where the field does not cover the display's range");
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
     cmd->callback([opt, &global] {
@@ -87,7 +90,9 @@ void add_encode_command(CLI::App& pattern, const GlobalOptions& global) {
         const relight::ReflectanceField field = patterns::load_field_for(design, opt->field, options);
         const patterns::Encoder encoder(design, field, geometry, options);
         const auto prepared = std::chrono::steady_clock::now();
-        patterns::write_pattern(opt->out, encoder, encoder.attributes());
+        patterns::WriteOptions write_options;
+        write_options.exr_compression = opt->compression;
+        patterns::write_pattern(opt->out, encoder, encoder.attributes(), write_options);
         const auto done = std::chrono::steady_clock::now();
         const double prepare_s = std::chrono::duration<double>(prepared - start).count();
         const double write_s = std::chrono::duration<double>(done - prepared).count();

@@ -1,0 +1,44 @@
+# `rfd pattern field` and `rfd pattern encode` end to end on Design II at a low resolution:
+#  - a procedural field is written and encoded; the pattern has the size and resolution the
+#    design asks for, and encoding twice gives byte-identical files;
+#  - a field whose lights do not reach the display's range is refused (exit 2) with the
+#    directions, and nothing is written;
+#  - an unwritable output is an I/O error (exit 3).
+file(REMOVE_RECURSE ${OUT})
+file(MAKE_DIRECTORY ${OUT})
+function(run expected_code)
+  execute_process(COMMAND ${RFD} --quiet ${ARGN} RESULT_VARIABLE code OUTPUT_VARIABLE stdout ERROR_VARIABLE stderr)
+  if(NOT code EQUAL expected_code)
+    message(FATAL_ERROR "rfd ${ARGN}: exit ${code}, expected ${expected_code}\n${stdout}\n${stderr}")
+  endif()
+  set(last_output "${stdout}${stderr}" PARENT_SCOPE)
+endfunction()
+
+run(0 pattern field bars --resolution 12x10 --spread 8 --out ${OUT}/bars)
+foreach(name a b)
+  run(0 pattern encode ${DESIGN} ${OUT}/bars --dpi 360x180 --out ${OUT}/${name}.exr --json)
+endforeach()
+# 24 mm at 360 x 180 dpi: 341 x 171 dots (whole dots covering the array).
+if(NOT last_output MATCHES "\"width\": 341" OR NOT last_output MATCHES "\"height\": 171")
+  message(FATAL_ERROR "unexpected pattern size: ${last_output}")
+endif()
+file(SHA256 ${OUT}/a.exr hash_a)
+file(SHA256 ${OUT}/b.exr hash_b)
+if(NOT hash_a STREQUAL hash_b)
+  message(FATAL_ERROR "encoding twice gave different files")
+endif()
+
+# A narrow field: four lights near the zenith, rendered from the light file.
+run(0 capture render ${SCENE} --lights ${NARROW} --resolution 8x4 --samples-per-pixel 1 --out ${OUT}/narrow)
+run(2 pattern encode ${DESIGN} ${OUT}/narrow --dpi 360 --out ${OUT}/narrow.exr)
+if(NOT last_output MATCHES "does not cover the display's angular range" OR NOT last_output MATCHES "display theta [0-9.]+, phi")
+  message(FATAL_ERROR "unexpected message: ${last_output}")
+endif()
+if(EXISTS ${OUT}/narrow.exr)
+  message(FATAL_ERROR "a refused pattern was written")
+endif()
+
+run(3 pattern encode ${DESIGN} ${OUT}/bars --dpi 360 --out /proc/rfd-no-such-dir/p.exr)
+if(NOT last_output MATCHES "does not exist")
+  message(FATAL_ERROR "unexpected message: ${last_output}")
+endif()
