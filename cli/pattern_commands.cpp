@@ -50,7 +50,7 @@ void add_encode_command(CLI::App& pattern, const GlobalOptions& global) {
     auto* cmd = pattern.add_subcommand("encode", "Encode a reflectance field into a print-resolution pattern (Designs I and II)");
     struct Options {
         std::string design, field, out, model = "paraxial", interpolation = "delaunay", fit = "cover", dpi,
-            compression = "rle";
+            compression = "rle", preview;
         double tilt = 0.0, turn = 0.0, angle_scale = 1.0, margin = 0.0;
         bool allow_partial = false, json = false;
     };
@@ -70,6 +70,7 @@ void add_encode_command(CLI::App& pattern, const GlobalOptions& global) {
     cmd->add_option("--margin", opt->margin, "Blank border around the array, mm")->check(CLI::Range(0.0, 100.0));
     cmd->add_option("--compression", opt->compression, "EXR compression: rle (fast, default), zips (smaller), none")
         ->check(CLI::IsMember({"none", "rle", "zips", "zip", "piz"}));
+    cmd->add_option("--preview", opt->preview, "Also write a screen preview (PNG, 1600 px), scaled to the white");
     cmd->add_flag("--allow-partial", opt->allow_partial, "Encode even where the field does not cover the display's range");
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
     cmd->callback([opt, &global] {
@@ -94,6 +95,7 @@ void add_encode_command(CLI::App& pattern, const GlobalOptions& global) {
         write_options.exr_compression = opt->compression;
         patterns::write_pattern(opt->out, encoder, encoder.attributes(), write_options);
         const auto done = std::chrono::steady_clock::now();
+        if (!opt->preview.empty()) patterns::write_preview(opt->out, opt->preview, 1600);
         const double prepare_s = std::chrono::duration<double>(prepared - start).count();
         const double write_s = std::chrono::duration<double>(done - prepared).count();
         const double dots = static_cast<double>(geometry.dot_count());

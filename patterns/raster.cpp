@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdlib>
 #include <array>
 #include <cmath>
 #include <future>
@@ -13,6 +14,7 @@
 #include "core/error.hpp"
 #include "core/files.hpp"
 #include "core/image.hpp"
+#include "core/image_io.hpp"
 #include "core/parallel.hpp"
 #include "core/progress.hpp"
 
@@ -286,6 +288,55 @@ void PatternReader::read_rows(int y0, int y1, std::span<float> out) {
 
 PatternFileInfo read_pattern_info(const std::filesystem::path& path) {
     return PatternReader(path).info();
+}
+
+void write_preview(const std::filesystem::path& pattern, const std::filesystem::path& preview, int max_side,
+                   double white) {
+    RFD_CHECK(max_side > 0);
+    PatternReader reader(pattern);
+    const PatternFileInfo& info = reader.info();
+    if (!(white > 0.0)) {
+        const auto it = info.attributes.find("white");
+        white = it != info.attributes.end() ? std::atof(it->second.c_str()) : 1.0;
+        if (!(white > 0.0)) white = 1.0;
+    }
+    // Physical aspect: dots are 1/dpi_x by 1/dpi_y inches.
+    const double width_in = info.dpi_x > 0 ? info.width / info.dpi_x : info.width;
+    const double height_in = info.dpi_y > 0 ? info.height / info.dpi_y : info.height;
+    // No preview pixel smaller than a dot, so that every one averages at least one.
+    const double scale = std::min({max_side / std::max(width_in, height_in), info.width / width_in, info.height / height_in});
+    const int w = std::max(1, static_cast<int>(std::lround(width_in * scale)));
+    const int h = std::max(1, static_cast<int>(std::lround(height_in * scale)));
+    const int channels = info.channels;
+    std::vector<double> sum(static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * static_cast<std::size_t>(channels), 0.0);
+    std::vector<double> count(static_cast<std::size_t>(w) * static_cast<std::size_t>(h), 0.0);
+    const std::size_t row_floats = static_cast<std::size_t>(info.width) * static_cast<std::size_t>(channels);
+    constexpr int kStrip = 64;
+    std::vector<float> strip(row_floats * kStrip);
+    for (int y0 = 0; y0 < info.height; y0 += kStrip) {
+        const int y1 = std::min(info.height, y0 + kStrip);
+        reader.read_rows(y0, y1, strip);
+        for (int y = y0; y < y1; ++y) {
+            const int py = std::min(h - 1, static_cast<int>(static_cast<long long>(y) * h / info.height));
+            const float* row = strip.data() + static_cast<std::size_t>(y - y0) * row_floats;
+            for (int x = 0; x < info.width; ++x) {
+                const int px = std::min(w - 1, static_cast<int>(static_cast<long long>(x) * w / info.width));
+                const std::size_t p = static_cast<std::size_t>(py) * static_cast<std::size_t>(w) + static_cast<std::size_t>(px);
+                count[p] += 1.0;
+                for (int c = 0; c < channels; ++c)
+                    sum[p * static_cast<std::size_t>(channels) + static_cast<std::size_t>(c)] += row[static_cast<std::size_t>(x * channels + c)];
+            }
+        }
+    }
+    Image image(w, h, channels);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const std::size_t p = static_cast<std::size_t>(y) * static_cast<std::size_t>(w) + static_cast<std::size_t>(x);
+            for (int c = 0; c < channels; ++c)
+                image.at(x, y, c) = static_cast<float>(sum[p * static_cast<std::size_t>(channels) + static_cast<std::size_t>(c)] /
+                                                       std::max(count[p], 1.0) / white);
+        }
+    write_image(preview, image);
 }
 
 }  // namespace rfd::patterns

@@ -118,4 +118,11 @@ private:
     PatternFileInfo info_;
 };
 
+/// A small preview of a pattern file for screens: box-averaged down to at most `max_side`
+/// pixels along its longer side (non-square dots averaged to square pixels), divided by
+/// `white` (the pattern's rfd:white when 0) and written through write_image (PNG: sRGB).
+/// Streams the pattern strip by strip.
+void write_preview(const std::filesystem::path& pattern, const std::filesystem::path& preview, int max_side,
+                   double white = 0.0);
+
 }  // namespace rfd::patterns
