@@ -49,7 +49,7 @@ std::pair<double, double> parse_dpi(const std::string& text) {
 void add_encode_command(CLI::App& pattern, const GlobalOptions& global) {
     auto* cmd = pattern.add_subcommand("encode", "Encode a reflectance field into a print-resolution pattern (Designs I and II)");
     struct Options {
-        std::string design, field, out, model = "paraxial", interpolation = "delaunay", fit = "cover", dpi,
+        std::string design, field, out, model = "auto", interpolation = "delaunay", fit = "cover", dpi,
             compression = "rle", preview;
         double tilt = 0.0, turn = 0.0, angle_scale = 1.0, margin = 0.0;
         bool allow_partial = false, json = false;
@@ -58,7 +58,7 @@ void add_encode_command(CLI::App& pattern, const GlobalOptions& global) {
     cmd->add_option("DESIGN", opt->design, "Design file (designs/design1.toml, design2.toml)")->required();
     cmd->add_option("FIELD", opt->field, "Reflectance field folder or .lp file")->required();
     cmd->add_option("--out", opt->out, "Pattern file: .exr (linear, half float), .tif (16-bit sRGB) or .png")->required();
-    cmd->add_option("--model", opt->model, "Inverse map: paraxial (closed form) or exact (traced, tabulated)");
+    cmd->add_option("--model", opt->model, "Inverse map: auto (paraxial if within a quarter dot of the exact trace), paraxial or exact");
     cmd->add_option("--interpolation", opt->interpolation, "Between light directions: delaunay, solid-angle or nearest");
     cmd->add_option("--tilt", opt->tilt, "Rotate the display's axis this many degrees toward the field's up (the thesis used 45)")
         ->check(CLI::Range(-90.0, 90.0));
@@ -77,15 +77,16 @@ void add_encode_command(CLI::App& pattern, const GlobalOptions& global) {
         (void)global;
         const optics::Design design = optics::load_design(opt->design);
         patterns::EncodeOptions options;
-        options.model = parse_model(opt->model);
+        double dpi_x = design.printer.dpi_x.value, dpi_y = design.printer.dpi_y.value;
+        if (!opt->dpi.empty()) std::tie(dpi_x, dpi_y) = parse_dpi(opt->dpi);
+        const patterns::PatternGeometry geometry = patterns::pattern_geometry(design, Dpi{dpi_x}, Dpi{dpi_y}, opt->margin);
+        const patterns::ModelChoice choice = patterns::choose_model(design, geometry);
+        options.model = opt->model == "auto" ? choice.model : parse_model(opt->model);
         options.interpolation = parse_interpolation(opt->interpolation);
         options.fit = parse_fit(opt->fit);
         options.mapping = {opt->tilt, opt->turn, opt->angle_scale};
         options.allow_partial_coverage = opt->allow_partial;
         options.field_name = opt->field;
-        double dpi_x = design.printer.dpi_x.value, dpi_y = design.printer.dpi_y.value;
-        if (!opt->dpi.empty()) std::tie(dpi_x, dpi_y) = parse_dpi(opt->dpi);
-        const patterns::PatternGeometry geometry = patterns::pattern_geometry(design, Dpi{dpi_x}, Dpi{dpi_y}, opt->margin);
 
         const auto start = std::chrono::steady_clock::now();
         const relight::ReflectanceField field = patterns::load_field_for(design, opt->field, options);
@@ -112,7 +113,8 @@ void add_encode_command(CLI::App& pattern, const GlobalOptions& global) {
                 {"lenslets", encoder.lattice().count_x() * encoder.lattice().count_y()},
                 {"field_directions_used", field.size()},
                 {"display_half_angle_deg", radians_to_degrees(encoder.display_range().max_angle_rad)},
-                {"model", opt->model},
+                {"model", std::string(optics::to_string(options.model))},
+                {"paraxial_error_dots", choice.paraxial_error_dots},
                 {"exact_table_error_deg", table_error_deg},
                 {"white", encoder.white()},
                 {"prepare_seconds", prepare_s},
@@ -125,8 +127,9 @@ void add_encode_command(CLI::App& pattern, const GlobalOptions& global) {
         std::printf("pattern %s: %d x %d dots at %g x %g dpi (%.1f x %.1f mm), %d lenslets\n", opt->out.c_str(),
                     geometry.width, geometry.height, geometry.dpi_x, geometry.dpi_y, geometry.size_mm().x(),
                     geometry.size_mm().y(), encoder.lattice().count_x() * encoder.lattice().count_y());
-        std::printf("  display range      up to %.1f deg from the axis, %s model", 
-                    radians_to_degrees(encoder.display_range().max_angle_rad), opt->model.c_str());
+        std::printf("  display range      up to %.1f deg from the axis; %s model (paraxial error up to %.2f dots)",
+                    radians_to_degrees(encoder.display_range().max_angle_rad),
+                    std::string(optics::to_string(options.model)).c_str(), choice.paraxial_error_dots);
         if (options.model == optics::Model::Exact) std::printf(" (table error %.2g deg)", table_error_deg);
         std::printf("\n  field              %zu light direction(s) used, tilt %g deg, turn %g deg, angle scale %g\n",
                     field.size(), opt->tilt, opt->turn, opt->angle_scale);

@@ -347,6 +347,24 @@ relight::ReflectanceField load_field_for(const optics::Design& design, const std
     return out;
 }
 
+ModelChoice choose_model(const optics::Design& design, const PatternGeometry& geometry, double tolerance_dots) {
+    check_design(design);
+    const optics::DesignOptics optics(design);
+    const CellIndex centre = optics.centre_cell();
+    ModelChoice choice;
+    for (const Eigen::Vector2d& offset : probe_offsets(optics.lattice())) {
+        // Where the direction the paraxial map assigns to this dot really lands.
+        const Eigen::Vector3d d = from_slopes(offset / optics.paraxial_b());
+        const optics::DesignOptics::Landing landing = optics.land(d, centre, optics::Model::Exact);
+        if (landing.status != optics::RayStatus::Ok) continue;
+        const Eigen::Vector2d error = landing.offset - offset;
+        choice.paraxial_error_dots = std::max(
+            {choice.paraxial_error_dots, std::abs(error.x()) / geometry.dot_x, std::abs(error.y()) / geometry.dot_y});
+    }
+    choice.model = choice.paraxial_error_dots <= tolerance_dots ? optics::Model::Paraxial : optics::Model::Exact;
+    return choice;
+}
+
 Encoder::Encoder(const optics::Design& design, const relight::ReflectanceField& field,
                  const PatternGeometry& geometry, const EncodeOptions& options)
     : geometry_(geometry), options_(options) {

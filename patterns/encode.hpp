@@ -100,6 +100,16 @@ relight::ReflectanceField load_field_for(const optics::Design& design,
                                          const std::filesystem::path& field,
                                          const EncodeOptions& options);
 
+/// The cheapest model that places every dot within `tolerance_dots` (along x or y) of where
+/// the exact optics send its direction: paraxial when its landing error over the whole cell
+/// (probed at its boundary and inside) stays below the tolerance, exact otherwise. Also
+/// returns that largest paraxial error, in dots.
+struct ModelChoice {
+    optics::Model model = optics::Model::Paraxial;
+    double paraxial_error_dots = 0.0;
+};
+ModelChoice choose_model(const optics::Design& design, const PatternGeometry& geometry, double tolerance_dots = 0.25);
+
 class Encoder final : public PatternSource {
 public:
     /// Prepares the tables: the design's optics, the inverse map (exact: tabulated), the

@@ -244,3 +244,21 @@ TEST(Encoder, NeededDirectionsAreEnoughForAnIdenticalPattern) {
 
 }  // namespace
 }  // namespace rfd::patterns
+
+namespace rfd::patterns {
+namespace {
+
+TEST(ChooseModel, ParaxialOnlyWhereItIsWithinAQuarterDot) {
+    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const ModelChoice fine = choose_model(design, pattern_geometry(design, Dpi{2880}, Dpi{2880}));
+    const ModelChoice coarse = choose_model(design, pattern_geometry(design, Dpi{20}, Dpi{20}));
+    EXPECT_EQ(fine.model, optics::Model::Exact);
+    EXPECT_EQ(coarse.model, optics::Model::Paraxial);
+    // The same error in millimetres, counted in dots of two sizes.
+    EXPECT_NEAR(fine.paraxial_error_dots / coarse.paraxial_error_dots, 2880.0 / 20.0, 1e-6);
+    EXPECT_GT(fine.paraxial_error_dots, 0.25);
+    EXPECT_LT(coarse.paraxial_error_dots, 0.25);
+}
+
+}  // namespace
+}  // namespace rfd::patterns
