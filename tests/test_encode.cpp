@@ -5,7 +5,6 @@
 #include <cmath>
 #include <fstream>
 #include <random>
-#include <regex>
 #include <sstream>
 
 #include <gmock/gmock.h>
@@ -34,8 +33,10 @@ std::string read_text(const std::filesystem::path& path) {
 // Design I with a small array (the preset's 63 x 73 lenslets are 143 million dots).
 optics::Design small_design1(int count_x, int count_y) {
     std::string text = read_text(kDesigns / "design1.toml");
-    text = std::regex_replace(text, std::regex(R"(count = \[63, 73\])"),
-                              "count = [" + std::to_string(count_x) + ", " + std::to_string(count_y) + "]");
+    // Plain string search: <regex> draws maybe-uninitialized warnings from GCC 12 under ASan.
+    const std::string preset = "count = [63, 73]";
+    text.replace(text.find(preset), preset.size(),
+                 "count = [" + std::to_string(count_x) + ", " + std::to_string(count_y) + "]");
     return optics::parse_design(text, "design1-small.toml");
 }
 
