@@ -22,4 +22,7 @@ void add_relight_commands(CLI::App& app, const GlobalOptions& global);
 /// `capture hdr` (exposure brackets) and `capture calibrate` (mirror-sphere light directions).
 void add_capture_tool_commands(CLI::App& capture, const GlobalOptions& global);
 
+/// The `print` group: sheet (pattern sheets for a printer), moire (pitch calibration).
+void add_print_commands(CLI::App& app, const GlobalOptions& global);
+
 }  // namespace rfd::cli
