@@ -186,7 +186,8 @@ void draw_marks(cairo_t* cr, const SheetLayout& layout) {
     for (int k = 0; k <= length; k += 10)
         show_text_at(cr, std::to_string(k) + (k == 0 ? " mm" : ""), lo.x() + k + 0.3,
                      base + 3.0 + kRulerFont, kRulerFont);
-    // Label above the pattern, centred on the paper, shrunk to the printable width.
+    // Label above the pattern and its crop marks, centred on the paper, shrunk to the
+    // printable width.
     double font = kLabelFont;
     cairo_set_font_size(cr, font);
     double widest = 0.0;
@@ -199,7 +200,8 @@ void draw_marks(cairo_t* cr, const SheetLayout& layout) {
     if (widest > printable) font *= printable / widest;
     const double centre = 0.5 * layout.paper.width;
     for (std::size_t k = 0; k < layout.label.size(); ++k) {
-        const double y = lo.y() - 2.5 - static_cast<double>(layout.label.size() - 1 - k) * 1.4 * font;
+        const double y = lo.y() - kCropGap - kCropLength - 1.5 -
+                         static_cast<double>(layout.label.size() - 1 - k) * 1.4 * font;
         show_text_at(cr, layout.label[k], 0.0, y, font, centre);
     }
     cairo_restore(cr);

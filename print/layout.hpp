@@ -75,7 +75,7 @@ struct SheetLayout {
 /// Room the marks need around the pattern, mm: crop marks at the sides, the label above,
 /// the ruler below.
 inline constexpr double kSideRoom = 6.0;
-inline constexpr double kTopRoom = 11.0;
+inline constexpr double kTopRoom = 15.0;
 inline constexpr double kBottomRoom = 11.0;
 
 /// Lays out a sheet for a pattern whose raster is `pattern` (the design's raster at the
