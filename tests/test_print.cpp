@@ -32,7 +32,7 @@ using rfd::testing::TempDir;
 const std::filesystem::path kDesigns = std::filesystem::path(RFD_SOURCE_DIR) / "designs";
 
 // A small test printer: non-square dots, a paper just big enough for Design II and its marks.
-std::string small_printer_toml(double dpi_x, double dpi_y, double paper_w = 50, double paper_h = 52) {
+std::string small_printer_toml(double dpi_x, double dpi_y, double paper_w = 50, double paper_h = 60) {
     std::ostringstream s;
     s << "[printer]\nname = \"test printer\"\ndpi_x = " << dpi_x << "\ndpi_y = " << dpi_y
       << "\ngamma = 2.2\nmax_density = 2.0\nblack_level = 0.012\nsheets = 2\n"
@@ -159,7 +159,7 @@ TEST(PrinterProfile, BadKeysNameFileLineAndKey) {
     too_black.replace(too_black.find("black_level = 0.012"), 19, "black_level = 0.001");
     EXPECT_THAT(error_of([&] { parse_printer(too_black, "black.toml"); }),
                 MatchesRegex("black\\.toml:7:.*black_level: black level 0\\.001.* darker than full ink.*"));
-    std::string no_room = small_printer_toml(720, 720, 50, 52);
+    std::string no_room = small_printer_toml(720, 720, 50, 60);
     no_room.replace(no_room.find("margin_mm = 1"), 13, "margin_mm = 30");
     EXPECT_THAT(error_of([&] { parse_printer(no_room, "margin.toml"); }), HasSubstr("no printable area"));
 }
@@ -181,8 +181,8 @@ TEST(SheetTiff, ResolutionTagsAndMarkersWhereTheDesignPutsTheCornerLenslets) {
     EXPECT_EQ(page.spec.get_string_attribute("ResolutionUnit"), "in");
     EXPECT_EQ(page.spec.nchannels, 3);
     EXPECT_EQ(page.spec.format, OIIO::TypeDesc::UINT8);
-    // The page: whole dots inside 50 x 52 mm.
-    const int page_w = static_cast<int>(std::floor(50.0 * 1200 / 25.4)), page_h = static_cast<int>(std::floor(52.0 * 600 / 25.4));
+    // The page: whole dots inside 50 x 60 mm.
+    const int page_w = static_cast<int>(std::floor(50.0 * 1200 / 25.4)), page_h = static_cast<int>(std::floor(60.0 * 600 / 25.4));
     ASSERT_EQ(page.width, page_w);
     ASSERT_EQ(page.height, page_h);
 
@@ -296,7 +296,7 @@ TEST(SheetPdf, PageIsThePaperSizeAndReRunsAreIdentical) {
     const std::string pdf = read_bytes(dir / "sheet.pdf");
     EXPECT_EQ(pdf, read_bytes(dir / "again.pdf"));
     EXPECT_NEAR(media_box_value(pdf, 2), 50.0 / 25.4 * 72.0, 1e-3);
-    EXPECT_NEAR(media_box_value(pdf, 3), 52.0 / 25.4 * 72.0, 1e-3);
+    EXPECT_NEAR(media_box_value(pdf, 3), 60.0 / 25.4 * 72.0, 1e-3);
 }
 
 TEST(SheetPdf, RasterWiderThanCairosLimitIsTiled) {
@@ -383,7 +383,7 @@ TEST(Sheet, BadOptionsAndAttributes) {
     patterns::write_pattern(big_pattern, Uniform(patterns::pattern_geometry(big, Dpi{100}, Dpi{100}), 0.5f), {});
     EXPECT_THAT(error_of([&] { write_sheet(dir / "s.tif", big, coarse, big_pattern, {}); }),
                 MatchesRegex(".*coarse\\.toml.*the pattern \\(1[45][0-9]\\.[0-9] x 1[45][0-9]\\.[0-9] mm\\).*do not fit "
-                             "the printable area of test paper \\(48\\.0 x 50\\.0 mm\\).*"));
+                             "the printable area of test paper \\(48\\.0 x 58\\.0 mm\\).*"));
 }
 
 // ----------------------------------------------------------------------------- moire
