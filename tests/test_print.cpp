@@ -194,6 +194,7 @@ TEST(SheetTiff, ResolutionTagsAndMarkersWhereTheDesignPutsTheCornerLenslets) {
     const optics::Lattice& lattice = optics.lattice();
     const double inradius = 0.5 * std::min(lattice.pitch_x(), lattice.pitch_y());
     int found = 0;
+    double worst = 0.0;
     for (const optics::CellIndex cell : {optics::CellIndex{0, 0}, {lattice.count_x() - 1, 0}, {0, lattice.count_y() - 1},
                                          {lattice.count_x() - 1, lattice.count_y() - 1}}) {
         const Eigen::Vector2d centre = lattice.center(cell);
@@ -215,11 +216,13 @@ TEST(SheetTiff, ResolutionTagsAndMarkersWhereTheDesignPutsTheCornerLenslets) {
         ASSERT_GT(sum, 10.0);
         EXPECT_NEAR(sx / sum, expected.x(), 0.5) << cell.i << "," << cell.j;
         EXPECT_NEAR(sy / sum, expected.y(), 0.5) << cell.i << "," << cell.j;
+        worst = std::max({worst, std::abs(sx / sum - expected.x()), std::abs(sy / sum - expected.y())});
         // The cell is printed clear around the marker's lines: the pattern is replaced.
         EXPECT_GT(clear, dots / 2);
         ++found;
     }
     EXPECT_EQ(found, 4);
+    RecordProperty("worst_marker_offset_dots", std::to_string(worst));
     ASSERT_EQ(report.layout.markers.size(), 4u);
 
     // A pattern dot away from the marks carries the tone-mapped value, computed here from
