@@ -131,7 +131,7 @@ std::vector<MoireBand> write_moire_pdf(const std::filesystem::path& out, const o
             const std::string header[] = {
                 "Pitch calibration (moire) - " + design.name + " - page " + std::to_string(page + 1) + " of " +
                     std::to_string(pages),
-                "Lay the array on the bands, curved side up, rows along the lines' direction as marked; the band whose",
+                "Lay the array on a band, curved side up, its rows parallel to the band's long edge; the band whose",
                 "fringes are widest or vanish (the band looks even) has the array's true pitch. x: spacing within a row,",
                 "rows: spacing of the rows. Design: pitch " + format("%.4f", lattice.pitch_x()) + " mm, rows " +
                     format("%.4f", lattice.pitch_y()) + " mm apart. " + printer.name + "."};
