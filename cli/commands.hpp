@@ -24,5 +24,7 @@ void add_capture_tool_commands(CLI::App& capture, const GlobalOptions& global);
 
 /// The `pattern` group: encode (Designs I/II), field (procedural test fields).
 void add_pattern_commands(CLI::App& app, const GlobalOptions& global);
+/// The `print` group: sheet (pattern sheets for a printer), moire (pitch calibration).
+void add_print_commands(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace rfd::cli

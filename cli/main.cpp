@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
     rfd::cli::add_relight_commands(app, global);
     rfd::cli::add_capture_tool_commands(*capture, global);
     rfd::cli::add_pattern_commands(app, global);
+    rfd::cli::add_print_commands(app, global);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& error) {

@@ -1,0 +1,148 @@
+// rfd print sheet and rfd print moire: printable sheets of a pattern (tone-mapped, with
+// registration markers, crop marks, ruler and label) and pitch-calibration sheets.
+
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "cli/commands.hpp"
+#include "optics/design.hpp"
+#include "print/moire.hpp"
+#include "print/printer.hpp"
+#include "print/sheet.hpp"
+
+namespace rfd::cli {
+namespace {
+
+// The --printer profile; without one, the thesis's printer's tone values at the design's
+// own [printer] resolution.
+print::PrinterProfile printer_for(const optics::Design& design, const std::string& option) {
+    if (!option.empty()) return print::load_printer(option);
+    print::PrinterProfile printer = print::load_printer("epson_stylus_pro_4800");
+    printer.dpi_x = design.printer.dpi_x;
+    printer.dpi_y = design.printer.dpi_y;
+    printer.name += " (default profile at the design's resolution)";
+    return printer;
+}
+
+void add_sheet_command(CLI::App& print_cmd) {
+    auto* cmd = print_cmd.add_subcommand(
+        "sheet", "A printable sheet of a pattern: tone-mapped for the printer, with registration markers under the "
+                 "corner lenslets, crop marks, ruler and label (TIFF or PDF)");
+    struct Options {
+        std::string design, pattern, printer, out;
+        print::SheetOptions sheet;
+        bool json = false;
+    };
+    auto opt = std::make_shared<Options>();
+    cmd->add_option("DESIGN", opt->design, "Design TOML file")->required();
+    cmd->add_option("PATTERN", opt->pattern, "Pattern file (EXR/TIFF/PNG) at the printer's resolution")->required();
+    cmd->add_option("--printer", opt->printer,
+                    "Printer profile: a TOML file or a bundled name (epson_stylus_pro_4800, laser_1200, "
+                    "inkjet_720); its dpi overrides the design's. Default: the Epson's tone values at the "
+                    "design's dpi");
+    cmd->add_option("--out", opt->out, "Output sheet, .tif/.tiff or .pdf")->required();
+    cmd->add_flag("--mirror", opt->sheet.mirror, "The back sheet: the whole page mirrored left-right");
+    cmd->add_option("--brightness", opt->sheet.brightness,
+                    "Scale of the pattern before clamping: transmittance = brightness * value / white");
+    cmd->add_option("--sheets", opt->sheet.sheets,
+                    "Sheets stacked back to back (1 or 2; 2 prints each at the square root); default: the profile's");
+    cmd->add_option("--bits", opt->sheet.bits, "TIFF bits per channel, 8 or 16");
+    cmd->add_flag("--json", opt->json, "Machine-readable summary");
+    cmd->callback([opt] {
+        const optics::Design design = optics::load_design(opt->design);
+        const print::PrinterProfile printer = printer_for(design, opt->printer);
+        const print::SheetReport r = print::write_sheet(opt->out, design, printer, opt->pattern, opt->sheet);
+        const print::SheetLayout& l = r.layout;
+        nlohmann::json markers = nlohmann::json::array();
+        for (const auto& m : l.markers)
+            markers.push_back({{"lenslet", {m.lenslet.i, m.lenslet.j}},
+                               {"page_mm", {m.centre.x(), m.centre.y()}},
+                               {"page_dots", {m.centre.x() / l.dot_x - 0.5, m.centre.y() / l.dot_y - 0.5}}});
+        const nlohmann::json summary = {
+            {"out", opt->out},
+            {"printer", printer.name},
+            {"dpi", {l.dpi_x, l.dpi_y}},
+            {"paper", {{"name", l.paper.name}, {"mm", {l.paper.width, l.paper.height}}}},
+            {"page_dots", {l.page_width, l.page_height}},
+            {"pattern_dots", {l.pattern.width, l.pattern.height}},
+            {"pattern_offset_dots", {l.offset_x, l.offset_y}},
+            {"pattern_mm", {l.pattern.size_mm().x(), l.pattern.size_mm().y()}},
+            {"brightness", r.tone.brightness},
+            {"white", r.tone.white},
+            {"sheets", r.tone.sheets},
+            {"mirror", l.mirror},
+            {"markers", markers}};
+        if (opt->json) {
+            std::printf("%s\n", summary.dump(2).c_str());
+            return;
+        }
+        std::printf("%s: %s sheet, %d x %d dots at %g x %g dpi (%s, %.0f x %.0f mm)\n", opt->out.c_str(),
+                    l.mirror ? "back (mirrored)" : "front", l.page_width, l.page_height, l.dpi_x, l.dpi_y,
+                    l.paper.name.c_str(), l.paper.width, l.paper.height);
+        std::printf("  pattern   %d x %d dots (%.2f x %.2f mm) at dot (%d, %d)\n", l.pattern.width, l.pattern.height,
+                    l.pattern.size_mm().x(), l.pattern.size_mm().y(), l.offset_x, l.offset_y);
+        std::printf("  tone      brightness %g, white %g, %d sheet(s), black %.4f of the stack\n", r.tone.brightness,
+                    r.tone.white, r.tone.sheets, r.tone.stack_transmittance(0.0));
+        for (const auto& m : l.markers)
+            std::printf("  marker    lenslet (%d, %d) at %.3f, %.3f mm on the front page\n", m.lenslet.i, m.lenslet.j,
+                        m.centre.x(), m.centre.y());
+        if (l.markers.empty()) std::printf("  markers   none (Design IV arrays are aligned by hand)\n");
+    });
+}
+
+void add_moire_command(CLI::App& print_cmd) {
+    auto* cmd = print_cmd.add_subcommand(
+        "moire", "Pitch-calibration sheet (thesis 8.4.1): line bands for a range of pitch hypotheses (PDF)");
+    struct Options {
+        std::string design, printer, out, pitch, pitch_y;
+        bool json = false;
+    };
+    auto opt = std::make_shared<Options>();
+    cmd->add_option("DESIGN", opt->design, "Design TOML file")->required();
+    cmd->add_option("--pitch", opt->pitch, "Pitch hypotheses along a row, FROM:TO:STEPS in mm")->required();
+    cmd->add_option("--pitch-y", opt->pitch_y,
+                    "Rectangular arrays: row-spacing hypotheses FROM:TO:STEPS (default: --pitch scaled by the "
+                    "design's pitch_y / pitch_x)");
+    cmd->add_option("--printer", opt->printer, "Printer profile (paper size); default epson_stylus_pro_4800");
+    cmd->add_option("--out", opt->out, "Output PDF")->required();
+    cmd->add_flag("--json", opt->json, "Machine-readable list of bands");
+    cmd->callback([opt] {
+        print::MoireOptions options;
+        options.x = print::parse_pitch_range(opt->pitch, "--pitch");
+        if (!opt->pitch_y.empty()) options.y = print::parse_pitch_range(opt->pitch_y, "--pitch-y");
+        const std::filesystem::path out(opt->out);
+        if (out.extension() != ".pdf")
+            throw InputError(SourceLocation{opt->out, 0, 0, "--out"}, "expected a .pdf file");
+        const optics::Design design = optics::load_design(opt->design);
+        const print::PrinterProfile printer = printer_for(design, opt->printer);
+        const auto bands = print::write_moire_pdf(out, design, printer, options);
+        if (opt->json) {
+            nlohmann::json list = nlohmann::json::array();
+            for (const auto& b : bands)
+                list.push_back({{"direction", b.along_x ? "x" : "rows"},
+                                {"pitch_mm", b.pitch},
+                                {"period_mm", b.period},
+                                {"page", b.page + 1}});
+            std::printf("%s\n", nlohmann::json{{"out", opt->out}, {"bands", list}}.dump(2).c_str());
+            return;
+        }
+        std::printf("%s: %zu bands on %d page(s)\n", opt->out.c_str(), bands.size(), bands.back().page + 1);
+        for (const auto& b : bands)
+            std::printf("  %-4s pitch %.4f mm, line period %.4f mm (page %d)\n", b.along_x ? "x" : "rows", b.pitch,
+                        b.period, b.page + 1);
+    });
+}
+
+}  // namespace
+
+void add_print_commands(CLI::App& app, const GlobalOptions&) {
+    auto* print_cmd = app.add_subcommand("print", "Printable sheets: patterns for a printer, pitch calibration");
+    print_cmd->require_subcommand(1);
+    add_sheet_command(*print_cmd);
+    add_moire_command(*print_cmd);
+}
+
+}  // namespace rfd::cli

@@ -1,0 +1,210 @@
+#include "print/layout.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include <cairo.h>
+
+#include "core/error.hpp"
+#include "optics/analysis.hpp"
+
+namespace rfd::print {
+namespace {
+
+constexpr double kMarkLine = 0.1;       // mm, crop marks
+constexpr double kRulerLine = 0.08;     // mm
+constexpr double kCropGap = 1.0;        // mm between the pattern and a crop mark
+constexpr double kCropLength = 4.5;     // mm
+constexpr double kLabelFont = 2.4;      // mm, the label's font size
+constexpr double kRulerFont = 1.8;      // mm
+
+std::string format_number(double value) {
+    char text[64];
+    std::snprintf(text, sizeof text, "%g", value);
+    return text;
+}
+
+// The lattice whose corner lenslets carry markers, if the design has one.
+std::optional<optics::Lattice> marker_lattice(const optics::Design& design) {
+    switch (design.kind) {
+        case optics::DesignKind::I:
+        case optics::DesignKind::II:
+            return optics::DesignOptics(design).lattice();
+        case optics::DesignKind::III: {
+            const optics::Plane& plane = design.pattern_plane();
+            if (plane.part)
+                if (const auto* array = std::get_if<optics::LensletArrayPart>(&*plane.part))
+                    return array->lattice;
+            return std::nullopt;
+        }
+        case optics::DesignKind::IV:
+            return std::nullopt;
+    }
+    return std::nullopt;
+}
+
+std::vector<std::string> label_lines(const optics::Design& design, const PrinterProfile& printer,
+                                     const SheetInfo& info) {
+    std::string sheet;
+    if (info.sheets == 1)
+        sheet = "single sheet";
+    else
+        sheet = info.mirror ? "sheet 2 of 2: back, mirrored" : "sheet 1 of 2: front";
+    return {design.name + "  -  pattern " + info.pattern_name,
+            printer.name + ", " + format_number(printer.dpi_x.value) + " x " +
+                format_number(printer.dpi_y.value) + " dpi, brightness " +
+                format_number(info.brightness) + ", " + sheet};
+}
+
+void show_text_at(cairo_t* cr, const std::string& text, double x, double y, double size,
+                  double centre_x = std::nan("")) {
+    cairo_set_font_size(cr, size);
+    if (std::isfinite(centre_x)) {
+        cairo_text_extents_t extents;
+        cairo_text_extents(cr, text.c_str(), &extents);
+        x = centre_x - (extents.x_bearing + 0.5 * extents.width);
+    }
+    cairo_move_to(cr, x, y);
+    cairo_show_text(cr, text.c_str());
+}
+
+}  // namespace
+
+Eigen::Vector2d SheetLayout::page_dot(const Eigen::Vector2d& lattice_mm) const {
+    return pattern.raster_position(lattice_mm) + Eigen::Vector2d(offset_x, offset_y);
+}
+
+Eigen::Vector2d SheetLayout::page_mm(const Eigen::Vector2d& lattice_mm) const {
+    const Eigen::Vector2d dot = page_dot(lattice_mm);
+    return {(dot.x() + 0.5) * dot_x, (dot.y() + 0.5) * dot_y};
+}
+
+SheetLayout layout_sheet(const optics::Design& design, const PrinterProfile& printer,
+                         const patterns::PatternGeometry& pattern, const SheetInfo& info) {
+    RFD_CHECK(pattern.width > 0 && pattern.height > 0);
+    SheetLayout l;
+    l.paper = printer.paper;
+    l.dpi_x = printer.dpi_x.value;
+    l.dpi_y = printer.dpi_y.value;
+    l.dot_x = printer.dpi_x.dot_mm();
+    l.dot_y = printer.dpi_y.dot_mm();
+    l.pattern = pattern;
+    l.mirror = info.mirror;
+    // Whole dots inside the paper; a hair of tolerance against 210 mm being 23811.0000001 dots.
+    l.page_width = static_cast<int>(std::floor(l.paper.width / l.dot_x + 1e-9));
+    l.page_height = static_cast<int>(std::floor(l.paper.height / l.dot_y + 1e-9));
+
+    const Eigen::Vector2d size = pattern.size_mm();
+    const double printable_w = l.paper.width - 2 * l.paper.margin;
+    const double printable_h = l.paper.height - 2 * l.paper.margin;
+    if (size.x() + 2 * kSideRoom > printable_w || size.y() + kTopRoom + kBottomRoom > printable_h) {
+        char text[512];
+        std::snprintf(text, sizeof text,
+                      "the pattern (%.1f x %.1f mm) and its marks (%.0f mm at the sides, %.0f mm above "
+                      "and below) do not fit the printable area of %s paper (%.1f x %.1f mm)",
+                      size.x(), size.y(), kSideRoom, kTopRoom, l.paper.name.c_str(), printable_w,
+                      printable_h);
+        throw InputError(SourceLocation{printer.file, 0, 0, "paper"}, text);
+    }
+    l.offset_x = (l.page_width - pattern.width) / 2;
+    l.offset_y = (l.page_height - pattern.height) / 2;
+
+    if (const auto lattice = marker_lattice(design)) {
+        const double inradius = lattice->kind() == optics::LatticeKind::Hexagonal
+                                    ? 0.5 * lattice->pitch_x()
+                                    : 0.5 * std::min(lattice->pitch_x(), lattice->pitch_y());
+        const int nx = lattice->count_x(), ny = lattice->count_y();
+        // Row ends of a hexagonal lattice: the outermost lenslet of the first and last rows.
+        const optics::CellIndex corners[] = {{0, ny - 1}, {nx - 1, ny - 1}, {0, 0}, {nx - 1, 0}};
+        for (const optics::CellIndex cell : corners) {
+            Marker m;
+            m.lenslet = cell;
+            const Eigen::Vector2d centre = lattice->center(cell);
+            m.centre = l.page_mm(centre);
+            for (const Eigen::Vector2d& corner : lattice->cell_corners())
+                m.cell.push_back(l.page_mm(centre + corner));
+            m.radius = 0.55 * inradius;
+            m.line_width = std::max(0.06 * inradius, 1.5 * std::max(l.dot_x, l.dot_y));
+            l.markers.push_back(std::move(m));
+        }
+    }
+    l.label = label_lines(design, printer, info);
+    return l;
+}
+
+void trace_clear_regions(cairo_t* cr, const SheetLayout& layout) {
+    for (const Marker& m : layout.markers) {
+        cairo_move_to(cr, m.cell.front().x(), m.cell.front().y());
+        for (std::size_t k = 1; k < m.cell.size(); ++k) cairo_line_to(cr, m.cell[k].x(), m.cell[k].y());
+        cairo_close_path(cr);
+    }
+}
+
+void draw_marks(cairo_t* cr, const SheetLayout& layout) {
+    cairo_save(cr);
+    cairo_set_line_cap(cr, CAIRO_LINE_CAP_BUTT);
+    // Markers: a ring and a crosshair, all within 0.9 of the cell's inradius.
+    for (const Marker& m : layout.markers) {
+        const double arm = m.radius / 0.55 * 0.9;
+        cairo_set_line_width(cr, m.line_width);
+        cairo_new_sub_path(cr);
+        cairo_arc(cr, m.centre.x(), m.centre.y(), m.radius, 0.0, 2.0 * kPi);
+        cairo_stroke(cr);
+        cairo_move_to(cr, m.centre.x() - arm, m.centre.y());
+        cairo_line_to(cr, m.centre.x() + arm, m.centre.y());
+        cairo_move_to(cr, m.centre.x(), m.centre.y() - arm);
+        cairo_line_to(cr, m.centre.x(), m.centre.y() + arm);
+        cairo_stroke(cr);
+    }
+    // Crop marks: an L outside each corner of the pattern, on its boundary lines.
+    const Eigen::Vector2d lo = layout.pattern_min(), hi = layout.pattern_max();
+    cairo_set_line_width(cr, kMarkLine);
+    for (const double x : {lo.x(), hi.x()})
+        for (const double y : {lo.y(), hi.y()}) {
+            const double sx = x == lo.x() ? -1.0 : 1.0, sy = y == lo.y() ? -1.0 : 1.0;
+            cairo_move_to(cr, x + sx * kCropGap, y);
+            cairo_line_to(cr, x + sx * (kCropGap + kCropLength), y);
+            cairo_move_to(cr, x, y + sy * kCropGap);
+            cairo_line_to(cr, x, y + sy * (kCropGap + kCropLength));
+        }
+    cairo_stroke(cr);
+    // Ruler below the pattern, from its left edge: ticks every mm, longer every 5 and 10,
+    // numbered every 10 mm; it checks the printer's scale with a steel rule.
+    cairo_select_font_face(cr, "DejaVu Sans", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+    const double base = hi.y() + 2.0;
+    const int length = std::max(10, static_cast<int>(std::floor(hi.x() - lo.x())));
+    cairo_set_line_width(cr, kRulerLine);
+    cairo_move_to(cr, lo.x(), base);
+    cairo_line_to(cr, lo.x() + length, base);
+    for (int k = 0; k <= length; ++k) {
+        const double tick = k % 10 == 0 ? 3.0 : k % 5 == 0 ? 2.0 : 1.2;
+        cairo_move_to(cr, lo.x() + k, base);
+        cairo_line_to(cr, lo.x() + k, base + tick);
+    }
+    cairo_stroke(cr);
+    for (int k = 0; k <= length; k += 10)
+        show_text_at(cr, std::to_string(k) + (k == 0 ? " mm" : ""), lo.x() + k + 0.3,
+                     base + 3.0 + kRulerFont, kRulerFont);
+    // Label above the pattern and its crop marks, centred on the paper, shrunk to the
+    // printable width.
+    double font = kLabelFont;
+    cairo_set_font_size(cr, font);
+    double widest = 0.0;
+    for (const std::string& line : layout.label) {
+        cairo_text_extents_t extents;
+        cairo_text_extents(cr, line.c_str(), &extents);
+        widest = std::max(widest, extents.width);
+    }
+    const double printable = layout.paper.width - 2 * layout.paper.margin;
+    if (widest > printable) font *= printable / widest;
+    const double centre = 0.5 * layout.paper.width;
+    for (std::size_t k = 0; k < layout.label.size(); ++k) {
+        const double y = lo.y() - kCropGap - kCropLength - 1.5 -
+                         static_cast<double>(layout.label.size() - 1 - k) * 1.4 * font;
+        show_text_at(cr, layout.label[k], 0.0, y, font, centre);
+    }
+    cairo_restore(cr);
+}
+
+}  // namespace rfd::print

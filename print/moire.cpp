@@ -1,0 +1,190 @@
+#include "print/moire.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include <cairo-pdf.h>
+#include <cairo.h>
+
+#include "core/error.hpp"
+#include "core/files.hpp"
+
+namespace rfd::print {
+namespace {
+
+constexpr double kLabelColumn = 36.0;  // mm left of the bands for their labels
+constexpr double kBandGap = 3.0;       // mm
+constexpr double kHeader = 16.0;       // mm for the instructions at the top of each page
+
+const optics::Lattice& array_lattice(const optics::Design& design) {
+    const optics::Plane& pattern = design.pattern_plane();
+    if (pattern.part)
+        if (const auto* array = std::get_if<optics::LensletArrayPart>(&*pattern.part)) return array->lattice;
+    for (const optics::Plane& plane : design.planes)
+        if (plane.part)
+            if (const auto* array = std::get_if<optics::LensletArrayPart>(&*plane.part)) return array->lattice;
+    throw InputError(SourceLocation{design.file}, "design has no lenslet array to calibrate");
+}
+
+std::string format(const char* format, double value) {
+    char text[64];
+    std::snprintf(text, sizeof text, format, value);
+    return text;
+}
+
+cairo_status_t write_to_stream(void* closure, const unsigned char* data, unsigned int length) {
+    auto* file = static_cast<std::FILE*>(closure);
+    return std::fwrite(data, 1, length, file) == length ? CAIRO_STATUS_SUCCESS : CAIRO_STATUS_WRITE_ERROR;
+}
+
+}  // namespace
+
+std::vector<double> PitchRange::values() const {
+    RFD_CHECK(steps >= 2);
+    std::vector<double> out;
+    for (int k = 0; k < steps; ++k) out.push_back(from + (to - from) * k / (steps - 1));
+    return out;
+}
+
+PitchRange parse_pitch_range(const std::string& text, const std::string& option) {
+    const std::string expected = option + ": expected FROM:TO:STEPS in mm with 0 < FROM < TO and 2 <= STEPS <= 200, got '" + text + "'";
+    const std::size_t a = text.find(':');
+    const std::size_t b = a == std::string::npos ? a : text.find(':', a + 1);
+    if (b == std::string::npos || text.find(':', b + 1) != std::string::npos) throw InputError(expected);
+    PitchRange range;
+    try {
+        std::size_t used = 0;
+        const std::string from = text.substr(0, a), to = text.substr(a + 1, b - a - 1), steps = text.substr(b + 1);
+        range.from = std::stod(from, &used);
+        if (used != from.size()) throw InputError(expected);
+        range.to = std::stod(to, &used);
+        if (used != to.size()) throw InputError(expected);
+        const long long n = std::stoll(steps, &used);
+        if (used != steps.size() || n < 2 || n > 200) throw InputError(expected);
+        range.steps = static_cast<int>(n);
+    } catch (const std::logic_error&) {  // stod/stoll: not a number, out of range
+        throw InputError(expected);
+    }
+    if (!std::isfinite(range.from) || !std::isfinite(range.to) || !(range.from > 0.0) || !(range.from < range.to))
+        throw InputError(expected);
+    return range;
+}
+
+std::vector<MoireBand> write_moire_pdf(const std::filesystem::path& out, const optics::Design& design,
+                                       const PrinterProfile& printer, const MoireOptions& options) {
+    const optics::Lattice& lattice = array_lattice(design);
+    const bool hex = lattice.kind() == optics::LatticeKind::Hexagonal;
+    const double row_factor = hex ? std::sqrt(3.0) / 2.0 : 1.0;
+    PitchRange y_range = options.y.value_or(options.x);
+    if (!options.y && !hex) {
+        const double scale = lattice.pitch_y() / lattice.pitch_x();
+        y_range.from *= scale;
+        y_range.to *= scale;
+    }
+    const Paper& paper = printer.paper;
+    const double band_left = paper.margin + kLabelColumn;
+    const double band_width = std::min(2.0 * lattice.half_extent().x(), paper.width - paper.margin - band_left);
+    const double band_height = std::max({options.band_height, 4.0 * options.x.to, 4.0 * y_range.to * row_factor});
+    const double usable = paper.height - 2 * paper.margin - kHeader;
+    const int per_page = static_cast<int>(std::floor((usable + kBandGap) / (band_height + kBandGap)));
+    if (per_page < 1 || band_width < 4.0 * options.x.to)
+        throw InputError(SourceLocation{printer.file, 0, 0, "paper"},
+                         "a calibration band (" + format("%.1f", band_width) + " x " + format("%.1f", band_height) +
+                             " mm) does not fit the printable area of " + paper.name + " paper");
+
+    std::vector<MoireBand> bands;
+    for (const double p : options.x.values()) bands.push_back({true, p, p, 0, 0.0});
+    for (const double p : y_range.values()) bands.push_back({false, p, p * row_factor, 0, 0.0});
+    for (std::size_t k = 0; k < bands.size(); ++k) {
+        bands[k].page = static_cast<int>(k) / per_page;
+        bands[k].top = paper.margin + kHeader + (static_cast<int>(k) % per_page) * (band_height + kBandGap);
+    }
+
+    constexpr double kPointsPerMm = 72.0 / kMillimetresPerInch;
+    const std::filesystem::path temporary = temporary_sibling(out);
+    struct Remove {
+        std::filesystem::path path;
+        ~Remove() {
+            std::error_code ec;
+            if (!path.empty()) std::filesystem::remove(path, ec);
+        }
+    } cleanup{temporary};
+    std::unique_ptr<std::FILE, decltype(&std::fclose)> file(std::fopen(temporary.c_str(), "wb"), &std::fclose);
+    if (!file) throw IoError(SourceLocation{out.string()}, "cannot write calibration sheet: cannot create a file there");
+    {
+        std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> surface(
+            cairo_pdf_surface_create_for_stream(write_to_stream, file.get(), paper.width * kPointsPerMm,
+                                                paper.height * kPointsPerMm),
+            &cairo_surface_destroy);
+        cairo_pdf_surface_set_metadata(surface.get(), CAIRO_PDF_METADATA_CREATE_DATE, "1970-01-01T00:00:00Z");
+        cairo_pdf_surface_set_metadata(surface.get(), CAIRO_PDF_METADATA_MOD_DATE, "1970-01-01T00:00:00Z");
+        std::unique_ptr<cairo_t, decltype(&cairo_destroy)> owner(cairo_create(surface.get()), &cairo_destroy);
+        cairo_t* cr = owner.get();
+        cairo_scale(cr, kPointsPerMm, kPointsPerMm);
+        cairo_select_font_face(cr, "DejaVu Sans", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+        cairo_set_source_rgb(cr, 0, 0, 0);
+        const int pages = bands.back().page + 1;
+        for (int page = 0; page < pages; ++page) {
+            cairo_set_font_size(cr, 2.6);
+            const std::string header[] = {
+                "Pitch calibration (moire) - " + design.name + " - page " + std::to_string(page + 1) + " of " +
+                    std::to_string(pages),
+                "Lay the array on a band, curved side up, its rows parallel to the band's long edge; the band whose",
+                "fringes are widest or vanish (the band looks even) has the array's true pitch. x: spacing within a row,",
+                "rows: spacing of the rows. Design: pitch " + format("%.4f", lattice.pitch_x()) + " mm, rows " +
+                    format("%.4f", lattice.pitch_y()) + " mm apart. " + printer.name + "."};
+            for (std::size_t k = 0; k < std::size(header); ++k) {
+                cairo_move_to(cr, paper.margin, paper.margin + 3.0 + 3.2 * static_cast<double>(k));
+                cairo_show_text(cr, header[k].c_str());
+            }
+            for (const MoireBand& band : bands) {
+                if (band.page != page) continue;
+                // Label: the hypothesis, and which spacing it tests.
+                cairo_set_font_size(cr, 2.8);
+                const std::string name = band.along_x ? "x " + format("%.4f", band.pitch) + " mm"
+                                         : hex ? "rows " + format("%.4f", band.period) + " mm"
+                                               : "rows " + format("%.4f", band.pitch) + " mm";
+                cairo_move_to(cr, paper.margin, band.top + 0.5 * band_height);
+                cairo_show_text(cr, name.c_str());
+                if (!band.along_x && hex) {
+                    cairo_set_font_size(cr, 2.0);
+                    cairo_move_to(cr, paper.margin, band.top + 0.5 * band_height + 3.0);
+                    cairo_show_text(cr, ("(pitch " + format("%.4f", band.pitch) + " mm)").c_str());
+                }
+                // Lines of period `period`, a quarter period wide, one centred in the band.
+                cairo_save(cr);
+                cairo_rectangle(cr, band_left, band.top, band_width, band_height);
+                cairo_clip(cr);
+                const double width = 0.25 * band.period;
+                if (band.along_x) {
+                    const double centre = band_left + 0.5 * band_width;
+                    const int n = static_cast<int>(std::ceil(0.5 * band_width / band.period)) + 1;
+                    for (int k = -n; k <= n; ++k)
+                        cairo_rectangle(cr, centre + k * band.period - 0.5 * width, band.top, width, band_height);
+                } else {
+                    const double centre = band.top + 0.5 * band_height;
+                    const int n = static_cast<int>(std::ceil(0.5 * band_height / band.period)) + 1;
+                    for (int k = -n; k <= n; ++k)
+                        cairo_rectangle(cr, band_left, centre + k * band.period - 0.5 * width, band_width, width);
+                }
+                cairo_fill(cr);
+                cairo_restore(cr);
+            }
+            cairo_show_page(cr);
+        }
+        owner.reset();
+        cairo_surface_finish(surface.get());
+        if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS)
+            throw IoError(SourceLocation{out.string()}, std::string("cannot write calibration sheet: ") +
+                                                            cairo_status_to_string(cairo_surface_status(surface.get())));
+    }
+    if (std::fclose(file.release()) != 0)
+        throw IoError(SourceLocation{out.string()}, "cannot write calibration sheet: closing the file failed");
+    move_into_place(temporary, out);
+    cleanup.path.clear();
+    return bands;
+}
+
+}  // namespace rfd::print

@@ -1,0 +1,64 @@
+#pragma once
+// The pitch-calibration sheet of thesis 8.4.1: "we have printed patterns for a set of
+// hypotheses and then chosen the distance which minimized the Moire effects that occur
+// when rotating the lens array on top of the pattern."
+//
+// For every pitch hypothesis p the sheet has a band of lines with that period, labelled
+// with p: x bands carry vertical lines every p (they measure the lenslet spacing along a
+// row), y bands horizontal lines every row spacing (they measure the spacing of the rows).
+// A lens array of true pitch P laid on a band of period p, focused on it, shows each
+// lenslet's view of the line at an offset growing by p - P per lenslet: fringes of period
+// P p / |p - P| (the moire magnifier). The band where the fringes are widest, or vanish so
+// the band looks even, has p = P. Lines are a quarter of the period wide.
+//
+// Hexagonal arrays: rows lie pitch sqrt(3)/2 apart, so the y band of pitch hypothesis p has
+// lines every p sqrt(3)/2 and is labelled with both numbers. Rectangular arrays have their
+// own y range (default: the x range scaled by pitch_y / pitch_x).
+//
+// Page frame as layout.hpp (mm, y down). Bands run across the array's width (or the
+// printable width, if narrower); as many pages as the bands need.
+//
+// Example: write_moire_pdf("calib.pdf", design, printer, {parse_pitch_range("2.34:2.38:9", "--pitch")});
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "optics/design.hpp"
+#include "print/printer.hpp"
+
+namespace rfd::print {
+
+/// `steps` pitches from `from` to `to`, both included, evenly spaced (mm).
+struct PitchRange {
+    double from = 0.0, to = 0.0;
+    int steps = 0;
+    std::vector<double> values() const;
+};
+
+/// Parses "FROM:TO:STEPS" (0 < FROM < TO, 2 <= STEPS <= 200). Throws InputError naming
+/// `option` and saying what was expected.
+PitchRange parse_pitch_range(const std::string& text, const std::string& option);
+
+struct MoireOptions {
+    PitchRange x;                  ///< pitch along a row, mm
+    std::optional<PitchRange> y;   ///< rectangular arrays: row spacing; default x scaled
+    double band_height = 10.0;     ///< mm
+};
+
+/// One band of the sheet, for the report and the tests.
+struct MoireBand {
+    bool along_x = true;   ///< vertical lines (x pitch) or horizontal lines (row spacing)
+    double pitch = 0.0;    ///< the hypothesis, mm
+    double period = 0.0;   ///< line period printed, mm (row spacing for y bands)
+    int page = 0;          ///< 0-based
+    double top = 0.0;      ///< band's top edge, page frame mm
+};
+
+/// Writes the calibration PDF (temporary file + rename) and returns its bands.
+/// Throws InputError when the design has no lenslet array, IoError when it cannot write.
+std::vector<MoireBand> write_moire_pdf(const std::filesystem::path& out, const optics::Design& design,
+                                       const PrinterProfile& printer, const MoireOptions& options);
+
+}  // namespace rfd::print

@@ -1,0 +1,103 @@
+#include "print/printer.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/config.hpp"
+#include "core/error.hpp"
+
+namespace rfd::print {
+namespace {
+
+PrinterProfile read_profile(ConfigTable& root) {
+    PrinterProfile p;
+    p.file = root.file();
+    {
+        ConfigTable t = root.table("printer");
+        p.name = t.string("name");
+        p.dpi_x = Dpi(t.number("dpi_x", 1.0, 100000.0));
+        p.dpi_y = Dpi(t.number("dpi_y", 1.0, 100000.0));
+        p.gamma = t.number("gamma", 0.1, 10.0);
+        p.max_density = t.number("max_density", 0.01, 6.0);
+        p.black_level = t.number("black_level", 0.0, 0.99);
+        p.sheets = static_cast<int>(t.optional_integer("sheets", 1, 2).value_or(1));
+        if (p.black_level < p.ink_transmittance())
+            t.fail("black_level", "black level " + std::to_string(p.black_level) +
+                                      " is darker than full ink can print (max_density " +
+                                      std::to_string(p.max_density) + " gives transmittance " +
+                                      std::to_string(p.ink_transmittance()) + ")");
+        t.finish();
+    }
+    if (auto t = root.optional_table("paper")) {
+        p.paper.name = t->string("name");
+        p.paper.width = t->number("width_mm", 10.0, 5000.0);
+        p.paper.height = t->number("height_mm", 10.0, 50000.0);
+        p.paper.margin = t->number("margin_mm", 0.0, 100.0);
+        if (2 * p.paper.margin >= std::min(p.paper.width, p.paper.height))
+            t->fail("margin_mm", "margins leave no printable area on " + p.paper.name);
+        t->finish();
+    }
+    root.finish();
+    return p;
+}
+
+}  // namespace
+
+double PrinterProfile::ink_transmittance() const { return std::pow(10.0, -max_density); }
+
+double PrinterProfile::transmittance(double v) const {
+    v = std::clamp(v, 0.0, 1.0);
+    const double ink = ink_transmittance();
+    return ink + (1.0 - ink) * std::pow(1.0 - v, gamma);
+}
+
+double PrinterProfile::printer_value(double t) const {
+    const double ink = ink_transmittance();
+    t = std::clamp(t, ink, 1.0);
+    return std::clamp(1.0 - std::pow((t - ink) / (1.0 - ink), 1.0 / gamma), 0.0, 1.0);
+}
+
+std::filesystem::path bundled_printer_folder() { return RFD_PRINTERS_DIR; }
+
+PrinterProfile load_printer(const std::string& name_or_path) {
+    std::filesystem::path path(name_or_path);
+    std::error_code ec;
+    // A bare name without a folder or extension is a bundled profile.
+    if (!std::filesystem::exists(path, ec) && !path.has_parent_path() && !path.has_extension())
+        path = bundled_printer_folder() / (name_or_path + ".toml");
+    if (!std::filesystem::is_regular_file(path, ec)) {
+        std::string known;
+        for (const auto& entry : std::filesystem::directory_iterator(bundled_printer_folder(), ec))
+            if (entry.path().extension() == ".toml")
+                known += (known.empty() ? "" : ", ") + entry.path().stem().string();
+        throw IoError(SourceLocation{name_or_path},
+                      "cannot open printer profile: no such file or bundled profile (bundled: " +
+                          known + ")");
+    }
+    ConfigTable root = ConfigTable::parse_file(path);
+    return read_profile(root);
+}
+
+PrinterProfile parse_printer(const std::string& toml_text, const std::string& name) {
+    ConfigTable root = ConfigTable::parse_string(toml_text, name);
+    return read_profile(root);
+}
+
+double ToneMap::stack_transmittance(double pattern_value) const {
+    RFD_CHECK(sheets == 1 || sheets == 2);
+    RFD_CHECK(brightness > 0.0 && white > 0.0);
+    const double t = std::clamp(brightness * pattern_value / white, 0.0, 1.0);
+    const double black = std::pow(printer.black_level, sheets);
+    return black + (1.0 - black) * t;
+}
+
+double ToneMap::sheet_transmittance(double pattern_value) const {
+    const double stack = stack_transmittance(pattern_value);
+    return sheets == 1 ? stack : std::sqrt(stack);
+}
+
+double ToneMap::printer_value(double pattern_value) const {
+    return printer.printer_value(sheet_transmittance(pattern_value));
+}
+
+}  // namespace rfd::print

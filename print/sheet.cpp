@@ -1,0 +1,388 @@
+#include "print/sheet.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <memory>
+#include <vector>
+
+#include <OpenImageIO/imageio.h>
+#include <cairo-pdf.h>
+#include <cairo.h>
+
+#include "core/error.hpp"
+#include "core/files.hpp"
+#include "core/parallel.hpp"
+#include "core/progress.hpp"
+
+namespace rfd::print {
+namespace {
+
+using SurfacePtr = std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)>;
+using ContextPtr = std::unique_ptr<cairo_t, decltype(&cairo_destroy)>;
+
+constexpr int kMaskChunk = 8192;  // columns of one Cairo mask surface (Cairo stops at 32767)
+
+std::string lower_extension(const std::filesystem::path& path) {
+    std::string ext = path.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return ext;
+}
+
+std::string format_number(double value) {
+    char text[64];
+    std::snprintf(text, sizeof text, "%g", value);
+    return text;
+}
+
+// A positive finite number from a pattern attribute, or `fallback` when it is absent.
+double attribute_number(const patterns::PatternFileInfo& info, const std::string& key,
+                        const std::filesystem::path& file, double fallback, bool allow_zero) {
+    const auto it = info.attributes.find(key);
+    if (it == info.attributes.end()) return fallback;
+    std::size_t used = 0;
+    double value = std::nan("");
+    try {
+        value = std::stod(it->second, &used);
+    } catch (const std::exception&) {
+        used = 0;
+    }
+    if (used != it->second.size() || !std::isfinite(value) || value < 0.0 || (!allow_zero && value == 0.0))
+        throw InputError(SourceLocation{file.string(), 0, 0, "rfd:" + key},
+                         "expected a " + std::string(allow_zero ? "non-negative" : "positive") +
+                             " number, got '" + it->second + "'");
+    return value;
+}
+
+// Removes the temporary file unless released: nothing half-written survives an exception.
+class TemporaryFile {
+public:
+    explicit TemporaryFile(std::filesystem::path path) : path_(std::move(path)) {}
+    ~TemporaryFile() {
+        if (!path_.empty()) {
+            std::error_code ec;
+            std::filesystem::remove(path_, ec);
+        }
+    }
+    TemporaryFile(const TemporaryFile&) = delete;
+    TemporaryFile& operator=(const TemporaryFile&) = delete;
+    const std::filesystem::path& path() const { return path_; }
+    void release() { path_.clear(); }
+
+private:
+    std::filesystem::path path_;
+};
+
+// Printer codes (1 - v, three channels) of one pattern row of `channels` channels.
+void tone_row(const float* pattern, int width, int channels, const ToneMap& tone, float* codes) {
+    for (int x = 0; x < width; ++x)
+        for (int c = 0; c < 3; ++c) {
+            const float p = pattern[static_cast<std::size_t>(x) * static_cast<std::size_t>(channels) +
+                                    static_cast<std::size_t>(channels == 1 ? 0 : c)];
+            codes[3 * static_cast<std::size_t>(x) + static_cast<std::size_t>(c)] =
+                static_cast<float>(1.0 - tone.printer_value(p));
+        }
+}
+
+// Renders the clear and ink masks of page rows [y0, y0 + rows) with Cairo, in column chunks.
+class MaskRenderer {
+public:
+    MaskRenderer(const SheetLayout& layout, int rows)
+        : layout_(layout), rows_(rows),
+          clear_(static_cast<std::size_t>(layout.page_width) * static_cast<std::size_t>(rows)),
+          ink_(clear_.size()) {}
+
+    void render(int y0) {
+        std::fill(clear_.begin(), clear_.end(), 0);
+        std::fill(ink_.begin(), ink_.end(), 0);
+        for (int x0 = 0; x0 < layout_.page_width; x0 += kMaskChunk) {
+            const int width = std::min(kMaskChunk, layout_.page_width - x0);
+            render_chunk(x0, y0, width, /*clear=*/true);
+            render_chunk(x0, y0, width, /*clear=*/false);
+        }
+    }
+    /// Coverage in [0, 255] of page dot (x, y0 + r).
+    std::uint8_t clear(int x, int r) const { return clear_[index(x, r)]; }
+    std::uint8_t ink(int x, int r) const { return ink_[index(x, r)]; }
+
+private:
+    std::size_t index(int x, int r) const {
+        return static_cast<std::size_t>(r) * static_cast<std::size_t>(layout_.page_width) +
+               static_cast<std::size_t>(x);
+    }
+    void render_chunk(int x0, int y0, int width, bool clear) {
+        SurfacePtr surface(cairo_image_surface_create(CAIRO_FORMAT_A8, width, rows_), &cairo_surface_destroy);
+        ContextPtr cr(cairo_create(surface.get()), &cairo_destroy);
+        RFD_CHECK(cairo_status(cr.get()) == CAIRO_STATUS_SUCCESS);
+        // User units: page-frame mm; device: dots of this chunk.
+        cairo_matrix_t m;
+        cairo_matrix_init(&m, 1.0 / layout_.dot_x, 0.0, 0.0, 1.0 / layout_.dot_y, -x0, -y0);
+        cairo_set_matrix(cr.get(), &m);
+        cairo_set_source_rgba(cr.get(), 0, 0, 0, 1);
+        if (clear) {
+            trace_clear_regions(cr.get(), layout_);
+            cairo_fill(cr.get());
+        } else {
+            draw_marks(cr.get(), layout_);
+        }
+        cairo_surface_flush(surface.get());
+        const unsigned char* data = cairo_image_surface_get_data(surface.get());
+        const int stride = cairo_image_surface_get_stride(surface.get());
+        std::vector<std::uint8_t>& target = clear ? clear_ : ink_;
+        for (int r = 0; r < rows_; ++r)
+            std::copy(data + static_cast<std::ptrdiff_t>(r) * stride, data + static_cast<std::ptrdiff_t>(r) * stride + width,
+                      target.begin() + static_cast<std::ptrdiff_t>(index(x0, r)));
+    }
+
+    const SheetLayout& layout_;
+    int rows_;
+    std::vector<std::uint8_t> clear_, ink_;
+};
+
+void write_tiff(const std::filesystem::path& out, const SheetLayout& layout, const ToneMap& tone,
+                patterns::PatternReader& reader, const SheetOptions& options) {
+    const int W = layout.page_width, H = layout.page_height;
+    const int channels = reader.info().channels;
+    const patterns::PatternGeometry& g = layout.pattern;
+    TemporaryFile temporary(temporary_sibling(out));
+    auto output = OIIO::ImageOutput::create(temporary.path().string());
+    if (!output) throw IoError(SourceLocation{out.string()}, "cannot write sheet: " + OIIO::geterror());
+    const OIIO::TypeDesc format = options.bits == 16 ? OIIO::TypeDesc::UINT16 : OIIO::TypeDesc::UINT8;
+    OIIO::ImageSpec spec(W, H, 3, format);
+    spec.attribute("XResolution", static_cast<float>(layout.dpi_x));
+    spec.attribute("YResolution", static_cast<float>(layout.dpi_y));
+    spec.attribute("ResolutionUnit", "in");
+    // Pixel width over height: OpenImageIO's TIFF writer stores YResolution as
+    // XResolution times this, and drops it without (as patterns/raster.cpp).
+    spec.attribute("PixelAspectRatio", static_cast<float>(layout.dpi_y / layout.dpi_x));
+    spec.attribute("DateTime", "1970:01:01 00:00:00");  // byte-identical reruns
+    spec.attribute("compression", "zip");
+    std::string description;
+    for (const std::string& line : layout.label) description += line + "\n";
+    spec.attribute("ImageDescription", description);
+    if (!output->open(temporary.path().string(), spec))
+        throw IoError(SourceLocation{out.string()}, "cannot write sheet: " + output->geterror());
+
+    const int strip = std::max(1, std::min(options.rows_per_strip, H));
+    const std::size_t row_codes = 3 * static_cast<std::size_t>(W);
+    std::vector<float> pattern_rows(static_cast<std::size_t>(g.width) * static_cast<std::size_t>(channels) *
+                                    static_cast<std::size_t>(strip));
+    std::vector<float> codes(row_codes * static_cast<std::size_t>(strip));
+    MaskRenderer masks(layout, strip);
+    Progress progress("sheet rows", static_cast<std::size_t>(H));
+    for (int y0 = 0; y0 < H; y0 += strip) {
+        const int y1 = std::min(H, y0 + strip);
+        // Pattern rows inside this strip.
+        const int p0 = std::clamp(y0 - layout.offset_y, 0, g.height);
+        const int p1 = std::clamp(y1 - layout.offset_y, 0, g.height);
+        if (p0 < p1) reader.read_rows(p0, p1, pattern_rows);
+        masks.render(y0);
+        parallel_for_chunks(static_cast<std::size_t>(y1 - y0), 1, [&](std::size_t begin, std::size_t end) {
+            std::vector<float> front(row_codes);
+            for (std::size_t r = begin; r < end; ++r) {
+                const int y = y0 + static_cast<int>(r);
+                std::fill(front.begin(), front.end(), 1.0f);  // bare film
+                const int py = y - layout.offset_y;
+                if (py >= 0 && py < g.height)
+                    tone_row(pattern_rows.data() + static_cast<std::size_t>(py - p0) *
+                                                       static_cast<std::size_t>(g.width) *
+                                                       static_cast<std::size_t>(channels),
+                             g.width, channels, tone, front.data() + 3 * static_cast<std::size_t>(layout.offset_x));
+                for (int x = 0; x < W; ++x) {
+                    const float clear = masks.clear(x, static_cast<int>(r)) / 255.0f;
+                    const float ink = masks.ink(x, static_cast<int>(r)) / 255.0f;
+                    float* code = front.data() + 3 * static_cast<std::size_t>(x);
+                    for (int c = 0; c < 3; ++c) {
+                        float v = 1.0f - code[c];
+                        v *= 1.0f - clear;
+                        v += (1.0f - v) * ink;
+                        code[c] = 1.0f - v;
+                    }
+                }
+                float* row = codes.data() + r * row_codes;
+                for (int x = 0; x < W; ++x) {
+                    const int source = layout.mirror ? W - 1 - x : x;
+                    for (int c = 0; c < 3; ++c)
+                        row[3 * static_cast<std::size_t>(x) + static_cast<std::size_t>(c)] =
+                            front[3 * static_cast<std::size_t>(source) + static_cast<std::size_t>(c)];
+                }
+            }
+        });
+        if (!output->write_scanlines(y0, y1, 0, OIIO::TypeDesc::FLOAT, codes.data()))
+            throw IoError(SourceLocation{out.string()}, "cannot write sheet: " + output->geterror());
+        progress.advance(static_cast<std::size_t>(y1 - y0));
+    }
+    if (!output->close()) throw IoError(SourceLocation{out.string()}, "cannot write sheet: " + output->geterror());
+    progress.finish();
+    move_into_place(temporary.path(), out);
+    temporary.release();
+}
+
+cairo_status_t write_to_stream(void* closure, const unsigned char* data, unsigned int length) {
+    auto* file = static_cast<std::FILE*>(closure);
+    return std::fwrite(data, 1, length, file) == length ? CAIRO_STATUS_SUCCESS : CAIRO_STATUS_WRITE_ERROR;
+}
+
+void write_pdf(const std::filesystem::path& out, const SheetLayout& layout, const ToneMap& tone,
+               patterns::PatternReader& reader) {
+    constexpr double kPointsPerMm = 72.0 / kMillimetresPerInch;
+    const int channels = reader.info().channels;
+    const patterns::PatternGeometry& g = layout.pattern;
+    TemporaryFile temporary(temporary_sibling(out));
+    std::unique_ptr<std::FILE, decltype(&std::fclose)> file(std::fopen(temporary.path().c_str(), "wb"), &std::fclose);
+    if (!file) throw IoError(SourceLocation{out.string()}, "cannot write sheet: cannot create a file there");
+    {
+        SurfacePtr surface(cairo_pdf_surface_create_for_stream(write_to_stream, file.get(),
+                                                               layout.paper.width * kPointsPerMm,
+                                                               layout.paper.height * kPointsPerMm),
+                           &cairo_surface_destroy);
+        // Fixed dates: identical inputs give identical files.
+        cairo_pdf_surface_set_metadata(surface.get(), CAIRO_PDF_METADATA_CREATE_DATE, "1970-01-01T00:00:00Z");
+        cairo_pdf_surface_set_metadata(surface.get(), CAIRO_PDF_METADATA_MOD_DATE, "1970-01-01T00:00:00Z");
+        cairo_pdf_surface_set_metadata(surface.get(), CAIRO_PDF_METADATA_TITLE, layout.label.front().c_str());
+        ContextPtr cr(cairo_create(surface.get()), &cairo_destroy);
+        cairo_scale(cr.get(), kPointsPerMm, kPointsPerMm);  // user units: page-frame mm
+        if (layout.mirror) {
+            cairo_translate(cr.get(), layout.paper.width, 0.0);
+            cairo_scale(cr.get(), -1.0, 1.0);
+        }
+        // The pattern, a band of tiles at a time; each tile its own image at the true dot size.
+        const std::size_t row_floats = static_cast<std::size_t>(g.width) * static_cast<std::size_t>(channels);
+        constexpr int kReadRows = 64;
+        std::vector<float> rows(row_floats * kReadRows);
+        std::vector<float> codes(3 * static_cast<std::size_t>(g.width));
+        Progress progress("sheet rows", static_cast<std::size_t>(g.height));
+        for (int ty = 0; ty < g.height; ty += kPdfTile) {
+            const int th = std::min(kPdfTile, g.height - ty);
+            std::vector<SurfacePtr> tiles;
+            for (int tx = 0; tx < g.width; tx += kPdfTile)
+                tiles.emplace_back(cairo_image_surface_create(CAIRO_FORMAT_RGB24, std::min(kPdfTile, g.width - tx), th),
+                                   &cairo_surface_destroy);
+            for (int r0 = 0; r0 < th; r0 += kReadRows) {
+                const int r1 = std::min(th, r0 + kReadRows);
+                reader.read_rows(ty + r0, ty + r1, rows);
+                for (int r = r0; r < r1; ++r) {
+                    tone_row(rows.data() + static_cast<std::size_t>(r - r0) * row_floats, g.width, channels, tone,
+                             codes.data());
+                    for (std::size_t t = 0; t < tiles.size(); ++t) {
+                        cairo_surface_t* tile = tiles[t].get();
+                        auto* pixels = reinterpret_cast<std::uint32_t*>(
+                            cairo_image_surface_get_data(tile) +
+                            static_cast<std::ptrdiff_t>(r) * cairo_image_surface_get_stride(tile));
+                        const int x0 = static_cast<int>(t) * kPdfTile;
+                        for (int x = 0; x < cairo_image_surface_get_width(tile); ++x) {
+                            std::uint32_t pixel = 0;
+                            for (int c = 0; c < 3; ++c)
+                                pixel = pixel << 8 |
+                                        static_cast<std::uint32_t>(std::lround(
+                                            255.0f * codes[3 * static_cast<std::size_t>(x0 + x) + static_cast<std::size_t>(c)]));
+                            pixels[x] = pixel;
+                        }
+                    }
+                }
+                progress.advance(static_cast<std::size_t>(r1 - r0));
+            }
+            for (std::size_t t = 0; t < tiles.size(); ++t) {
+                cairo_surface_mark_dirty(tiles[t].get());
+                const int x0 = static_cast<int>(t) * kPdfTile;
+                cairo_save(cr.get());
+                cairo_translate(cr.get(), (layout.offset_x + x0) * layout.dot_x, (layout.offset_y + ty) * layout.dot_y);
+                cairo_scale(cr.get(), layout.dot_x, layout.dot_y);
+                cairo_set_source_surface(cr.get(), tiles[t].get(), 0.0, 0.0);
+                cairo_pattern_set_filter(cairo_get_source(cr.get()), CAIRO_FILTER_NEAREST);
+                cairo_rectangle(cr.get(), 0.0, 0.0, cairo_image_surface_get_width(tiles[t].get()), th);
+                cairo_fill(cr.get());
+                cairo_restore(cr.get());
+            }
+        }
+        progress.finish();
+        cairo_set_source_rgb(cr.get(), 1, 1, 1);
+        trace_clear_regions(cr.get(), layout);
+        cairo_fill(cr.get());
+        cairo_set_source_rgb(cr.get(), 0, 0, 0);
+        draw_marks(cr.get(), layout);
+        cairo_show_page(cr.get());
+        cr.reset();
+        cairo_surface_finish(surface.get());
+        if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS)
+            throw IoError(SourceLocation{out.string()},
+                          std::string("cannot write sheet: ") + cairo_status_to_string(cairo_surface_status(surface.get())));
+    }
+    if (std::fclose(file.release()) != 0)
+        throw IoError(SourceLocation{out.string()}, "cannot write sheet: closing the file failed");
+    move_into_place(temporary.path(), out);
+    temporary.release();
+}
+
+}  // namespace
+
+patterns::PatternGeometry check_pattern(const optics::Design& design, const PrinterProfile& printer,
+                                        const std::filesystem::path& pattern_file,
+                                        const patterns::PatternFileInfo& info) {
+    const double margin = attribute_number(info, "margin_mm", pattern_file, 0.0, /*allow_zero=*/true);
+    const patterns::PatternGeometry expected =
+        patterns::pattern_geometry(design, printer.dpi_x, printer.dpi_y, margin);
+    const auto dpi_differs = [](double file_dpi, Dpi dpi) {
+        return file_dpi > 0.0 && std::abs(file_dpi - dpi.value) > 1e-3 * dpi.value;
+    };
+    if (info.width != expected.width || info.height != expected.height ||
+        dpi_differs(info.dpi_x, printer.dpi_x) || dpi_differs(info.dpi_y, printer.dpi_y)) {
+        std::string file_size = std::to_string(info.width) + " x " + std::to_string(info.height) + " dots";
+        if (info.dpi_x > 0.0)
+            file_size += " at " + format_number(info.dpi_x) + " x " + format_number(info.dpi_y) + " dpi";
+        throw InputError(SourceLocation{pattern_file.string()},
+                         "the pattern is " + file_size + ", but '" + design.name + "' at " +
+                             format_number(printer.dpi_x.value) + " x " + format_number(printer.dpi_y.value) +
+                             " dpi (printer '" + printer.name + "') needs " + std::to_string(expected.width) +
+                             " x " + std::to_string(expected.height) +
+                             " dots: encode the pattern at the printer's resolution");
+    }
+    return expected;
+}
+
+SheetReport write_sheet(const std::filesystem::path& out, const optics::Design& design,
+                        const PrinterProfile& printer, const std::filesystem::path& pattern_file,
+                        const SheetOptions& options) {
+    const std::string ext = lower_extension(out);
+    const bool pdf = ext == ".pdf";
+    if (!pdf && ext != ".tif" && ext != ".tiff")
+        throw InputError(SourceLocation{out.string(), 0, 0, "--out"},
+                         "unknown sheet extension '" + ext + "' (expected .tif, .tiff or .pdf)");
+    if (!(options.brightness > 0.0) || !std::isfinite(options.brightness))
+        throw InputError(SourceLocation{"", 0, 0, "--brightness"},
+                         "expected a positive number, got " + format_number(options.brightness));
+    if (options.sheets != 0 && options.sheets != 1 && options.sheets != 2)
+        throw InputError(SourceLocation{"", 0, 0, "--sheets"},
+                         "expected 1 or 2, got " + std::to_string(options.sheets));
+    if (options.bits != 8 && options.bits != 16)
+        throw InputError(SourceLocation{"", 0, 0, "--bits"}, "expected 8 or 16, got " + std::to_string(options.bits));
+    patterns::PatternReader reader(pattern_file);
+    if (reader.info().channels != 1 && reader.info().channels != 3)
+        throw InputError(SourceLocation{pattern_file.string()},
+                         "expected a pattern with 1 (grey) or 3 (RGB) channels, got " +
+                             std::to_string(reader.info().channels));
+    const patterns::PatternGeometry geometry = check_pattern(design, printer, pattern_file, reader.info());
+
+    SheetReport report;
+    report.pattern_channels = reader.info().channels;
+    report.tone.printer = printer;
+    report.tone.brightness = options.brightness;
+    report.tone.white = attribute_number(reader.info(), "white", pattern_file, 1.0, /*allow_zero=*/false);
+    report.tone.sheets = options.sheets == 0 ? printer.sheets : options.sheets;
+    SheetInfo info;
+    info.pattern_name = pattern_file.filename().string();
+    info.brightness = options.brightness;
+    info.sheets = report.tone.sheets;
+    info.mirror = options.mirror;
+    report.layout = layout_sheet(design, printer, geometry, info);
+    if (pdf)
+        write_pdf(out, report.layout, report.tone, reader);
+    else
+        write_tiff(out, report.layout, report.tone, reader, options);
+    return report;
+}
+
+}  // namespace rfd::print

@@ -1,0 +1,62 @@
+#pragma once
+// Printed sheets (thesis 8.4, 8.4.1): a pattern file, tone-mapped for a printer, on its
+// page with registration markers, crop marks, ruler and label (layout.hpp), written as
+//  - TIFF: the whole page at the printer's resolution, RGB, 8 or 16 bits per channel,
+//    zip-compressed, streamed a strip of rows at a time (memory stays at a few strips
+//    whatever the page's size), XResolution/YResolution = the printer's dpi; the codes are
+//    the printer's codes 1 - v (printer.hpp), not sRGB-encoded light;
+//  - PDF: a page of the paper's exact size (points = mm / 25.4 * 72), the pattern as
+//    tiles of at most kPdfTile x kPdfTile dots each, placed edge to edge at the true dot
+//    size (x and y scaled separately) and drawn with nearest-neighbour filtering; the marks
+//    as vectors. Cairo's PDF writer keeps the page's images until the page is finished,
+//    so a PDF needs memory for the whole raster (4 bytes a dot): use TIFF for full-page
+//    patterns at 2880 x 1440 dpi.
+// Both are written to a temporary sibling and renamed: nothing half-written survives a
+// failure. Identical inputs give byte-identical files (no time stamps).
+//
+// --mirror writes the back sheet: the whole page mirrored left-right, so that when the
+// sheet is flipped and laid behind the front its markers fall on the same lenslets.
+//
+// Example: write_sheet("sheet.tif", design, printer, "pattern.tif", {.brightness = 1.2});
+
+#include <filesystem>
+#include <string>
+
+#include "optics/design.hpp"
+#include "print/layout.hpp"
+#include "print/printer.hpp"
+
+namespace rfd::print {
+
+inline constexpr int kPdfTile = 2048;  ///< largest PDF image tile side, dots (Cairo stops at 32767)
+
+struct SheetOptions {
+    double brightness = 1.0;  ///< scales the pattern before clamping, > 0
+    int sheets = 0;           ///< 1 or 2; 0 takes the printer profile's default
+    bool mirror = false;      ///< the mirrored back sheet
+    int bits = 8;             ///< TIFF bits per channel, 8 or 16
+    int rows_per_strip = 64;  ///< TIFF rows composed at once
+};
+
+/// What write_sheet did, for the command's report.
+struct SheetReport {
+    SheetLayout layout;
+    ToneMap tone;
+    int pattern_channels = 0;
+};
+
+/// Checks that `pattern_file` is `design`'s raster at the printer's dpi (size and, when the
+/// file has one, resolution; with the file's rfd:margin_mm if any) and returns that raster.
+/// Throws InputError naming the file and both sizes otherwise.
+patterns::PatternGeometry check_pattern(const optics::Design& design, const PrinterProfile& printer,
+                                        const std::filesystem::path& pattern_file,
+                                        const patterns::PatternFileInfo& info);
+
+/// Writes the sheet; the format follows `out`'s extension (.tif/.tiff or .pdf). Throws
+/// InputError for bad options, a pattern that does not match the design at the printer's
+/// dpi or does not fit the paper, IoError when a file cannot be read or written.
+SheetReport write_sheet(const std::filesystem::path& out, const optics::Design& design,
+                        const PrinterProfile& printer, const std::filesystem::path& pattern_file,
+                        const SheetOptions& options);
+
+}  // namespace rfd::print

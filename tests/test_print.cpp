@@ -1,0 +1,454 @@
+// print/: printer profiles, the tone mapping's inversion and two-sheet product, sheets read
+// back (resolution tags, markers found where the design puts the corner lenslets, the
+// mirror, determinism), PDF page size and tiling, the moire sheet, and bad input.
+
+#include <cmath>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+
+#include <OpenImageIO/imageio.h>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "optics/analysis.hpp"
+#include "optics/design.hpp"
+#include "patterns/raster.hpp"
+#include "print/moire.hpp"
+#include "print/printer.hpp"
+#include "print/sheet.hpp"
+#include "tests/support/error_of.hpp"
+#include "tests/support/temp_dir.hpp"
+
+namespace rfd::print {
+namespace {
+
+using ::testing::HasSubstr;
+using ::testing::MatchesRegex;
+using rfd::testing::error_of;
+using rfd::testing::TempDir;
+
+const std::filesystem::path kDesigns = std::filesystem::path(RFD_SOURCE_DIR) / "designs";
+
+// A small test printer: non-square dots, a paper just big enough for Design II and its marks.
+std::string small_printer_toml(double dpi_x, double dpi_y, double paper_w = 50, double paper_h = 60) {
+    std::ostringstream s;
+    s << "[printer]\nname = \"test printer\"\ndpi_x = " << dpi_x << "\ndpi_y = " << dpi_y
+      << "\ngamma = 2.2\nmax_density = 2.0\nblack_level = 0.012\nsheets = 2\n"
+      << "[paper]\nname = \"test\"\nwidth_mm = " << paper_w << "\nheight_mm = " << paper_h << "\nmargin_mm = 1\n";
+    return s.str();
+}
+
+class Uniform final : public patterns::PatternSource {
+public:
+    Uniform(patterns::PatternGeometry g, float value) : g_(g), value_(value) {}
+    const patterns::PatternGeometry& geometry() const override { return g_; }
+    int channels() const override { return 1; }
+    void render_row(int, std::span<float> out) const override { std::fill(out.begin(), out.end(), value_); }
+
+private:
+    patterns::PatternGeometry g_;
+    float value_;
+};
+
+struct Page {
+    int width = 0, height = 0;
+    OIIO::ImageSpec spec;
+    std::vector<std::uint8_t> pixels;  // RGB
+    int code(int x, int y, int c = 0) const {
+        return pixels[(static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)) * 3 +
+                      static_cast<std::size_t>(c)];
+    }
+};
+
+Page read_page(const std::filesystem::path& path) {
+    auto in = OIIO::ImageInput::open(path.string());
+    EXPECT_TRUE(in) << OIIO::geterror();
+    Page page;
+    page.spec = in->spec();
+    page.width = page.spec.width;
+    page.height = page.spec.height;
+    page.pixels.resize(static_cast<std::size_t>(page.width) * static_cast<std::size_t>(page.height) * 3);
+    EXPECT_TRUE(in->read_image(0, 0, 0, 3, OIIO::TypeDesc::UINT8, page.pixels.data()));
+    return page;
+}
+
+std::string read_bytes(const std::filesystem::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// Writes a uniform pattern of `value` for `design` at the printer's dpi.
+std::filesystem::path write_test_pattern(const TempDir& dir, const optics::Design& design,
+                                         const PrinterProfile& printer, float value,
+                                         const patterns::PatternAttributes& attributes = {{"white", "0.8"}}) {
+    const auto g = patterns::pattern_geometry(design, printer.dpi_x, printer.dpi_y);
+    const auto path = dir / "pattern.exr";
+    patterns::write_pattern(path, Uniform(g, value), attributes);
+    return path;
+}
+
+// ----------------------------------------------------------------------------- tone mapping
+
+TEST(PrinterProfile, ForwardModelInvertsExactly) {
+    const PrinterProfile p = parse_printer(small_printer_toml(720, 720), "test.toml");
+    const double ink = std::pow(10.0, -2.0);
+    EXPECT_DOUBLE_EQ(p.ink_transmittance(), ink);
+    EXPECT_DOUBLE_EQ(p.transmittance(0.0), 1.0);   // bare film
+    EXPECT_NEAR(p.transmittance(1.0), ink, 1e-15); // full ink: 10^-D
+    for (int k = 0; k <= 100; ++k) {
+        const double v = k / 100.0;
+        EXPECT_NEAR(p.printer_value(p.transmittance(v)), v, 1e-9) << v;
+        const double t = ink + (1.0 - ink) * k / 100.0;
+        EXPECT_NEAR(p.transmittance(p.printer_value(t)), t, 1e-12) << t;
+        // The model of the header, written out independently.
+        EXPECT_NEAR(p.transmittance(v), ink + (1 - ink) * std::pow(1 - v, 2.2), 1e-15);
+    }
+    // Out of range asks for the nearest printable value.
+    EXPECT_DOUBLE_EQ(p.printer_value(0.0), 1.0);
+    EXPECT_DOUBLE_EQ(p.printer_value(1.5), 0.0);
+}
+
+TEST(ToneMap, TwoSheetsMultiplyToTheBlackCorrectedTarget) {
+    const PrinterProfile p = parse_printer(small_printer_toml(720, 720), "test.toml");
+    const double b = 0.012;
+    for (const int sheets : {1, 2}) {
+        ToneMap tone{p, 1.5, 0.8, sheets};
+        for (int k = 0; k <= 40; ++k) {
+            const double value = k / 40.0;
+            const double target = std::min(1.0, 1.5 * value / 0.8);
+            const double black = std::pow(b, sheets);
+            const double stack = black + (1 - black) * target;
+            // What the printed sheets transmit, through the forward model, stacked.
+            const double one_sheet = p.transmittance(tone.printer_value(value));
+            EXPECT_NEAR(std::pow(one_sheet, sheets), stack, 1e-12) << sheets << " " << value;
+            EXPECT_NEAR(tone.stack_transmittance(value), stack, 1e-15);
+        }
+        // Black prints the black level per sheet; anything at or above white prints no ink.
+        EXPECT_NEAR(p.transmittance(tone.printer_value(0.0)), b, 1e-12);
+        EXPECT_DOUBLE_EQ(tone.printer_value(1.01 * 0.8 / 1.5), 0.0);
+        EXPECT_DOUBLE_EQ(tone.printer_value(7.0), 0.0);
+    }
+}
+
+// ----------------------------------------------------------------------------- profiles
+
+TEST(PrinterProfile, BundledProfilesLoad) {
+    const PrinterProfile epson = load_printer("epson_stylus_pro_4800");
+    EXPECT_EQ(epson.dpi_x.value, 2880);
+    EXPECT_EQ(epson.dpi_y.value, 1440);
+    EXPECT_EQ(epson.sheets, 2);
+    EXPECT_EQ(epson.paper.width, 210);
+    EXPECT_EQ(epson.paper.height, 297);
+    EXPECT_EQ(load_printer("laser_1200").dpi_y.value, 1200);
+    EXPECT_EQ(load_printer("inkjet_720").dpi_x.value, 720);
+    EXPECT_THAT(error_of([] { load_printer("no_such_printer"); }),
+                HasSubstr("no such file or bundled profile (bundled: "));
+}
+
+TEST(PrinterProfile, BadKeysNameFileLineAndKey) {
+    std::string text = small_printer_toml(720, 720);
+    text.replace(text.find("gamma"), 5, "gama");
+    EXPECT_THAT(error_of([&] { parse_printer(text, "typo.toml"); }),
+                MatchesRegex("typo\\.toml:5:[0-9]+: printer\\.gama: unknown key \\(did you mean 'gamma'\\?\\)"));
+    std::string unknown = small_printer_toml(720, 720) + "colour = 3\n";
+    EXPECT_THAT(error_of([&] { parse_printer(unknown, "unknown.toml"); }),
+                MatchesRegex("unknown\\.toml:14:.*paper\\.colour: unknown key.*"));
+    std::string too_black = small_printer_toml(720, 720);
+    too_black.replace(too_black.find("black_level = 0.012"), 19, "black_level = 0.001");
+    EXPECT_THAT(error_of([&] { parse_printer(too_black, "black.toml"); }),
+                MatchesRegex("black\\.toml:7:.*black_level: black level 0\\.001.* darker than full ink.*"));
+    std::string no_room = small_printer_toml(720, 720, 50, 60);
+    no_room.replace(no_room.find("margin_mm = 1"), 13, "margin_mm = 30");
+    EXPECT_THAT(error_of([&] { parse_printer(no_room, "margin.toml"); }), HasSubstr("no printable area"));
+}
+
+// ----------------------------------------------------------------------------- TIFF sheets
+
+TEST(SheetTiff, ResolutionTagsAndMarkersWhereTheDesignPutsTheCornerLenslets) {
+    TempDir dir;
+    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const PrinterProfile printer = parse_printer(small_printer_toml(1200, 600), "test.toml");
+    const auto pattern = write_test_pattern(dir, design, printer, 0.4f);
+    SheetOptions options;
+    options.rows_per_strip = 37;  // strips that do not divide the page
+    const SheetReport report = write_sheet(dir / "sheet.tif", design, printer, pattern, options);
+    const Page page = read_page(dir / "sheet.tif");
+
+    EXPECT_EQ(page.spec.get_float_attribute("XResolution"), 1200.0f);
+    EXPECT_EQ(page.spec.get_float_attribute("YResolution"), 600.0f);
+    EXPECT_EQ(page.spec.get_string_attribute("ResolutionUnit"), "in");
+    EXPECT_EQ(page.spec.nchannels, 3);
+    EXPECT_EQ(page.spec.format, OIIO::TypeDesc::UINT8);
+    // The page: whole dots inside 50 x 60 mm.
+    const int page_w = static_cast<int>(std::floor(50.0 * 1200 / 25.4)), page_h = static_cast<int>(std::floor(60.0 * 600 / 25.4));
+    ASSERT_EQ(page.width, page_w);
+    ASSERT_EQ(page.height, page_h);
+
+    // Where the design puts the corner lenslets: lattice centres through the raster's
+    // geometry, plus the centring offset.
+    const auto g = patterns::pattern_geometry(design, Dpi{1200}, Dpi{600});
+    const int offset_x = (page_w - g.width) / 2, offset_y = (page_h - g.height) / 2;
+    const optics::DesignOptics optics(design);
+    const optics::Lattice& lattice = optics.lattice();
+    const double inradius = 0.5 * std::min(lattice.pitch_x(), lattice.pitch_y());
+    int found = 0;
+    double worst = 0.0;
+    for (const optics::CellIndex cell : {optics::CellIndex{0, 0}, {lattice.count_x() - 1, 0}, {0, lattice.count_y() - 1},
+                                         {lattice.count_x() - 1, lattice.count_y() - 1}}) {
+        const Eigen::Vector2d centre = lattice.center(cell);
+        const Eigen::Vector2d expected = g.raster_position(centre) + Eigen::Vector2d(offset_x, offset_y);
+        // Centroid of the ink inside the cell's inscribed circle (all of it clear but the marker).
+        double sum = 0, sx = 0, sy = 0;
+        int clear = 0, dots = 0;
+        for (int y = 0; y < page.height; ++y)
+            for (int x = 0; x < page.width; ++x) {
+                const Eigen::Vector2d mm = g.dot_centre(x - offset_x, y - offset_y);
+                if ((mm - centre).norm() > 0.95 * inradius) continue;
+                const double ink = 1.0 - page.code(x, y) / 255.0;
+                sum += ink;
+                sx += ink * x;
+                sy += ink * y;
+                ++dots;
+                clear += page.code(x, y) == 255;
+            }
+        ASSERT_GT(sum, 10.0);
+        EXPECT_NEAR(sx / sum, expected.x(), 0.5) << cell.i << "," << cell.j;
+        EXPECT_NEAR(sy / sum, expected.y(), 0.5) << cell.i << "," << cell.j;
+        worst = std::max({worst, std::abs(sx / sum - expected.x()), std::abs(sy / sum - expected.y())});
+        // The cell is printed clear around the marker's lines: the pattern is replaced.
+        EXPECT_GT(clear, dots / 2);
+        ++found;
+    }
+    EXPECT_EQ(found, 4);
+    RecordProperty("worst_marker_offset_dots", std::to_string(worst));
+    ASSERT_EQ(report.layout.markers.size(), 4u);
+
+    // A pattern dot away from the marks carries the tone-mapped value, computed here from
+    // the model of printer.hpp: t = 0.4 / 0.8 stacked on two sheets.
+    const double b2 = 0.012 * 0.012, ink = 0.01;
+    const double sheet = std::sqrt(b2 + (1 - b2) * 0.5);
+    const double code = std::pow((sheet - ink) / (1 - ink), 1 / 2.2);
+    const Eigen::Vector2d middle = g.raster_position(lattice.center({2, 2}) + Eigen::Vector2d(0.5, 0.3));
+    EXPECT_NEAR(page.code(static_cast<int>(middle.x()) + offset_x, static_cast<int>(middle.y()) + offset_y), 255 * code,
+                0.51);
+    // Bare paper outside the pattern and its marks.
+    EXPECT_EQ(page.code(2, page.height / 2), 255);
+}
+
+TEST(SheetTiff, MirrorIsTheExactLeftRightMirrorAndRerunsAreIdentical) {
+    TempDir dir;
+    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const PrinterProfile printer = parse_printer(small_printer_toml(600, 300), "test.toml");
+    const auto pattern = write_test_pattern(dir, design, printer, 0.3f);
+    write_sheet(dir / "front.tif", design, printer, pattern, {});
+    write_sheet(dir / "front_again.tif", design, printer, pattern, {});
+    SheetOptions mirrored;
+    mirrored.mirror = true;
+    write_sheet(dir / "back.tif", design, printer, pattern, mirrored);
+    EXPECT_EQ(read_bytes(dir / "front.tif"), read_bytes(dir / "front_again.tif"));
+
+    const Page front = read_page(dir / "front.tif"), back = read_page(dir / "back.tif");
+    ASSERT_EQ(front.width, back.width);
+    ASSERT_EQ(front.height, back.height);
+    // The label differs (front / back), so compare everything from the pattern's top row
+    // down: the pattern, markers, crop marks and ruler.
+    const auto g = patterns::pattern_geometry(design, Dpi{600}, Dpi{300});
+    const int label_bottom = (front.height - g.height) / 2;
+    long long differing = 0, inked = 0;
+    for (int y = label_bottom; y < front.height; ++y)
+        for (int x = 0; x < front.width; ++x) {
+            differing += front.code(x, y) != back.code(front.width - 1 - x, y);
+            inked += front.code(x, y) < 128;
+        }
+    EXPECT_EQ(differing, 0);
+    EXPECT_GT(inked, 1000);  // the comparison saw the marks and the pattern
+}
+
+TEST(SheetTiff, SixteenBitsKeepTheResolution) {
+    TempDir dir;
+    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const PrinterProfile printer = parse_printer(small_printer_toml(300, 150), "test.toml");
+    const auto pattern = write_test_pattern(dir, design, printer, 0.5f);
+    SheetOptions options;
+    options.bits = 16;
+    write_sheet(dir / "sheet16.tif", design, printer, pattern, options);
+    auto in = OIIO::ImageInput::open((dir / "sheet16.tif").string());
+    ASSERT_TRUE(in);
+    EXPECT_EQ(in->spec().format, OIIO::TypeDesc::UINT16);
+    EXPECT_EQ(in->spec().get_float_attribute("XResolution"), 300.0f);
+    EXPECT_EQ(in->spec().get_float_attribute("YResolution"), 150.0f);
+}
+
+// ----------------------------------------------------------------------------- PDF sheets
+
+// The four numbers of the PDF's first /MediaBox [x0 y0 x1 y1]. (No std::regex: GCC 12's
+// <regex> trips -Wmaybe-uninitialized under the sanitizer build.)
+double media_box_value(const std::string& pdf, int index) {
+    const std::size_t at = pdf.find("/MediaBox [");
+    EXPECT_NE(at, std::string::npos);
+    if (at == std::string::npos) return -1.0;
+    std::istringstream in(pdf.substr(at + 11, 100));
+    double values[4] = {-1, -1, -1, -1};
+    in >> values[0] >> values[1] >> values[2] >> values[3];
+    return values[index];
+}
+
+// The number after `key` at or after `from`.
+long long number_after(const std::string& pdf, const std::string& key, std::size_t from) {
+    const std::size_t at = pdf.find(key, from);
+    if (at == std::string::npos) return -1;
+    return std::stoll(pdf.substr(at + key.size(), 20));
+}
+
+TEST(SheetPdf, PageIsThePaperSizeAndReRunsAreIdentical) {
+    TempDir dir;
+    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const PrinterProfile printer = parse_printer(small_printer_toml(720, 360), "test.toml");
+    const auto pattern = write_test_pattern(dir, design, printer, 0.5f);
+    write_sheet(dir / "sheet.pdf", design, printer, pattern, {});
+    write_sheet(dir / "again.pdf", design, printer, pattern, {});
+    const std::string pdf = read_bytes(dir / "sheet.pdf");
+    EXPECT_EQ(pdf, read_bytes(dir / "again.pdf"));
+    EXPECT_NEAR(media_box_value(pdf, 2), 50.0 / 25.4 * 72.0, 1e-3);
+    EXPECT_NEAR(media_box_value(pdf, 3), 60.0 / 25.4 * 72.0, 1e-3);
+}
+
+TEST(SheetPdf, RasterWiderThanCairosLimitIsTiled) {
+    TempDir dir;
+    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    // 40000 dpi across: Design II's 24 mm are 37796 dots, beyond Cairo's 32767.
+    const PrinterProfile printer = parse_printer(small_printer_toml(40000, 60), "test.toml");
+    const auto pattern = write_test_pattern(dir, design, printer, 0.5f);
+    const auto g = patterns::pattern_geometry(design, Dpi{40000}, Dpi{60});
+    ASSERT_GT(g.width, 32767);
+    write_sheet(dir / "wide.pdf", design, printer, pattern, {});
+    const std::string pdf = read_bytes(dir / "wide.pdf");
+    // Every image tile, and together they are the raster's width exactly.
+    int tiles = 0;
+    long long width = 0;
+    for (std::size_t at = pdf.find("/Subtype /Image"); at != std::string::npos; at = pdf.find("/Subtype /Image", at + 1)) {
+        ++tiles;
+        const long long tile_width = number_after(pdf, "/Width ", at);
+        width += tile_width;
+        EXPECT_EQ(number_after(pdf, "/Height ", at), g.height);
+        EXPECT_LE(tile_width, kPdfTile);
+    }
+    EXPECT_EQ(tiles, (g.width + kPdfTile - 1) / kPdfTile);
+    EXPECT_EQ(width, g.width);
+}
+
+// ----------------------------------------------------------------------------- bad input
+
+TEST(Sheet, PatternOfTheWrongSizeSaysBothSizes) {
+    TempDir dir;
+    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const PrinterProfile at_720 = parse_printer(small_printer_toml(720, 720), "a.toml");
+    const PrinterProfile at_600 = parse_printer(small_printer_toml(600, 300), "b.toml");
+    const auto pattern = write_test_pattern(dir, design, at_720, 0.5f);
+    const auto g = patterns::pattern_geometry(design, Dpi{600}, Dpi{300});
+    const std::string message = error_of([&] { write_sheet(dir / "sheet.tif", design, at_600, pattern, {}); });
+    EXPECT_THAT(message, HasSubstr("the pattern is 681 x 681 dots at 720 x 720 dpi"));
+    EXPECT_THAT(message, HasSubstr("needs " + std::to_string(g.width) + " x " + std::to_string(g.height) + " dots"));
+    EXPECT_FALSE(std::filesystem::exists(dir / "sheet.tif"));
+}
+
+TEST(Sheet, UnwritableOutputLeavesNothingBehind) {
+    TempDir dir;
+    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const PrinterProfile printer = parse_printer(small_printer_toml(300, 150), "test.toml");
+    const auto pattern = write_test_pattern(dir, design, printer, 0.5f);
+    // A directory where the file should go: the rename fails after the whole sheet is written.
+    std::filesystem::create_directory(dir / "taken.tif");
+    std::filesystem::create_directory(dir / "taken.pdf");
+    for (const char* name : {"taken.tif", "taken.pdf"}) {
+        try {
+            write_sheet(dir / name, design, printer, pattern, {});
+            ADD_FAILURE() << "no error for " << name;
+        } catch (const IoError& error) {
+            EXPECT_EQ(error.exit_code(), 3);
+        }
+    }
+    EXPECT_THAT(error_of([&] { write_sheet(dir / "missing" / "sheet.tif", design, printer, pattern, {}); }),
+                HasSubstr("missing"));
+    std::vector<std::string> left;
+    for (const auto& entry : std::filesystem::directory_iterator(dir.path())) left.push_back(entry.path().filename());
+    std::sort(left.begin(), left.end());
+    EXPECT_EQ(left, (std::vector<std::string>{"pattern.exr", "taken.pdf", "taken.tif"}));
+    EXPECT_TRUE(std::filesystem::is_empty(dir / "taken.tif"));
+}
+
+TEST(Sheet, BadOptionsAndAttributes) {
+    TempDir dir;
+    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const PrinterProfile printer = parse_printer(small_printer_toml(300, 150), "test.toml");
+    const auto pattern = write_test_pattern(dir, design, printer, 0.5f, {{"white", "bright"}});
+    EXPECT_THAT(error_of([&] { write_sheet(dir / "s.tif", design, printer, pattern, {}); }),
+                HasSubstr("rfd:white: expected a positive number, got 'bright'"));
+    SheetOptions options;
+    options.sheets = 3;
+    EXPECT_THAT(error_of([&] { write_sheet(dir / "s.tif", design, printer, pattern, options); }),
+                HasSubstr("--sheets: expected 1 or 2, got 3"));
+    EXPECT_THAT(error_of([&] { write_sheet(dir / "s.png", design, printer, pattern, {}); }),
+                HasSubstr("expected .tif, .tiff or .pdf"));
+    // Design I does not fit the test printer's small paper.
+    const optics::Design big = optics::load_design(kDesigns / "design1.toml");
+    const PrinterProfile coarse = parse_printer(small_printer_toml(100, 100), "coarse.toml");
+    const auto big_pattern = dir / "big.exr";
+    patterns::write_pattern(big_pattern, Uniform(patterns::pattern_geometry(big, Dpi{100}, Dpi{100}), 0.5f), {});
+    EXPECT_THAT(error_of([&] { write_sheet(dir / "s.tif", big, coarse, big_pattern, {}); }),
+                MatchesRegex(".*coarse\\.toml.*the pattern \\(1[45][0-9]\\.[0-9] x 1[45][0-9]\\.[0-9] mm\\).*do not fit "
+                             "the printable area of test paper \\(48\\.0 x 58\\.0 mm\\).*"));
+}
+
+// ----------------------------------------------------------------------------- moire
+
+TEST(Moire, PitchRangeParsing) {
+    const PitchRange r = parse_pitch_range("2.30:2.40:11", "--pitch");
+    ASSERT_EQ(r.values().size(), 11u);
+    EXPECT_DOUBLE_EQ(r.values().front(), 2.30);
+    EXPECT_DOUBLE_EQ(r.values().back(), 2.40);
+    EXPECT_NEAR(r.values()[5], 2.35, 1e-15);
+    for (const char* bad : {"2.4:2.3:5", "2.3:2.4:1", "0:1:5", "-1:1:5", "2.3:2.4", "2.3:2.4:5:6", "a:2.4:5",
+                            "2.3:2.4:5x", "2.3:2.3:5", "2.3:2.4:1000"})
+        EXPECT_THAT(error_of([&] { parse_pitch_range(bad, "--pitch"); }),
+                    HasSubstr("--pitch: expected FROM:TO:STEPS in mm with 0 < FROM < TO and 2 <= STEPS <= 200, got '" +
+                              std::string(bad) + "'"))
+            << bad;
+}
+
+TEST(Moire, BandsForEveryHypothesisOnPaperSizedPages) {
+    TempDir dir;
+    const optics::Design design = optics::load_design(kDesigns / "design1.toml");
+    const PrinterProfile printer = load_printer("epson_stylus_pro_4800");
+    MoireOptions options;
+    options.x = parse_pitch_range("2.33:2.39:13", "--pitch");
+    const auto bands = write_moire_pdf(dir / "calib.pdf", design, printer, options);
+    ASSERT_EQ(bands.size(), 26u);
+    for (int k = 0; k < 13; ++k) {
+        EXPECT_TRUE(bands[static_cast<std::size_t>(k)].along_x);
+        EXPECT_NEAR(bands[static_cast<std::size_t>(k)].period, 2.33 + 0.005 * k, 1e-12);
+        // Hexagonal rows lie pitch * sqrt(3) / 2 apart.
+        EXPECT_FALSE(bands[static_cast<std::size_t>(13 + k)].along_x);
+        EXPECT_NEAR(bands[static_cast<std::size_t>(13 + k)].period, (2.33 + 0.005 * k) * std::sqrt(3.0) / 2, 1e-12);
+    }
+    const std::string pdf = read_bytes(dir / "calib.pdf");
+    EXPECT_NEAR(media_box_value(pdf, 2), 210.0 / 25.4 * 72.0, 1e-3);
+    EXPECT_NEAR(media_box_value(pdf, 3), 297.0 / 25.4 * 72.0, 1e-3);
+    // Bands within the printable area, in pages that say so in the PDF.
+    int pages = 0;
+    for (std::size_t at = pdf.find("/Type /Page"); at != std::string::npos; at = pdf.find("/Type /Page", at + 1))
+        pages += pdf.compare(at, 12, "/Type /Pages") != 0;
+    EXPECT_EQ(pages, bands.back().page + 1);
+    for (const auto& band : bands) EXPECT_LE(band.top + 10.0, 297.0 - 3.0);
+
+    // A rectangular array: rows default to the x range scaled by pitch_y / pitch_x.
+    const optics::Design rect = optics::load_design(kDesigns / "design2.toml");
+    options.x = parse_pitch_range("3.9:4.1:5", "--pitch");
+    const auto rect_bands = write_moire_pdf(dir / "rect.pdf", rect, printer, options);
+    EXPECT_NEAR(rect_bands[5].period, 3.9 * 4.8 / 4.0, 1e-12);
+    EXPECT_NEAR(rect_bands[9].period, 4.1 * 4.8 / 4.0, 1e-12);
+}
+
+}  // namespace
+}  // namespace rfd::print
