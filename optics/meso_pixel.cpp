@@ -217,11 +217,20 @@ IncidentBin MesoPixelOptics::bin(CellIndex cell, Model model, int samples_per_si
             if (!l.cell_contains(cell, point)) continue;
             if (const auto d = optics_.direction_for(point, cell, model)) bin.samples.push_back(*d);
         }
+    // Mean over the two opposite edges that the model can map (the field lens vignettes the
+    // outer edge of the corner bins).
     auto half_width = [&](const Eigen::Vector2d& unit) {
-        // A hair inside the edge: on the array's outer edge the exact map stops.
-        const Eigen::Vector2d edge = centre + (1.0 - 1e-9) * l.boundary_distance(unit) * unit;
-        const auto d = optics_.direction_for(edge, cell, model);
-        return d ? radians_to_degrees(angle_between(*d, bin.centre)) : 0.0;
+        double sum = 0.0;
+        int count = 0;
+        for (const double sign : {-1.0, 1.0}) {
+            // A hair inside the edge: on the array's outer edge the exact map stops.
+            const Eigen::Vector2d edge = centre + sign * (1.0 - 1e-9) * l.boundary_distance(unit) * unit;
+            if (const auto d = optics_.direction_for(edge, cell, model)) {
+                sum += radians_to_degrees(angle_between(*d, bin.centre));
+                ++count;
+            }
+        }
+        return count > 0 ? sum / count : 0.0;
     };
     bin.half_width_x_deg = half_width(Eigen::Vector2d::UnitX());
     bin.half_width_y_deg = half_width(Eigen::Vector2d::UnitY());

@@ -70,8 +70,10 @@ struct IncidentBin {
     /// Travel directions to an n x n grid of points at the centres of n x n equal parts of
     /// the cell's bounding box (inside the cell; the ones the model cannot map are left out).
     std::vector<Eigen::Vector3d> samples;
-    double half_width_x_deg = 0.0;  ///< angular half-widths of the bin about its centre,
-    double half_width_y_deg = 0.0;  ///< from the directions to the cell's edge midpoints
+    /// Angular half-widths of the bin about its centre: the mean angle to the directions of
+    /// the two opposite edge midpoints that the model maps (0 when neither is).
+    double half_width_x_deg = 0.0;
+    double half_width_y_deg = 0.0;
 };
 
 class MesoPixelOptics {

@@ -267,8 +267,10 @@ TEST(MesoPixel, BinSamplesLandInTheirMesoCell) {
         // Closed form: the chief ray through the main lens's centre lands at B tan.
         const Eigen::Vector2d h = optics.lattice().center(cell);
         EXPECT_NEAR((slopes(paraxial.centre) - h / b).norm(), 0.0, 1e-12);
-        EXPECT_NEAR(paraxial.half_width_x_deg,
-                    radians_to_degrees(angle_between(paraxial.centre, Eigen::Vector3d((h.x() + 2.0) / b, h.y() / b, 1).normalized())), 1e-7);
+        auto angle_to = [&](double x) {
+            return radians_to_degrees(angle_between(paraxial.centre, Eigen::Vector3d(x / b, h.y() / b, 1).normalized()));
+        };
+        EXPECT_NEAR(paraxial.half_width_x_deg, 0.5 * (angle_to(h.x() - 2.0) + angle_to(h.x() + 2.0)), 1e-7);
         const IncidentBin exact = meso.bin(cell, Model::Exact, 3);
         // The field lens (30 mm) vignettes the outer corner of the corner bins (the thesis's
         // "3" and "7" in figure 8.13): those samples have no exact chief ray.
