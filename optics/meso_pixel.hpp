@@ -110,13 +110,15 @@ public:
     std::size_t pattern_surface() const { return d_pattern_; }
     std::size_t last_surface() const { return last_; }
 
-private:
-    // Slope (air, at C's vertex plane) of the ray through C_k's vertex that lands at
-    // `offset` on D; exact by Newton. nullopt when it does not arrive or converge.
+    /// The two halves of dot(), for callers that tabulate: the slope (air, at C's vertex
+    /// plane) of the ray through C_k's vertex that lands at `offset` on D (exact: Newton;
+    /// nullopt when it does not arrive or converge), and what that ray does. The slope does
+    /// not depend on the cell (all arrays share one lattice) except at the array's edge.
     std::optional<Eigen::Vector2d> chief_slope(const Eigen::Vector2d& offset, CellIndex cell,
                                                Model model) const;
     DotRay follow(const Eigen::Vector2d& slope, CellIndex cell, Model model) const;
 
+private:
     const DesignOptics& optics_;
     SequentialSystem backward_;  // reversed system, for tracing from C back to A
     std::size_t c_front_ = 0, d_pattern_ = 0, last_ = 0;
