@@ -22,4 +22,7 @@ void add_relight_commands(CLI::App& app, const GlobalOptions& global);
 /// `capture hdr` (exposure brackets) and `capture calibrate` (mirror-sphere light directions).
 void add_capture_tool_commands(CLI::App& capture, const GlobalOptions& global);
 
+/// `pattern encode-angular` (Designs III/IV), added to the `pattern` group.
+void add_pattern_angular_command(CLI::App& pattern, const GlobalOptions& global);
+
 }  // namespace rfd::cli

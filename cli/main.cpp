@@ -22,6 +22,8 @@ int main(int argc, char** argv) {
     rfd::cli::add_study_command(*capture, global);
     rfd::cli::add_relight_commands(app, global);
     rfd::cli::add_capture_tool_commands(*capture, global);
+    CLI::App* pattern = app.add_subcommand("pattern", "Encode reflectance fields into print patterns")->require_subcommand(1);
+    rfd::cli::add_pattern_angular_command(*pattern, global);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& error) {

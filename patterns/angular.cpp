@@ -186,6 +186,31 @@ PatternAttributes AngularPattern::attributes() const {
             {"bin_samples", std::to_string(options_.bin_samples)}};
 }
 
+LetterField letter_field_for(const optics::MesoPixelOptics& meso, optics::Model model,
+                             const std::string& characters) {
+    const optics::Lattice& lattice = meso.lattice();
+    std::vector<Eigen::Vector3d> centres;
+    for (int j = 0; j < lattice.count_y(); ++j)
+        for (int i = 0; i < lattice.count_x(); ++i) centres.push_back(field_light_of(meso.bin({i, j}, model, 1).centre));
+    if (characters.size() < centres.size())
+        throw InputError("--text: " + std::to_string(centres.size()) + " incident bins need " +
+                         std::to_string(centres.size()) + " characters, got " + std::to_string(characters.size()));
+    const double half = std::abs(meso.output_gain()) * 0.375 * std::min(lattice.pitch_x(), lattice.pitch_y());
+    return LetterField(centres, characters, {half, half});
+}
+
+DiamondField diamond_field_for(const optics::MesoPixelOptics& meso, optics::Model model) {
+    const optics::Lattice& lattice = meso.lattice();
+    double light = 0.0;
+    for (int j = 0; j < lattice.count_y(); ++j)
+        for (int i = 0; i < lattice.count_x(); ++i) {
+            const Eigen::Vector3d d = meso.bin({i, j}, model, 1).centre;
+            light = std::max({light, std::abs(d.x() / d.z()), std::abs(d.y() / d.z())});
+        }
+    const double view = std::abs(meso.output_gain()) * 0.375 * lattice.pitch_x();
+    return DiamondField(light > 0.0 ? light : 0.1, view);
+}
+
 double estimate_white(const PatternSource& source, double percentile, int rows) {
     const PatternGeometry& g = source.geometry();
     const int ch = source.channels();

@@ -114,6 +114,16 @@ private:
     std::vector<CellTable> tables_;
 };
 
+/// Figure 8.13's field for this display: one character per meso cell (in lattice order,
+/// row by row from the bottom left), centred on its bin's centre direction, drawn over the
+/// output directions of the inner 3/4 of a cell (|tan| <= |gain| * 0.375 * min pitch).
+/// Throws InputError when `characters` is shorter than the number of bins.
+LetterField letter_field_for(const optics::MesoPixelOptics& meso, optics::Model model,
+                             const std::string& characters);
+/// Figure 8.15's field for this display: the light range is the largest bin-centre slope,
+/// the view range the output slope of 3/4 of half a cell along x.
+DiamondField diamond_field_for(const optics::MesoPixelOptics& meso, optics::Model model);
+
 /// The value that should print as full transmittance: the given percentile (e.g. 99.5) of
 /// all samples of `rows` rows spread evenly over the raster (every row when rows >= height).
 /// Deterministic; 0 for a blank pattern.
