@@ -23,6 +23,7 @@
 #include "relight/sampling.hpp"
 #include "relight/scene.hpp"
 #include "relight/stage.hpp"
+#include "relight/view_set.hpp"
 
 namespace rfd::cli {
 namespace {
@@ -193,6 +194,10 @@ void add_capture_commands(CLI::App& capture, const GlobalOptions&) {
         const std::size_t views = scene.cameras.size();
         double camera_seconds = 0.0, light_seconds = 0.0;
         std::size_t shading_points = 0, escaped = 0;
+        std::vector<relight::ViewEntry> view_entries;
+        // A views file from an earlier run would list views being replaced: written last.
+        std::error_code stale;
+        std::filesystem::remove(out / "views.txt", stale);
         for (std::size_t v = 0; v < views; ++v) {
             char name[32];
             std::snprintf(name, sizeof name, "view_%02zu", v);
@@ -229,7 +234,15 @@ void add_capture_commands(CLI::App& capture, const GlobalOptions&) {
             light_seconds += std::chrono::duration<double>(Clock::now() - t1).count();
             relight::write_light_file(folder / "field.lp", files, directions,
                                       any_radius ? radii : std::vector<double>{});
+            // The view in the display frame (the first camera's field frame): the direction
+            // toward this camera from what it looks at, and the rotation back from its
+            // light frame.
+            const relight::Camera& cam = scene.cameras[v];
+            const Eigen::Vector3d toward = scene.cameras.front().field_frame().transpose() *
+                                           (cam.position - cam.look_at).normalized();
+            view_entries.push_back({name, toward, stage.to_view_frame().transpose(), 0});
         }
+        if (views > 1) relight::write_view_file(out / "views.txt", view_entries);
 
         const double per_light = light_seconds / static_cast<double>(views * lights.directions.size());
         const auto& camera = scene.cameras.front();

@@ -26,5 +26,7 @@ void add_capture_tool_commands(CLI::App& capture, const GlobalOptions& global);
 void add_pattern_commands(CLI::App& app, const GlobalOptions& global);
 /// The `print` group: sheet (pattern sheets for a printer), moire (pitch calibration).
 void add_print_commands(CLI::App& app, const GlobalOptions& global);
+/// `pattern encode-angular` (Designs III/IV), added to the `pattern` group.
+void add_pattern_angular_command(CLI::App& pattern, const GlobalOptions& global);
 
 }  // namespace rfd::cli

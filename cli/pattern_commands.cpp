@@ -175,10 +175,11 @@ void add_field_command(CLI::App& pattern, const GlobalOptions& global) {
 }  // namespace
 
 void add_pattern_commands(CLI::App& app, const GlobalOptions& global) {
-    CLI::App* pattern = app.add_subcommand("pattern", "Encode reflectance fields into print-resolution patterns")
+    CLI::App* pattern = app.add_subcommand("pattern", "Encode reflectance fields into print-resolution patterns (Designs I-IV)")
                             ->require_subcommand(1);
     add_encode_command(*pattern, global);
     add_field_command(*pattern, global);
+    add_pattern_angular_command(*pattern, global);
 }
 
 }  // namespace rfd::cli
