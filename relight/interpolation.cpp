@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <numeric>
 #include <string>
 #include <utility>
@@ -155,6 +156,21 @@ SphericalInterpolator::SphericalInterpolator(std::vector<Eigen::Vector3d> direct
     grid.rows = std::clamp(static_cast<int>(std::ceil(2.0 * std::sqrt(static_cast<double>(n)))), 8, 512);
     grid.cols = 2 * grid.rows;
     const std::size_t triangle_count = triangles_.size();
+    // Neighbours across each edge (opposite vertex j), for walking from a hinted triangle.
+    neighbours_.assign(triangle_count, {kNoTriangle, kNoTriangle, kNoTriangle});
+    {
+        std::map<std::pair<std::size_t, std::size_t>, std::pair<std::size_t, std::size_t>> edges;
+        for (std::size_t t = 0; t < triangle_count; ++t)
+            for (std::size_t j = 0; j < 3; ++j) {
+                std::size_t a = triangles_[t][(j + 1) % 3], b = triangles_[t][(j + 2) % 3];
+                if (a > b) std::swap(a, b);
+                auto [it, inserted] = edges.try_emplace({a, b}, t, j);
+                if (!inserted) {
+                    neighbours_[t][j] = it->second.first;
+                    neighbours_[it->second.first][it->second.second] = t;
+                }
+            }
+    }
     std::vector<Eigen::Vector3d> cap_centre(triangle_count);
     std::vector<double> cap_radius(triangle_count), theta_low(triangle_count), theta_high(triangle_count);
     std::vector<bool> locatable(triangle_count);
@@ -307,7 +323,30 @@ InterpolationWeights SphericalInterpolator::weights(const Eigen::Vector3d& direc
     InterpolationWeights out;
     // The hinted triangle first: its three plane tests spare the grid cell's angles (and,
     // being tests of sign and ratio, do not need a unit vector).
-    const bool hinted = method != Interpolation::nearest && hint < triangles_.size() && in_triangle(direction, hint, out);
+    bool hinted = false;
+    if (method != Interpolation::nearest && hint < triangles_.size()) {
+        // Walk from the hinted triangle toward the direction, across the edge it lies
+        // beyond, for a few steps: coherent queries land in the same or an adjacent one.
+        std::size_t t = hint;
+        for (int step = 0; step < 4 && t != kNoTriangle; ++step) {
+            if (in_triangle(direction, t, out)) {
+                hint = t;
+                hinted = true;
+                break;
+            }
+            const auto& planes = planes_[t];
+            std::size_t worst = 0;
+            double lowest = direction.dot(planes[0]);
+            for (std::size_t j = 1; j < 3; ++j) {
+                const double w = direction.dot(planes[j]);
+                if (w < lowest) {
+                    lowest = w;
+                    worst = j;
+                }
+            }
+            t = neighbours_[t][worst];
+        }
+    }
     if (!hinted) {
         const Eigen::Vector3d unit = direction.normalized();
         const std::size_t cell = grid_->cell_of(unit);

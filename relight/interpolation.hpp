@@ -82,7 +82,8 @@ public:
     /// l_i(direction) for a unit `direction` anywhere on the sphere. Thread-safe.
     InterpolationWeights weights(const Eigen::Vector3d& direction,
                                  Interpolation method = Interpolation::delaunay) const;
-    /// The same, trying triangle `hint` first and leaving in it the triangle found
+    /// The same, trying triangle `hint` first (then walking to its neighbours for a few
+    /// steps) and leaving in it the triangle found
     /// (kNoTriangle outside T): coherent queries, such as neighbouring print dots, then
     /// skip the point location. The same weights as without a hint (on an edge shared by two
     /// triangles, up to rounding). `direction` need not be unit here: any positive multiple
@@ -138,6 +139,8 @@ private:
     std::vector<Triangle> triangles_;
     // Per triangle, the edge normals whose dot products with d give its weights.
     std::vector<std::array<Eigen::Vector3d, 3>> planes_;
+    // Per triangle, the triangle across the edge opposite vertex j (kNoTriangle at the rim).
+    std::vector<std::array<std::size_t, 3>> neighbours_;
     std::vector<std::size_t> boundary_;
     std::vector<double> boundary_phi_;
     std::unique_ptr<Grid> grid_;
