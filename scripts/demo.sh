@@ -53,4 +53,21 @@ done
 "$rfd" pattern encode designs/design2.toml "$patterns/sig08_field" --interpolation nearest \
   --out "$patterns/design2_sig08.exr" --preview "$patterns/design2_sig08.png" | tee "$patterns/design2_sig08.txt"
 
+# Print sheets for the thesis's printer (8.4, 8.4.1): front and mirrored back sheets for
+# back-to-back printing, registration markers under the corner lenslets, crop marks, ruler,
+# label. Design I's full A4 page as TIFF (true 2880 x 1440 dpi tags), Design II's as PDF.
+echo "== print sheets" >&2
+"$rfd" print sheet designs/design1.toml "$patterns/design1_bottle.exr" --printer epson_stylus_pro_4800 \
+  --out "$patterns/design1_front.tif" | tee "$patterns/design1_sheets.txt"
+"$rfd" print sheet designs/design1.toml "$patterns/design1_bottle.exr" --printer epson_stylus_pro_4800 \
+  --mirror --out "$patterns/design1_back.tif" | tee -a "$patterns/design1_sheets.txt"
+for name in design2_bottle design2_sig08; do
+  "$rfd" print sheet designs/design2.toml "$patterns/$name.exr" --out "$patterns/${name}_front.pdf" \
+    | tee "$patterns/${name}_sheets.txt"
+  "$rfd" print sheet designs/design2.toml "$patterns/$name.exr" --mirror --out "$patterns/${name}_back.pdf" \
+    | tee -a "$patterns/${name}_sheets.txt"
+done
+"$rfd" print moire designs/design1.toml --pitch 2.350:2.366:9 --out "$patterns/design1_moire.pdf" \
+  | tee "$patterns/design1_moire.txt"
+
 echo "demo written to $out" >&2
