@@ -1,5 +1,6 @@
 #include "core/files.hpp"
 
+#include <cctype>
 #include <fstream>
 #include <random>
 
@@ -65,6 +66,21 @@ void ensure_directory(const std::filesystem::path& dir) {
     std::filesystem::create_directories(dir, ec);
     if (ec || !std::filesystem::is_directory(dir))
         throw IoError(SourceLocation{dir.string()}, "cannot create directory: " + ec.message());
+}
+
+TemporaryFile::~TemporaryFile() {
+    if (!path_.empty()) {
+        std::error_code ec;
+        std::filesystem::remove(path_, ec);
+    }
+}
+
+bool is_blank_or_comment(const std::string& line) {
+    for (const char c : line) {
+        if (c == '#') return true;
+        if (!std::isspace(static_cast<unsigned char>(c))) return false;
+    }
+    return true;
 }
 
 }  // namespace rfd

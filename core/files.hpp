@@ -28,4 +28,24 @@ void write_text_file(const std::filesystem::path& path, const std::string& text)
 /// Creates `dir` (and parents) or throws IoError naming it.
 void ensure_directory(const std::filesystem::path& dir);
 
+/// A temporary file that is removed when the guard goes out of scope, unless released:
+/// for writers that stream into temporary_sibling() and must leave nothing half-written
+/// when an exception interrupts them.
+class TemporaryFile {
+public:
+    explicit TemporaryFile(std::filesystem::path path) : path_(std::move(path)) {}
+    ~TemporaryFile();
+    TemporaryFile(const TemporaryFile&) = delete;
+    TemporaryFile& operator=(const TemporaryFile&) = delete;
+    const std::filesystem::path& path() const { return path_; }
+    /// The file is finished (and moved into place): keep it.
+    void release() { path_.clear(); }
+
+private:
+    std::filesystem::path path_;
+};
+
+/// True for a line of a text data file that holds nothing: blank, or a '#' comment.
+bool is_blank_or_comment(const std::string& line);
+
 }  // namespace rfd

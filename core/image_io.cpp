@@ -14,13 +14,6 @@
 namespace rfd {
 namespace {
 
-std::string lower_extension(const std::filesystem::path& path) {
-    std::string ext = path.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    return ext;
-}
-
 std::unique_ptr<OIIO::ImageInput> open_input(const std::filesystem::path& path) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec))
@@ -38,6 +31,13 @@ int colour_channels(const OIIO::ImageSpec& spec) {
 }
 
 }  // namespace
+
+std::string lower_extension(const std::filesystem::path& path) {
+    std::string ext = path.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return ext;
+}
 
 bool is_linear_format(const std::filesystem::path& path) {
     const std::string ext = lower_extension(path);

@@ -11,6 +11,7 @@
 // Example: Image image = read_image("field/img_000.exr"); write_image("preview.png", image);
 
 #include <filesystem>
+#include <string>
 
 #include "core/image.hpp"
 
@@ -32,6 +33,8 @@ ImageSize read_image_size(const std::filesystem::path& path);
 /// non-finite sample (nothing is written) and IoError when writing fails.
 void write_image(const std::filesystem::path& path, const Image& image);
 
+/// The extension of `path` in lower case, with its dot (".exr"), as writers choose formats.
+std::string lower_extension(const std::filesystem::path& path);
 /// True for the extensions write_image() and read_image() treat as linear float.
 bool is_linear_format(const std::filesystem::path& path);
 

@@ -13,22 +13,6 @@
 namespace rfd::patterns {
 namespace {
 
-// True when unit `d` lies inside (or on) a triangle of T: the interpolation there is a true
-// blend of measured lights, not the horizon band's extrapolation.
-bool inside_triangulation(const relight::SphericalInterpolator& interpolator, const Eigen::Vector3d& d) {
-    const auto& dirs = interpolator.directions();
-    constexpr double kEdge = -1e-12;
-    for (const auto& t : interpolator.triangles()) {
-        const Eigen::Vector3d& a = dirs[t[0]];
-        const Eigen::Vector3d& b = dirs[t[1]];
-        const Eigen::Vector3d& c = dirs[t[2]];
-        if (d.dot(a.cross(b)) >= kEdge && d.dot(b.cross(c)) >= kEdge && d.dot(c.cross(a)) >= kEdge &&
-            d.dot(a + b + c) > 0.0)
-            return true;
-    }
-    return false;
-}
-
 std::string angles_text(const Eigen::Vector3d& d) {
     const SphericalAngles a = angles_of(d);
     char text[64];
@@ -196,7 +180,7 @@ std::unique_ptr<AngularLookup> ViewSetField::bind(const std::vector<LightBin>& b
         for (std::size_t b = 0; b < bins.size(); ++b) {
             std::vector<double> weights(field.size(), 0.0);
             for (const auto& light : bins[b]) {
-                if (!inside_triangulation(lights, light)) {
+                if (!lights.covers(light)) {
                     missing.push_back("bin " + std::to_string(b) + " " + angles_text(light));
                     continue;
                 }

@@ -32,12 +32,6 @@ std::string describe(const Eigen::Vector3d& direction) {
     return "theta " + format_angle(a.theta) + ", phi " + format_angle(a.phi);
 }
 
-// A direction set's triangulation covers `v` when v lies in one of its triangles: outside
-// them (near the horizon) the interpolation only extrapolates along arcs.
-bool covered(const relight::SphericalInterpolator& interpolator, const Eigen::Vector3d& v) {
-    return interpolator.weights(v, relight::Interpolation::delaunay).count == 3;
-}
-
 const optics::Plane& check_design(const optics::Design& design) {
     if (design.kind != optics::DesignKind::I && design.kind != optics::DesignKind::II)
         throw InputError(SourceLocation{design.file, 0, 0, "design.kind"},
@@ -394,11 +388,11 @@ Encoder::Encoder(const optics::Design& design, const relight::ReflectanceField& 
     t.interpolator = std::make_unique<relight::SphericalInterpolator>(field.directions);
     std::vector<std::string> missing;
     std::size_t missing_count = 0;
-    double lowest_needed = 0.0;
+    double highest_needed_theta = 0.0;
     for (const Eigen::Vector3d& d : range_.probes) {
         const Eigen::Vector3d v = options.mapping.field_direction(d);
-        lowest_needed = std::max(lowest_needed, angles_of(v).theta);
-        if (covered(*t.interpolator, v)) continue;
+        highest_needed_theta = std::max(highest_needed_theta, angles_of(v).theta);
+        if (t.interpolator->covers(v)) continue;
         ++missing_count;
         if (missing.size() < 4) missing.push_back("display " + describe(d) + " -> field " + describe(v));
     }
@@ -411,7 +405,7 @@ Encoder::Encoder(const optics::Design& design, const relight::ReflectanceField& 
                          "the field does not cover the display's angular range: " + std::to_string(missing_count) +
                              " of " + std::to_string(range_.probes.size()) +
                              " probed incident directions (up to " + format_angle(range_.max_angle_rad) +
-                             " deg from the display axis; field theta up to " + format_angle(lowest_needed) +
+                             " deg from the display axis; field theta up to " + format_angle(highest_needed_theta) +
                              " deg) fall outside the field's light directions (theta up to " +
                              format_angle(field_highest) + " deg), e.g.:" + list +
                              "\n  capture those directions, change --tilt/--angle-scale, or pass --allow-partial");

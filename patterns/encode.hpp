@@ -36,7 +36,6 @@
 //   write_pattern("pattern.exr", encoder, encoder.attributes());
 
 #include <memory>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -131,7 +130,7 @@ public:
     PatternAttributes attributes() const;
 
     /// Incident direction (unit, travel) for a dot offset from its lenslet's centre, in
-    /// the encoder's model (exact: from the table). nullopt outside the table.
+    /// the encoder's model (exact: from the table, clamped to its edge).
     Eigen::Vector3d incident_direction(const Eigen::Vector2d& offset) const;
     /// Largest angle (radians) between the tabulated exact inverse map and a direct Newton
     /// solve, over `samples` deterministic offsets inside the centre cell (0 for paraxial).

@@ -23,13 +23,6 @@ namespace {
 
 constexpr const char* kAttributePrefix = "rfd:";
 
-std::string lower_extension(const std::filesystem::path& path) {
-    std::string ext = path.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    return ext;
-}
-
 // Half-extent of what the pattern must cover, mm.
 Eigen::Vector2d covered_half_extent(const optics::Design& design) {
     if (design.macro)
@@ -47,25 +40,6 @@ Eigen::Vector2d covered_half_extent(const optics::Design& design) {
                 return array->lattice.half_extent();
     throw InputError(SourceLocation{design.file}, "design has no lenslet array to print a pattern for");
 }
-
-// Removes the temporary file unless released: nothing half-written survives an exception.
-class TemporaryFile {
-public:
-    explicit TemporaryFile(std::filesystem::path path) : path_(std::move(path)) {}
-    ~TemporaryFile() {
-        if (!path_.empty()) {
-            std::error_code ec;
-            std::filesystem::remove(path_, ec);
-        }
-    }
-    TemporaryFile(const TemporaryFile&) = delete;
-    TemporaryFile& operator=(const TemporaryFile&) = delete;
-    const std::filesystem::path& path() const { return path_; }
-    void release() { path_.clear(); }
-
-private:
-    std::filesystem::path path_;
-};
 
 }  // namespace
 

@@ -14,6 +14,7 @@
 
 #include "core/error.hpp"
 #include "core/files.hpp"
+#include "core/image_io.hpp"
 #include "core/parallel.hpp"
 #include "core/progress.hpp"
 
@@ -24,13 +25,6 @@ using SurfacePtr = std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_dest
 using ContextPtr = std::unique_ptr<cairo_t, decltype(&cairo_destroy)>;
 
 constexpr int kMaskChunk = 8192;  // columns of one Cairo mask surface (Cairo stops at 32767)
-
-std::string lower_extension(const std::filesystem::path& path) {
-    std::string ext = path.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    return ext;
-}
 
 std::string format_number(double value) {
     char text[64];
@@ -56,25 +50,6 @@ double attribute_number(const patterns::PatternFileInfo& info, const std::string
                              " number, got '" + it->second + "'");
     return value;
 }
-
-// Removes the temporary file unless released: nothing half-written survives an exception.
-class TemporaryFile {
-public:
-    explicit TemporaryFile(std::filesystem::path path) : path_(std::move(path)) {}
-    ~TemporaryFile() {
-        if (!path_.empty()) {
-            std::error_code ec;
-            std::filesystem::remove(path_, ec);
-        }
-    }
-    TemporaryFile(const TemporaryFile&) = delete;
-    TemporaryFile& operator=(const TemporaryFile&) = delete;
-    const std::filesystem::path& path() const { return path_; }
-    void release() { path_.clear(); }
-
-private:
-    std::filesystem::path path_;
-};
 
 // Printer codes (1 - v, three channels) of one pattern row of `channels` channels.
 void tone_row(const float* pattern, int width, int channels, const ToneMap& tone, float* codes) {

@@ -13,14 +13,6 @@
 namespace rfd::relight {
 namespace {
 
-bool is_blank_or_comment(const std::string& line) {
-    for (const char c : line) {
-        if (c == '#') return true;
-        if (!std::isspace(static_cast<unsigned char>(c))) return false;
-    }
-    return true;
-}
-
 SourceLocation at(const std::filesystem::path& path, int line) {
     return SourceLocation{path.string(), line, 0, ""};
 }

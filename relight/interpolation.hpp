@@ -91,6 +91,11 @@ public:
     static constexpr std::size_t kNoTriangle = static_cast<std::size_t>(-1);
     InterpolationWeights weights(const Eigen::Vector3d& direction, Interpolation method, std::size_t& hint) const;
 
+    /// True when `direction` lies in a triangle of T: the interpolation there blends measured
+    /// lights rather than extrapolating along the horizon band's arcs.
+    bool covers(const Eigen::Vector3d& direction) const {
+        return weights(direction, Interpolation::delaunay).count == 3;
+    }
     std::size_t size() const { return directions_.size(); }
     const std::vector<Eigen::Vector3d>& directions() const { return directions_; }
     /// T, canonical_order'ed, det(a, b, c) > 0.
