@@ -5,14 +5,18 @@
 #include <cstdlib>
 #include <array>
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
 #include <future>
 #include <limits>
+#include <span>
 #include <vector>
 
 #include <OpenImageIO/imageio.h>
 
 #include "core/error.hpp"
 #include "core/files.hpp"
+#include "core/half.hpp"
 #include "core/image.hpp"
 #include "core/image_io.hpp"
 #include "core/parallel.hpp"
@@ -39,6 +43,17 @@ Eigen::Vector2d covered_half_extent(const optics::Design& design) {
             if (const auto* array = std::get_if<optics::LensletArrayPart>(&*p.part))
                 return array->lattice.half_extent();
     throw InputError(SourceLocation{design.file}, "design has no lenslet array to print a pattern for");
+}
+
+// The first dot of `row` with a NaN or infinite value, or -1. The common all-finite case
+// is a branch-free pass the compiler vectorises; only a bad row is searched.
+int first_non_finite(std::span<const float> row, int channels) {
+    bool all_finite = true;
+    for (const float v : row) all_finite &= std::abs(v) <= std::numeric_limits<float>::max();
+    if (all_finite) return -1;
+    for (std::size_t i = 0; i < row.size(); ++i)
+        if (!std::isfinite(row[i])) return static_cast<int>(i / static_cast<std::size_t>(channels));
+    return -1;
 }
 
 }  // namespace
@@ -123,10 +138,16 @@ void write_pattern(const std::filesystem::path& path, const PatternSource& sourc
 
     const std::size_t row_floats = static_cast<std::size_t>(g.width) * static_cast<std::size_t>(channels);
     const int strip_rows = std::min(options.rows_per_strip, g.height);
-    // Two strips: one is written (on its own thread: conversion, compression, disk) while
-    // the next is rendered in parallel.
-    std::array<std::vector<float>, 2> strips;
-    for (auto& strip : strips) strip.resize(row_floats * static_cast<std::size_t>(strip_rows));
+    // Half-float EXR rows are converted by the rendering threads (F16C, in parallel), so the
+    // writer thread is left with compression and disk; other formats go as float to
+    // OpenImageIO, which converts them.
+    const bool half = format == OIIO::TypeDesc::HALF;
+    const OIIO::TypeDesc strip_format = half ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT;
+    const std::size_t row_bytes = row_floats * strip_format.size();
+    // Two strips: one is written (on its own thread: compression and disk) while the next
+    // is rendered in parallel.
+    std::array<std::vector<std::byte>, 2> strips;
+    for (auto& strip : strips) strip.resize(row_bytes * static_cast<std::size_t>(strip_rows));
     std::vector<int> first_bad(static_cast<std::size_t>(strip_rows));
     std::future<void> writing;
     Progress progress(options.progress_label, static_cast<std::size_t>(g.height));
@@ -136,21 +157,20 @@ void write_pattern(const std::filesystem::path& path, const PatternSource& sourc
     try {
         for (int y0 = 0, k = 0; y0 < g.height; y0 += strip_rows, ++k) {
             const int y1 = std::min(g.height, y0 + strip_rows);
-            std::vector<float>& strip = strips[static_cast<std::size_t>(k % 2)];
+            std::vector<std::byte>& strip = strips[static_cast<std::size_t>(k % 2)];
             parallel_for_chunks(static_cast<std::size_t>(y1 - y0), 1, [&](std::size_t begin, std::size_t end) {
+                std::vector<float> rendered(half ? row_floats : 0);
                 for (std::size_t r = begin; r < end; ++r) {
-                    std::span<float> row(strip.data() + r * row_floats, row_floats);
+                    std::byte* destination = strip.data() + r * row_bytes;
+                    std::span<float> row = half ? std::span<float>(rendered)
+                                                : std::span<float>(reinterpret_cast<float*>(destination), row_floats);
                     source.render_row(y0 + static_cast<int>(r), row);
-                    int bad = -1;
-                    for (std::size_t i = 0; i < row_floats; ++i) {
-                        float& v = row[i];
-                        if (!std::isfinite(v)) {
-                            if (bad < 0) bad = static_cast<int>(i / static_cast<std::size_t>(channels));
-                            continue;
-                        }
-                        if (srgb) v = linear_to_srgb(std::clamp(v, 0.0f, 1.0f));
-                    }
-                    first_bad[r] = bad;
+                    first_bad[r] = first_non_finite(row, channels);
+                    if (first_bad[r] >= 0) continue;
+                    if (half)
+                        floats_to_half(row, std::span<std::uint16_t>(reinterpret_cast<std::uint16_t*>(destination), row_floats));
+                    else if (srgb)
+                        for (float& v : row) v = linear_to_srgb(std::clamp(v, 0.0f, 1.0f));
                 }
             });
             for (int r = 0; r < y1 - y0; ++r)
@@ -159,8 +179,8 @@ void write_pattern(const std::filesystem::path& path, const PatternSource& sourc
                                      "refusing to write dot (" + std::to_string(first_bad[static_cast<std::size_t>(r)]) +
                                          ", " + std::to_string(y0 + r) + "): the pattern value is not a finite number");
             finish_writing();  // the other strip's write, before this one starts
-            writing = std::async(std::launch::async, [&output, &path, &strip, y0, y1] {
-                if (!output->write_scanlines(y0, y1, 0, OIIO::TypeDesc::FLOAT, strip.data()))
+            writing = std::async(std::launch::async, [&output, &path, &strip, strip_format, y0, y1] {
+                if (!output->write_scanlines(y0, y1, 0, strip_format, strip.data()))
                     throw IoError(SourceLocation{path.string()}, "cannot write pattern: " + output->geterror());
             });
             progress.advance(static_cast<std::size_t>(y1 - y0));
