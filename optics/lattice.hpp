@@ -18,7 +18,9 @@
 //
 // Example: Lattice::hexagonal(2.358, 40, 40).cell_at({0.3, -1.2})
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -122,6 +124,24 @@ public:
             const double a = 0.5 * x + 0.8660254037844386 * y;
             const double b = -0.5 * x + 0.8660254037844386 * y;
             return (ax <= half) & ((a < 0 ? -a : a) <= half) & ((b < 0 ? -b : b) <= half);
+        }
+    }
+
+    /// Where the horizontal line at height `y` leaves the region of `cell` toward +x (the
+    /// right end of the cell's chord on that line), for scan-line loops over many points.
+    /// Edge rounding aside, points of the line left of it and right of the region's left end
+    /// belong to `cell`. Precondition: K == kind().
+    template <LatticeKind K>
+    double cell_exit_x_of(CellIndex cell, double y) const {
+        const double half = 0.5 * pitch_x_;
+        const double centre_x = origin_.x() + cell.i * pitch_x_ + row_shift_of<K>(cell.j);
+        if constexpr (K == LatticeKind::Rectangular) {
+            (void)y;
+            return centre_x + half;
+        } else {
+            // The flat side at +pitch/2, or a slanted side (x = pitch - sqrt(3)|dy|) nearer the corners.
+            const double dy = std::abs(y - (origin_.y() + cell.j * pitch_y_));
+            return centre_x + std::min(half, pitch_x_ - 1.7320508075688772 * dy);
         }
     }
 

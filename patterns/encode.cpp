@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
+#include <limits>
 #include <map>
 
 #include "core/error.hpp"
@@ -526,6 +528,95 @@ void Encoder::render_row(int py, std::span<float> out) const {
         render_row_of<LatticeKind::Rectangular>(py, out);
 }
 
+namespace {
+
+// The lights of up to kChunk consecutive dots of a run, in the field frame (unnormalised),
+// and their 1/cos(kappa): filled a chunk at a time so the arithmetic (square roots above
+// all) runs as vector instructions rather than one dot after another.
+constexpr int kChunk = 64;
+struct ChunkLights {
+    double x[kChunk], y[kChunk], z[kChunk], inverse_cos[kChunk];
+    // For lights R (-s, 1): |R (-s, 1)| = sqrt(1 + s^2) = 1/cos(kappa).
+    void norms(int n) {
+        for (int i = 0; i < n; ++i) inverse_cos[i] = std::sqrt(x[i] * x[i] + y[i] * y[i] + z[i] * z[i]);
+    }
+};
+
+const float kZeroSample[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+
+// Renders the dots [begin, end) of a print row that lie in one lenslet (a run) from that
+// lenslet's samples. `fill(first, n, lights)` gives the lights of dots first .. first+n-1.
+// Neighbouring dots nearly always share a triangle of the interpolation, so its planes and
+// sample pointers stay loaded and a dot costs three dot products and the blend; a dot that
+// leaves the triangle (or any dot for other interpolations) goes through the
+// interpolator's full query. `start_triangle` is the hint for the first dot and is left
+// holding that dot's triangle: the next lenslet of the same lattice row starts at nearly
+// the same direction.
+template <class Fill>
+void render_run(const Encoder::Tables& t, relight::Interpolation method, std::size_t channels,
+                const float* lenslet_samples, int begin, int end, const Fill& fill, float* out,
+                std::size_t& start_triangle) {
+    RFD_CHECK(channels <= std::size(kZeroSample));
+    std::size_t triangle = start_triangle;
+    const relight::SphericalInterpolator& interpolator = *t.interpolator;
+    const bool delaunay = method == relight::Interpolation::delaunay;
+    // Plain doubles (zeroed): Eigen members here trip GCC 12's maybe-uninitialized.
+    double planes[3][3] = {};
+    std::array<const float*, 3> sample{};
+    bool loaded = false;
+    auto load = [&] {
+        loaded = delaunay && triangle != relight::SphericalInterpolator::kNoTriangle;
+        if (!loaded) return;
+        for (std::size_t j = 0; j < 3; ++j) {
+            for (Eigen::Index k = 0; k < 3; ++k) planes[j][k] = interpolator.edge_planes(triangle)[j][k];
+            const int column = t.column_of[interpolator.triangles()[triangle][j]];
+            sample[j] = column < 0 ? kZeroSample : lenslet_samples + static_cast<std::size_t>(column) * channels;
+        }
+    };
+    load();
+    ChunkLights lights;
+    for (int first = begin; first < end; first += kChunk) {
+        const int n = std::min(kChunk, end - first);
+        fill(first, n, lights);
+        for (int i = 0; i < n; ++i) {
+            const int px = first + i;
+            float* dot = out + static_cast<std::size_t>(px) * channels;
+            const double vx = lights.x[i], vy = lights.y[i], vz = lights.z[i];
+            if (loaded) {
+                const double a0 = vx * planes[0][0] + vy * planes[0][1] + vz * planes[0][2];
+                const double a1 = vx * planes[1][0] + vy * planes[1][1] + vz * planes[1][2];
+                const double a2 = vx * planes[2][0] + vy * planes[2][1] + vz * planes[2][2];
+                const double sum = a0 + a1 + a2;
+                if (a0 >= 0.0 && a1 >= 0.0 && a2 >= 0.0 && sum > 0.0) {
+                    const double scale = lights.inverse_cos[i] / sum;
+                    const float w0 = static_cast<float>(a0 * scale), w1 = static_cast<float>(a1 * scale),
+                                w2 = static_cast<float>(a2 * scale);
+                    for (std::size_t c = 0; c < channels; ++c)
+                        dot[c] = w0 * sample[0][c] + w1 * sample[1][c] + w2 * sample[2][c];
+                    continue;
+                }
+            }
+            const relight::InterpolationWeights w = interpolator.weights(Eigen::Vector3d(vx, vy, vz), method, triangle);
+            for (std::size_t k = 0; k < w.count; ++k) {
+                const int column = t.column_of[w.index[k]];
+                if (column < 0 || w.weight[k] == 0.0) continue;
+                const float weight = static_cast<float>(w.weight[k] * lights.inverse_cos[i]);
+                const float* s = lenslet_samples + static_cast<std::size_t>(column) * channels;
+                for (std::size_t c = 0; c < channels; ++c) dot[c] += weight * s[c];
+            }
+            load();
+            if (px == begin) start_triangle = triangle;
+        }
+    }
+}
+
+}  // namespace
+
+// A print row is a sequence of runs, one per lenslet it crosses. Within a run the offset
+// from the lenslet axis moves by dot_x per dot, so the paraxial direction is linear in px
+// and the exact one is a lerp along one line of the table (the table's bilinear lookup at
+// the run's fixed y, prepared once per lattice row). Angle scaling is not linear: it
+// takes the general path per dot.
 template <LatticeKind K>
 void Encoder::render_row_of(int py, std::span<float> out) const {
     const Tables& t = *tables_;
@@ -534,39 +625,94 @@ void Encoder::render_row_of(int py, std::span<float> out) const {
     const std::size_t stride = static_cast<std::size_t>(t.columns) * channels;
     const double y = geometry_.dot_centre(0, py).y();
     const double x0 = geometry_.dot_centre(0, py).x();
+    const double dx = geometry_.dot_x;
+    const int width = geometry_.width;
     const bool exact = options_.model == optics::Model::Exact;
     const bool scaled = options_.mapping.angle_scale != 1.0;
-    const bool delaunay = options_.interpolation == relight::Interpolation::delaunay;
     const Eigen::Matrix3d& rotation = t.rotation;
-    const double inverse_b = 1.0 / t.b;
-    std::size_t triangle = relight::SphericalInterpolator::kNoTriangle;
-    std::fill(out.begin(), out.end(), 0.0f);
-    for (int px = 0; px < geometry_.width; ++px) {
-        const Eigen::Vector2d p(x0 + px * geometry_.dot_x, y);
-        const CellIndex cell = lattice.cell_at_of<K>(p);
-        if (!lattice.contains(cell)) continue;
-        const Eigen::Vector2d offset = p - lattice.center_of<K>(cell);
-        const Eigen::Vector2d slopes = exact ? t.table_slopes(offset) : Eigen::Vector2d(offset * inverse_b);
-        const double inverse_cos = std::sqrt(1.0 + slopes.squaredNorm());  // 1 / cos(kappa)
-        // The field direction, mirrored to the front, scaled and rotated (AngularMapping);
-        // the interpolation takes it unnormalised.
-        Eigen::Vector3d v(-slopes.x(), -slopes.y(), 1.0);
-        if (scaled) v = options_.mapping.field_direction(Eigen::Vector3d(slopes.x(), slopes.y(), 1.0).normalized(), rotation);
-        else v = rotation * v;
-        relight::InterpolationWeights w;
-        // Neighbouring dots mostly share a triangle: test it inline before the full search.
-        if (!(delaunay && triangle != relight::SphericalInterpolator::kNoTriangle &&
-              t.interpolator->in_triangle(v, triangle, w)))
-            w = t.interpolator->weights(v, options_.interpolation, triangle);
-        const float* base = t.samples.data() + lattice.linear_index(cell) * stride;
-        float* dot = out.data() + static_cast<std::size_t>(px) * channels;
-        for (std::size_t k = 0; k < w.count; ++k) {
-            const int column = t.column_of[w.index[k]];
-            if (column < 0 || w.weight[k] == 0.0) continue;
-            const float weight = static_cast<float>(w.weight[k] * inverse_cos);
-            const float* sample = base + static_cast<std::size_t>(column) * channels;
-            for (std::size_t c = 0; c < channels; ++c) dot[c] += weight * sample[c];
+    auto field_light = [&](const Eigen::Vector2d& slopes) -> Eigen::Vector3d {
+        return rotation * Eigen::Vector3d(-slopes.x(), -slopes.y(), 1.0);
+    };
+
+    // Exact model: the table's rows interpolated at this print row's offset from the axes
+    // of the (at most two) lattice rows it crosses, as field-frame lights.
+    std::array<int, 2> line_row{std::numeric_limits<int>::min(), std::numeric_limits<int>::min()};
+    std::array<std::vector<Eigen::Vector3d>, 2> lines;
+    auto table_line = [&](int j, double offset_y) -> const std::vector<Eigen::Vector3d>& {
+        const std::size_t slot = static_cast<std::size_t>(j & 1);
+        if (line_row[slot] != j) {
+            const std::size_t n = static_cast<std::size_t>(t.nodes);
+            const double fy = std::clamp((offset_y - t.table_origin) / t.table_step, 0.0, t.nodes - 1.000001);
+            const std::size_t iy = static_cast<std::size_t>(fy);
+            const double ty = fy - static_cast<double>(iy);
+            lines[slot].resize(n);
+            for (std::size_t ix = 0; ix < n; ++ix)
+                lines[slot][ix] = field_light((1 - ty) * t.slopes[iy * n + ix] + ty * t.slopes[(iy + 1) * n + ix]);
+            line_row[slot] = j;
         }
+        return lines[slot];
+    };
+
+    // Per lattice-row parity, the triangle of the last run's first dot.
+    std::array<std::size_t, 2> start_triangle{relight::SphericalInterpolator::kNoTriangle,
+                                              relight::SphericalInterpolator::kNoTriangle};
+    std::fill(out.begin(), out.end(), 0.0f);
+    for (int px = 0; px < width;) {
+        const double x = x0 + px * dx;
+        const CellIndex cell = lattice.cell_at_of<K>({x, y});
+        // The run's end from the cell's chord, then checked against cell_at on both sides.
+        const double reach = std::min((lattice.cell_exit_x_of<K>(cell, y) - x) / dx, static_cast<double>(width));
+        int end = std::clamp(px + 1 + static_cast<int>(std::floor(reach)), px + 1, width);
+        while (end > px + 1 && !(lattice.cell_at_of<K>({x0 + (end - 1) * dx, y}) == cell)) --end;
+        while (end < width && lattice.cell_at_of<K>({x0 + end * dx, y}) == cell) ++end;
+        if (lattice.contains(cell)) {
+            const Eigen::Vector2d centre = lattice.center_of<K>(cell);
+            const double offset_y = y - centre.y();
+            const double offset_x0 = x0 - centre.x();  // the offset of dot px is offset_x0 + px * dx
+            const float* samples = t.samples.data() + lattice.linear_index(cell) * stride;
+            std::size_t& triangle = start_triangle[static_cast<std::size_t>(cell.j & 1)];
+            if (scaled) {
+                render_run(t, options_.interpolation, channels, samples, px, end, [&](int first, int n, ChunkLights& l) {
+                    for (int i = 0; i < n; ++i) {
+                        const Eigen::Vector2d offset(offset_x0 + (first + i) * dx, offset_y);
+                        const Eigen::Vector2d slopes = exact ? t.table_slopes(offset) : Eigen::Vector2d(offset / t.b);
+                        const Eigen::Vector3d v = options_.mapping.field_direction(from_slopes(slopes), rotation);
+                        l.x[i] = v.x(), l.y[i] = v.y(), l.z[i] = v.z();
+                        l.inverse_cos[i] = std::sqrt(1.0 + slopes.squaredNorm());
+                    }
+                }, out.data(), triangle);
+            } else if (exact) {
+                const std::vector<Eigen::Vector3d>& line = table_line(cell.j, offset_y);
+                const double fx0 = (offset_x0 - t.table_origin) / t.table_step, fdx = dx / t.table_step;
+                const double last = t.nodes - 1.000001;
+                render_run(t, options_.interpolation, channels, samples, px, end, [&](int first, int n, ChunkLights& l) {
+                    for (int i = 0; i < n; ++i) {
+                        const double fx = std::clamp(fx0 + (first + i) * fdx, 0.0, last);
+                        const std::size_t ix = static_cast<std::size_t>(fx);
+                        const double f = fx - static_cast<double>(ix);
+                        const Eigen::Vector3d& a = line[ix];
+                        const Eigen::Vector3d& b = line[ix + 1];
+                        l.x[i] = a.x() + f * (b.x() - a.x());
+                        l.y[i] = a.y() + f * (b.y() - a.y());
+                        l.z[i] = a.z() + f * (b.z() - a.z());
+                    }
+                    l.norms(n);
+                }, out.data(), triangle);
+            } else {
+                const Eigen::Vector3d start = field_light(Eigen::Vector2d(offset_x0, offset_y) / t.b);
+                const Eigen::Vector3d step = rotation.col(0) * (-dx / t.b);
+                render_run(t, options_.interpolation, channels, samples, px, end, [&](int first, int n, ChunkLights& l) {
+                    for (int i = 0; i < n; ++i) {
+                        const double k = first + i;
+                        l.x[i] = start.x() + k * step.x();
+                        l.y[i] = start.y() + k * step.y();
+                        l.z[i] = start.z() + k * step.z();
+                    }
+                    l.norms(n);
+                }, out.data(), triangle);
+            }
+        }
+        px = end;
     }
 }
 

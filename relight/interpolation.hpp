@@ -105,6 +105,10 @@ public:
     /// One-ring neighbours of every direction in T.
     std::vector<std::vector<std::size_t>> one_rings() const;
 
+    /// Triangle t's three edge planes: inside it d . planes[j] >= 0 for every j, and the weight
+    /// of its vertex j is d . planes[j] over the sum of the three (see in_triangle).
+    const std::array<Eigen::Vector3d, 3>& edge_planes(std::size_t t) const { return planes_[t]; }
+
     /// The weights of triangle `t` at d (any positive multiple of a direction) when d lies in
     /// it; false otherwise. Inline: the pattern encoder calls it once per print dot.
     bool in_triangle(const Eigen::Vector3d& d, std::size_t t, InterpolationWeights& out) const {

@@ -2,6 +2,7 @@
 // 1/cos(kappa) factor, lenslet sampling, the decode round trip (paraxial and exact), and
 // the error for a field that does not cover the display's range.
 
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <random>
@@ -186,6 +187,78 @@ INSTANTIATE_TEST_SUITE_P(Designs, DecodeRoundTrip,
                                            RoundTripCase{"rect_paraxial_tilted", false, optics::Model::Paraxial, 45.0},
                                            RoundTripCase{"rect_exact", false, optics::Model::Exact, 0.0}),
                          [](const auto& test) { return std::string(test.param.name); });
+
+// render_row walks each print row lenslet by lenslet with incremental directions and a
+// cached triangle; every dot must still be what the per-dot definition gives: its cell by
+// nearest centre, its incident direction, the mapping, the interpolation weights and the
+// lenslet's samples, times 1/cos(kappa).
+struct PerDotCase {
+    const char* name;
+    bool hexagonal;
+    optics::Model model;
+    double tilt_deg;
+    double angle_scale;
+    relight::Interpolation interpolation;
+    friend void PrintTo(const PerDotCase& c, std::ostream* os) { *os << c.name; }
+};
+
+class RenderRow : public ::testing::TestWithParam<PerDotCase> {};
+
+TEST_P(RenderRow, EveryDotIsThePerDotBlendOfItsLenslet) {
+    const PerDotCase& param = GetParam();
+    const optics::Design design = param.hexagonal ? small_design1(5, 4) : optics::load_design(kDesigns / "design2.toml");
+    const relight::ReflectanceField field = smooth_field(600, 8, 6);
+    EncodeOptions options;
+    options.model = param.model;
+    options.mapping.tilt_deg = param.tilt_deg;
+    options.mapping.angle_scale = param.angle_scale;
+    options.interpolation = param.interpolation;
+    options.allow_partial_coverage = true;  // angle_scale > 1 reaches past the field's horizon
+    const PatternGeometry g = param.hexagonal ? pattern_geometry(design, Dpi{2880}, Dpi{1440})
+                                              : pattern_geometry(design, Dpi{240}, Dpi{200});
+    const Encoder encoder(design, field, g, options);
+    const std::size_t row_floats = static_cast<std::size_t>(g.width) * 3;
+    std::vector<float> row(row_floats);
+    std::size_t inside = 0, outside = 0;
+    double worst = 0.0;
+    for (int py = 1; py < g.height; py += 11) {
+        encoder.render_row(py, row);
+        for (int px = 0; px < g.width; ++px) {
+            const Eigen::Vector2d p = g.dot_centre(px, py);
+            const optics::CellIndex cell = encoder.lattice().cell_at(p);
+            std::array<double, 3> expected{};
+            if (encoder.lattice().contains(cell)) {
+                const Eigen::Vector3d d = encoder.incident_direction(p - encoder.lattice().center(cell));
+                const relight::InterpolationWeights w =
+                    encoder.interpolator().weights(options.mapping.field_direction(d), param.interpolation);
+                for (std::size_t k = 0; k < w.count; ++k)
+                    for (int c = 0; c < 3; ++c)
+                        expected[static_cast<std::size_t>(c)] += w.weight[k] * encoder.lenslet_sample(cell, w.index[k], c) / d.z();
+                ++inside;
+            } else {
+                ++outside;
+            }
+            for (std::size_t c = 0; c < 3; ++c) {
+                const double got = row[static_cast<std::size_t>(px) * 3 + c];
+                worst = std::max(worst, std::abs(got - expected[c]) / std::max(1.0, std::abs(expected[c])));
+                ASSERT_NEAR(got, expected[c], 2e-5 * std::max(1.0, std::abs(expected[c]))) << "dot " << px << ", " << py;
+            }
+        }
+    }
+    EXPECT_GT(inside, 1000u);
+    RecordProperty("worst_relative_error", std::to_string(worst));
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Mappings, RenderRow,
+    ::testing::Values(PerDotCase{"hex_paraxial", true, optics::Model::Paraxial, 0.0, 1.0, relight::Interpolation::delaunay},
+                      PerDotCase{"hex_exact_tilted", true, optics::Model::Exact, 45.0, 1.0, relight::Interpolation::delaunay},
+                      PerDotCase{"hex_paraxial_scaled", true, optics::Model::Paraxial, 20.0, 1.6, relight::Interpolation::delaunay},
+                      PerDotCase{"hex_exact_nearest", true, optics::Model::Exact, 10.0, 1.0, relight::Interpolation::nearest},
+                      PerDotCase{"rect_exact_tilted", false, optics::Model::Exact, 45.0, 1.0, relight::Interpolation::delaunay},
+                      PerDotCase{"rect_paraxial_solid_angle", false, optics::Model::Paraxial, 0.0, 1.0,
+                                 relight::Interpolation::solid_angle}),
+    [](const auto& test) { return std::string(test.param.name); });
 
 TEST(Encoder, ExactTableMatchesDirectNewtonSolves) {
     const optics::Design design = small_design1(5, 5);

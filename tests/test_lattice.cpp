@@ -44,6 +44,25 @@ TEST(Lattice, CellAtIsTheNearestCentre) {
     }
 }
 
+TEST(Lattice, CellExitIsWhereAHorizontalLineLeavesTheCell) {
+    std::mt19937_64 random(7);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    for (const Lattice& lattice : {Lattice::hexagonal(2.358, 7, 8), Lattice::rectangular(4.0, 4.8, 6, 5)}) {
+        const Eigen::Vector2d half = lattice.half_extent();
+        const double eps = 1e-9 * lattice.pitch_x();
+        for (int k = 0; k < 20000; ++k) {
+            const Eigen::Vector2d p(half.x() * unit(random), half.y() * unit(random));
+            const CellIndex cell = lattice.cell_at(p);
+            const double exit = lattice.kind() == LatticeKind::Hexagonal
+                                    ? lattice.cell_exit_x_of<LatticeKind::Hexagonal>(cell, p.y())
+                                    : lattice.cell_exit_x_of<LatticeKind::Rectangular>(cell, p.y());
+            ASSERT_GE(exit, p.x() - eps);
+            ASSERT_TRUE(lattice.cell_contains(cell, {exit - eps, p.y()})) << k;
+            ASSERT_FALSE(lattice.cell_contains(cell, {exit + eps, p.y()})) << k;
+        }
+    }
+}
+
 TEST(Lattice, CentresAverageToZero) {
     for (const Lattice& lattice : {Lattice::hexagonal(2.358, 7, 8), Lattice::hexagonal(2.358, 63, 73),
                                    Lattice::rectangular(4.0, 4.8, 6, 5)}) {
