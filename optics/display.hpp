@@ -1,0 +1,127 @@
+#pragma once
+// Forward simulation of the observer-invariant displays (Designs I and II, thesis 8.2):
+// light from distant sources behind the display, through the lens array (A), modulated by
+// the printed transparency in the encoding plane (B), onto the diffuser (C), where the
+// observer sees it. Everything the thesis observed follows from tracing it: Design I's
+// per-direction images shifting on the diffuser as the light moves, Design II's corrective
+// lenslets holding them on their macro-pixel, wrap-over into the neighbouring lenslet at
+// steep angles, vignetting, several lights adding up.
+//
+// Method: for every light direction, a square grid of rays over every lenslet's cell at the
+// entrance plane (the rays inside the cell; the grids of neighbouring cells tile the
+// plane) is traced to the encoding surface, takes the transmittance of the print dot it
+// lands on, and is traced on to the diffuser's face, where its power is splatted
+// (bilinearly) into the output image. A ray that leaves its lenslet is not lost: it goes
+// on through the lenslet it has crossed into (wrap-over is crosstalk, not darkness).
+// Paraxial: each lenslet's augmented matrices, no Fresnel losses. Exact: real surfaces,
+// Snell's law, apertures, total internal reflection, Fresnel transmittance.
+//
+// Units: an output value is the irradiance on the diffuser divided by the light's
+// irradiance on a plane facing it; a fully transparent pattern lit head-on averages the
+// display's light efficiency. Directions: d is the direction the light travels
+// (d.z() > 0: from the back toward the observer), as in analysis.hpp.
+//
+// Example: RasterTransparency t(w, h, 3, dot_x, dot_y, values);
+//          DisplaySimulator sim(design);
+//          DiffuserImage out = sim.simulate(t, {{incident_direction(0.2, 0.0), {1, 1, 1}}}, {});
+
+#include <array>
+#include <cstddef>
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/image.hpp"
+#include "optics/analysis.hpp"
+#include "optics/design.hpp"
+
+namespace rfd::optics {
+
+/// The printed pattern as light meets it: the transmittance of each print dot.
+class Transparency {
+public:
+    virtual ~Transparency() = default;
+    virtual int channels() const = 0;
+    /// For each point (mm, the encoding plane's frame: origin on the array's axis, x right,
+    /// y up) the transmittance in [0, 1] of the dot under it, `channels()` values per point
+    /// (channel fastest); 0 off the sheet. Called once per batch of rays, so an
+    /// implementation may stream its dots (sorting the points by row).
+    virtual void sample(std::span<const Eigen::Vector2d> points, std::span<float> out) const = 0;
+};
+
+/// A transparency held in memory: width x height dots of dot_x by dot_y mm, centred on the
+/// axis, row 0 at the top (the layout of patterns::PatternGeometry), values interleaved.
+class RasterTransparency final : public Transparency {
+public:
+    RasterTransparency(int width, int height, int channels, double dot_x, double dot_y, std::vector<float> values);
+    int channels() const override { return channels_; }
+    void sample(std::span<const Eigen::Vector2d> points, std::span<float> out) const override;
+
+private:
+    int width_, height_, channels_;
+    double dot_x_, dot_y_;
+    std::vector<float> values_;
+};
+
+/// A distant light: a direction of travel, a colour (its irradiance per channel on a plane
+/// facing it) and, for an area source, an angular radius (a uniform disc of directions).
+struct DisplayLight {
+    Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();
+    std::array<double, 3> colour{1.0, 1.0, 1.0};
+    double angular_radius_rad = 0.0;
+};
+
+struct SimulationOptions {
+    Model model = Model::Paraxial;
+    int rays_per_side = 8;          ///< per lenslet, over the cell's bounding box
+    double pixels_per_pitch = 8.0;  ///< output pixels per lenslet pitch along x
+    /// Directions per side of the square grid over an area light's disc (1 for points).
+    int area_samples_per_side = 5;
+};
+
+/// What the diffuser shows.
+struct DiffuserImage {
+    Image image;                 ///< relative irradiance (RGB), row 0 at the top
+    double pixel_mm = 0.0;       ///< square pixels
+    Eigen::Vector2d first_pixel = Eigen::Vector2d::Zero();  ///< centre of pixel (0, 0), mm
+    std::size_t rays = 0;        ///< rays traced
+    std::size_t directions = 0;  ///< light directions sampled
+    std::size_t lost = 0;        ///< rays that did not reach the diffuser
+    std::size_t crossed = 0;     ///< rays that reached it through a neighbouring lenslet
+    /// Power reaching the diffuser over the power entering the lenslets, per channel, with
+    /// the pattern taken as fully transparent (the optics' efficiency) and as printed.
+    double optical_efficiency = 0.0;
+    std::array<double, 3> pattern_efficiency{};
+
+    /// The centre of pixel (x, y), mm.
+    Eigen::Vector2d pixel_centre(int x, int y) const {
+        return first_pixel + Eigen::Vector2d(x * pixel_mm, -y * pixel_mm);
+    }
+};
+
+class DisplaySimulator {
+public:
+    /// Designs I and II only; InputError otherwise.
+    explicit DisplaySimulator(const Design& design);
+
+    const DesignOptics& optics() const { return optics_; }
+    /// Index of the diffuser's light-side face in the system.
+    std::size_t diffuser_surface() const { return diffuser_surface_; }
+
+    /// The diffuser image under `lights` (each with d.z() > 0; InputError otherwise).
+    DiffuserImage simulate(const Transparency& pattern, const std::vector<DisplayLight>& lights,
+                           const SimulationOptions& options) const;
+
+    /// The mean of `image` over each lenslet's cell: the picture at the display's own
+    /// resolution (one value per lenslet), count_x by count_y, row 0 at the top (cell row
+    /// count_y - 1). For hexagonal lattices odd rows are shifted by half a pixel on screen;
+    /// here each lenslet simply takes its column.
+    Image per_lenslet(const DiffuserImage& image) const;
+
+private:
+    DesignOptics optics_;
+    std::size_t diffuser_surface_ = 0;
+};
+
+}  // namespace rfd::optics
