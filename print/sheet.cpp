@@ -32,25 +32,6 @@ std::string format_number(double value) {
     return text;
 }
 
-// A positive finite number from a pattern attribute, or `fallback` when it is absent.
-double attribute_number(const patterns::PatternFileInfo& info, const std::string& key,
-                        const std::filesystem::path& file, double fallback, bool allow_zero) {
-    const auto it = info.attributes.find(key);
-    if (it == info.attributes.end()) return fallback;
-    std::size_t used = 0;
-    double value = std::nan("");
-    try {
-        value = std::stod(it->second, &used);
-    } catch (const std::exception&) {
-        used = 0;
-    }
-    if (used != it->second.size() || !std::isfinite(value) || value < 0.0 || (!allow_zero && value == 0.0))
-        throw InputError(SourceLocation{file.string(), 0, 0, "rfd:" + key},
-                         "expected a " + std::string(allow_zero ? "non-negative" : "positive") +
-                             " number, got '" + it->second + "'");
-    return value;
-}
-
 // Printer codes (1 - v, three channels) of one pattern row of `channels` channels.
 void tone_row(const float* pattern, int width, int channels, const ToneMap& tone, float* codes) {
     for (int x = 0; x < width; ++x)
@@ -293,6 +274,24 @@ void write_pdf(const std::filesystem::path& out, const SheetLayout& layout, cons
 }
 
 }  // namespace
+
+double attribute_number(const patterns::PatternFileInfo& info, const std::string& key,
+                        const std::filesystem::path& file, double fallback, bool allow_zero) {
+    const auto it = info.attributes.find(key);
+    if (it == info.attributes.end()) return fallback;
+    std::size_t used = 0;
+    double value = std::nan("");
+    try {
+        value = std::stod(it->second, &used);
+    } catch (const std::exception&) {
+        used = 0;
+    }
+    if (used != it->second.size() || !std::isfinite(value) || value < 0.0 || (!allow_zero && value == 0.0))
+        throw InputError(SourceLocation{file.string(), 0, 0, "rfd:" + key},
+                         "expected a " + std::string(allow_zero ? "non-negative" : "positive") +
+                             " number, got '" + it->second + "'");
+    return value;
+}
 
 patterns::PatternGeometry check_pattern(const optics::Design& design, const PrinterProfile& printer,
                                         const std::filesystem::path& pattern_file,

@@ -45,6 +45,11 @@ struct SheetReport {
     int pattern_channels = 0;
 };
 
+/// A number from a pattern's rfd: attribute `key` (>= 0, or > 0 unless allow_zero), or
+/// `fallback` when the file has none. InputError naming the file and attribute otherwise.
+double attribute_number(const patterns::PatternFileInfo& info, const std::string& key,
+                        const std::filesystem::path& file, double fallback, bool allow_zero);
+
 /// Checks that `pattern_file` is `design`'s raster at the printer's dpi (size and, when the
 /// file has one, resolution; with the file's rfd:margin_mm if any) and returns that raster.
 /// Throws InputError naming the file and both sizes otherwise.

@@ -3,6 +3,7 @@
 // mirror, determinism), PDF page size and tiling, the moire sheet, and bad input.
 
 #include <cmath>
+#include <random>
 #include <fstream>
 #include <iterator>
 #include <sstream>
@@ -15,6 +16,7 @@
 #include "optics/design.hpp"
 #include "patterns/raster.hpp"
 #include "print/moire.hpp"
+#include "print/printed.hpp"
 #include "print/printer.hpp"
 #include "print/sheet.hpp"
 #include "tests/support/error_of.hpp"
@@ -86,6 +88,65 @@ std::filesystem::path write_test_pattern(const TempDir& dir, const optics::Desig
     const auto path = dir / "pattern.exr";
     patterns::write_pattern(path, Uniform(g, value), attributes);
     return path;
+}
+
+
+// ------------------------------------------------------------------ printed transparency
+
+// Every dot a different value, exact in half floats: k / 16 plus 1/8 per channel.
+class Steps final : public patterns::PatternSource {
+public:
+    explicit Steps(patterns::PatternGeometry g) : g_(g) {}
+    const patterns::PatternGeometry& geometry() const override { return g_; }
+    int channels() const override { return 3; }
+    void render_row(int py, std::span<float> out) const override {
+        for (int px = 0; px < g_.width; ++px)
+            for (int c = 0; c < 3; ++c) out[static_cast<std::size_t>(px * 3 + c)] = value(px, py, c);
+    }
+    static float value(int px, int py, int c) { return static_cast<float>((px + 3 * py) % 17) / 16.0f + 0.125f * static_cast<float>(c); }
+
+private:
+    patterns::PatternGeometry g_;
+};
+
+TEST(PrintedTransparency, EachPointSeesItsDotAsPrinted) {
+    const TempDir dir;
+    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const PrinterProfile printer = parse_printer(small_printer_toml(300, 150), "test.toml");
+    const auto g = patterns::pattern_geometry(design, printer.dpi_x, printer.dpi_y);
+    patterns::write_pattern(dir / "steps.exr", Steps(g), {{"white", "0.8"}});
+    const PrintedTransparency printed(design, printer, dir / "steps.exr", 1.3, 2);
+    EXPECT_EQ(printed.tone().white, 0.8);
+    EXPECT_EQ(printed.tone().sheets, 2);
+
+    std::mt19937_64 random(3);
+    std::uniform_real_distribution<double> unit(-0.6, 0.6);  // a little past the sheet too
+    std::vector<Eigen::Vector2d> points;
+    for (int k = 0; k < 5000; ++k) points.emplace_back(unit(random) * g.size_mm().x(), unit(random) * g.size_mm().y());
+    std::vector<float> out(points.size() * 3);
+    printed.sample(points, out);
+    int on_sheet = 0;
+    for (std::size_t k = 0; k < points.size(); ++k) {
+        const Eigen::Vector2d r = g.raster_position(points[k]);
+        const int px = static_cast<int>(std::floor(r.x() + 0.5)), py = static_cast<int>(std::floor(r.y() + 0.5));
+        const bool inside = px >= 0 && py >= 0 && px < g.width && py < g.height;
+        on_sheet += inside;
+        for (int c = 0; c < 3; ++c) {
+            const double expected = inside ? printed.tone().stack_transmittance(Steps::value(px, py, c)) : 0.0;
+            ASSERT_NEAR(out[k * 3 + static_cast<std::size_t>(c)], expected, 1e-6) << k;
+        }
+    }
+    EXPECT_GT(on_sheet, 2500);
+    EXPECT_LT(on_sheet, 4900);
+}
+
+TEST(PrintedTransparency, APatternForAnotherResolutionIsRefused) {
+    const TempDir dir;
+    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const PrinterProfile printer = parse_printer(small_printer_toml(300, 150), "test.toml");
+    const auto path = write_test_pattern(dir, design, parse_printer(small_printer_toml(200, 200), "other.toml"), 0.5f);
+    EXPECT_THAT(error_of([&] { PrintedTransparency(design, printer, path, 1.0, 0); }),
+                HasSubstr("encode the pattern at the printer's resolution"));
 }
 
 // ----------------------------------------------------------------------------- tone mapping

@@ -1,0 +1,73 @@
+#include "print/printed.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <string>
+#include <vector>
+
+#include "core/error.hpp"
+#include "print/sheet.hpp"
+
+namespace rfd::print {
+
+PrintedTransparency::PrintedTransparency(const optics::Design& design, const PrinterProfile& printer,
+                                         std::filesystem::path pattern_file, double brightness, int sheets)
+    : file_(std::move(pattern_file)) {
+    if (!(brightness > 0.0) || !std::isfinite(brightness))
+        throw InputError(SourceLocation{"", 0, 0, "--brightness"}, "expected a positive number");
+    if (sheets != 0 && sheets != 1 && sheets != 2)
+        throw InputError(SourceLocation{"", 0, 0, "--sheets"}, "expected 1 or 2, got " + std::to_string(sheets));
+    const patterns::PatternFileInfo info = patterns::read_pattern_info(file_);
+    if (info.channels != 1 && info.channels != 3)
+        throw InputError(SourceLocation{file_.string()},
+                         "expected a pattern with 1 (grey) or 3 (RGB) channels, got " + std::to_string(info.channels));
+    geometry_ = check_pattern(design, printer, file_, info);
+    channels_ = info.channels;
+    tone_.printer = printer;
+    tone_.brightness = brightness;
+    tone_.white = attribute_number(info, "white", file_, 1.0, /*allow_zero=*/false);
+    tone_.sheets = sheets == 0 ? printer.sheets : sheets;
+}
+
+void PrintedTransparency::sample(std::span<const Eigen::Vector2d> points, std::span<float> out) const {
+    const std::size_t c = static_cast<std::size_t>(channels_);
+    RFD_CHECK(out.size() == points.size() * c);
+    std::fill(out.begin(), out.end(), 0.0f);
+    // The dot under each point (off the sheet: none), then the points in row order.
+    const patterns::PatternGeometry& g = geometry_;
+    std::vector<std::size_t> order;
+    std::vector<int> row(points.size(), -1), column(points.size(), -1);
+    for (std::size_t k = 0; k < points.size(); ++k) {
+        const Eigen::Vector2d r = g.raster_position(points[k]);
+        const double x = std::floor(r.x() + 0.5), y = std::floor(r.y() + 0.5);
+        if (!(x >= 0.0 && y >= 0.0 && x < g.width && y < g.height)) continue;
+        row[k] = static_cast<int>(y);
+        column[k] = static_cast<int>(x);
+        order.push_back(k);
+    }
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return row[a] < row[b]; });
+
+    constexpr int kStripRows = 64;
+    patterns::PatternReader reader(file_);
+    const std::size_t row_floats = static_cast<std::size_t>(g.width) * c;
+    std::vector<float> strip;
+    for (std::size_t next = 0; next < order.size();) {
+        // A strip of consecutive rows that points land in: rows no point needs are not read.
+        const int y0 = row[order[next]];
+        int y1 = y0 + 1;
+        for (std::size_t k = next; k < order.size() && row[order[k]] <= y1 && y1 - y0 < kStripRows; ++k)
+            y1 = std::max(y1, row[order[k]] + 1);
+        strip.resize(row_floats * static_cast<std::size_t>(y1 - y0));
+        reader.read_rows(y0, y1, strip);
+        for (; next < order.size() && row[order[next]] < y1; ++next) {
+            const std::size_t k = order[next];
+            const float* dot = strip.data() + static_cast<std::size_t>(row[k] - y0) * row_floats +
+                               static_cast<std::size_t>(column[k]) * c;
+            for (std::size_t ch = 0; ch < c; ++ch)
+                out[k * c + ch] = static_cast<float>(tone_.stack_transmittance(dot[ch]));
+        }
+    }
+}
+
+}  // namespace rfd::print

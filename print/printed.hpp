@@ -1,0 +1,43 @@
+#pragma once
+// A pattern as the printer will print it, for the display simulator: each dot's
+// transmittance after the tone mapping of printer.hpp (brightness, white, gamma, black
+// level, maximum density, sheets stacked back to back), read from the pattern file.
+//
+// The file is not loaded: sample() sorts the points by row and reads only the rows they
+// land in (consecutive ones as one strip), so a full-page pattern costs a strip of memory.
+//
+// Example: PrintedTransparency t(design, load_printer("epson_stylus_pro_4800"), "p.exr", 1.0, 0);
+//          DiffuserImage out = DisplaySimulator(design).simulate(t, lights, {});
+
+#include <filesystem>
+
+#include "optics/design.hpp"
+#include "optics/display.hpp"
+#include "patterns/raster.hpp"
+#include "print/printer.hpp"
+
+namespace rfd::print {
+
+class PrintedTransparency final : public optics::Transparency {
+public:
+    /// Checks the pattern against the design at the printer's dpi (check_pattern: size and
+    /// resolution) and its channels (1 or 3); InputError naming the file otherwise.
+    /// `sheets` 0 means the printer profile's.
+    PrintedTransparency(const optics::Design& design, const PrinterProfile& printer,
+                        std::filesystem::path pattern_file, double brightness, int sheets);
+
+    int channels() const override { return channels_; }
+    /// Thread-safe: every call opens its own reader.
+    void sample(std::span<const Eigen::Vector2d> points, std::span<float> out) const override;
+
+    const ToneMap& tone() const { return tone_; }
+    const patterns::PatternGeometry& geometry() const { return geometry_; }
+
+private:
+    std::filesystem::path file_;
+    patterns::PatternGeometry geometry_;
+    ToneMap tone_;
+    int channels_ = 0;
+};
+
+}  // namespace rfd::print
