@@ -4,7 +4,10 @@
 #include <string>
 #include <utility>
 
+#include "optics/design.hpp"
+#include "print/printer.hpp"
 #include "relight/interpolation.hpp"
+#include "relight/render.hpp"
 #include "relight/scene.hpp"
 
 namespace rfd::cli {
@@ -16,7 +19,16 @@ std::pair<int, int> parse_resolution(const std::string& text);
 /// non-positive sample count leaves the scene's own value.
 void apply_scene_overrides(relight::Scene& scene, const std::string& resolution, int samples_per_pixel);
 
+inline constexpr const char* kLightSyntax = "THETA,PHI[,RADIUS][,R:G:B] (degrees; colour as irradiance per channel)";
+/// --light THETA,PHI[,RADIUS][,R:G:B]: a distant light toward (THETA, PHI) in the field's
+/// frame, a disc of RADIUS degrees if given; InputError quoting the option otherwise.
+relight::Light parse_light(const std::string& text);
+
 /// --interpolation: "delaunay", "solid-angle" or "nearest"; InputError naming it otherwise.
 relight::Interpolation parse_interpolation(const std::string& text);
+
+/// The --printer profile (a file or a bundled name); without one, the thesis's printer's
+/// tone values at the design's own [printer] resolution.
+print::PrinterProfile printer_for(const optics::Design& design, const std::string& option);
 
 }  // namespace rfd::cli

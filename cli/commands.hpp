@@ -29,4 +29,7 @@ void add_print_commands(CLI::App& app, const GlobalOptions& global);
 /// `pattern encode-angular` (Designs III/IV), added to the `pattern` group.
 void add_pattern_angular_command(CLI::App& pattern, const GlobalOptions& global);
 
+/// `simulate`: the predicted output of a Design I/II display under lights.
+void add_simulate_commands(CLI::App& app, const GlobalOptions& global);
+
 }  // namespace rfd::cli

@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "optics/design.hpp"
 #include "print/moire.hpp"
@@ -15,17 +16,6 @@
 
 namespace rfd::cli {
 namespace {
-
-// The --printer profile; without one, the thesis's printer's tone values at the design's
-// own [printer] resolution.
-print::PrinterProfile printer_for(const optics::Design& design, const std::string& option) {
-    if (!option.empty()) return print::load_printer(option);
-    print::PrinterProfile printer = print::load_printer("epson_stylus_pro_4800");
-    printer.dpi_x = design.printer.dpi_x;
-    printer.dpi_y = design.printer.dpi_y;
-    printer.name += " (default profile at the design's resolution)";
-    return printer;
-}
 
 void add_sheet_command(CLI::App& print_cmd) {
     auto* cmd = print_cmd.add_subcommand(

@@ -30,55 +30,6 @@
 namespace rfd::cli {
 namespace {
 
-constexpr const char* kLightSyntax = "THETA,PHI[,RADIUS][,R:G:B] (degrees; colour as irradiance per channel)";
-
-double parse_number(const std::string& text, const std::string& light, const char* what) {
-    std::size_t used = 0;
-    double value = std::numeric_limits<double>::quiet_NaN();
-    try {
-        value = std::stod(text, &used);
-    } catch (const std::exception&) {
-        used = 0;
-    }
-    if (text.empty() || used != text.size() || !std::isfinite(value))
-        throw InputError("--light '" + light + "': " + what + " '" + text + "' is not a number; expected " +
-                         kLightSyntax);
-    return value;
-}
-
-relight::Light parse_light(const std::string& text) {
-    std::vector<std::string> parts;
-    std::stringstream stream(text);
-    for (std::string part; std::getline(stream, part, ',');) parts.push_back(part);
-    if (!text.empty() && text.back() == ',') parts.emplace_back();
-    Eigen::Vector3d colour = Eigen::Vector3d::Ones();
-    if (parts.size() >= 3 && parts.back().find(':') != std::string::npos) {
-        std::vector<std::string> channels;
-        std::stringstream colour_stream(parts.back());
-        for (std::string c; std::getline(colour_stream, c, ':');) channels.push_back(c);
-        if (channels.size() != 3)
-            throw InputError("--light '" + text + "': colour '" + parts.back() + "' must be R:G:B");
-        for (int c = 0; c < 3; ++c) {
-            colour[c] = parse_number(channels[static_cast<std::size_t>(c)], text, "colour channel");
-            if (colour[c] < 0.0) throw InputError("--light '" + text + "': colour channels must be >= 0");
-        }
-        parts.pop_back();
-    }
-    if (parts.size() < 2 || parts.size() > 3)
-        throw InputError("--light '" + text + "': expected " + kLightSyntax);
-    const double theta = parse_number(parts[0], text, "THETA");
-    const double phi = parse_number(parts[1], text, "PHI");
-    if (theta < 0.0 || theta > 90.0)
-        throw InputError("--light '" + text + "': THETA must be within [0, 90] degrees from the zenith "
-                         "(the field covers the upper hemisphere), got " + parts[0]);
-    const Eigen::Vector3d direction = direction_from_angles(degrees_to_radians(theta), degrees_to_radians(phi));
-    if (parts.size() == 2) return relight::DirectionalLight{direction, colour};
-    const double radius = parse_number(parts[2], text, "RADIUS");
-    if (!(radius > 0.0 && radius <= 90.0))
-        throw InputError("--light '" + text + "': RADIUS must be within (0, 90] degrees, got " + parts[2]);
-    return relight::DiskLight{direction, degrees_to_radians(radius), colour};
-}
-
 // JSON has no infinity: a perfect match is reported as null.
 nlohmann::json finite_or_null(double value) {
     return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
