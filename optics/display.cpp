@@ -178,46 +178,91 @@ DiffuserImage DisplaySimulator::simulate(const Transparency& pattern, const std:
     std::vector<Eigen::Vector2d> landings(ray_count);
     std::vector<float> transmittance(ray_count * static_cast<std::size_t>(pattern_channels));
     const double pixel_area = result.pixel_mm * result.pixel_mm;
+    ParaxialBatch batch;
+    auto cell_of = [&](std::size_t index) {
+        return CellIndex{static_cast<int>(index % static_cast<std::size_t>(lattice.count_x())),
+                         static_cast<int>(index / static_cast<std::size_t>(lattice.count_x()))};
+    };
 
     for (const DisplayLight& light : lights) {
         const std::vector<Eigen::Vector3d> samples = light_samples(light, options.area_samples_per_side);
         for (const Eigen::Vector3d& d : samples) {
             ++result.directions;
-            // Lenslets to the pattern, in parallel; each ray is independent.
+            // Lenslets to the pattern, in parallel; each ray is independent. Paraxial rays go
+            // as one batch; the few that cross into a neighbouring lenslet are traced again
+            // alone, through it.
+            if (paraxial) {
+                batch.resize(ray_count);
+                parallel_for_chunks(cells, 16, [&](std::size_t begin, std::size_t end) {
+                    for (std::size_t cell_index = begin; cell_index < end; ++cell_index) {
+                        const Eigen::Vector2d centre = lattice.center(cell_of(cell_index));
+                        for (std::size_t k = 0; k < offsets.size(); ++k) {
+                            const std::size_t r = cell_index * offsets.size() + k;
+                            batch.x[r] = centre.x() + offsets[k].x();
+                            batch.y[r] = centre.y() + offsets[k].y();
+                            batch.tx[r] = d.x() / d.z();
+                            batch.ty[r] = d.y() / d.z();
+                            batch.status[r] = RayStatus::Ok;
+                        }
+                    }
+                });
+                trace_paraxial_batch(system, batch, entry_z, 0, encoding);
+            }
             parallel_for_chunks(cells, 16, [&](std::size_t begin, std::size_t end) {
                 for (std::size_t cell_index = begin; cell_index < end; ++cell_index) {
-                    const CellIndex cell{static_cast<int>(cell_index % static_cast<std::size_t>(lattice.count_x())),
-                                         static_cast<int>(cell_index / static_cast<std::size_t>(lattice.count_x()))};
-                    const Eigen::Vector2d centre = lattice.center(cell);
+                    const Eigen::Vector2d centre = lattice.center(cell_of(cell_index));
                     for (std::size_t k = 0; k < offsets.size(); ++k) {
-                        RayState& state = rays[cell_index * offsets.size() + k];
+                        const std::size_t r = cell_index * offsets.size() + k;
+                        RayState& state = rays[r];
                         state = RayState{};
                         state.paraxial_mode = paraxial;
                         const Eigen::Vector2d point = centre + offsets[k];
                         if (paraxial) {
-                            state.paraxial = {point.x(), point.y(), d.x() / d.z(), d.y() / d.z()};
-                            trace_paraxial_ray(system, state, entry_z, 0, encoding);
+                            if (batch.status[r] == RayStatus::Ok) {
+                                state.paraxial = {batch.x[r], batch.y[r], batch.tx[r], batch.ty[r]};
+                                state.arrived = true;
+                            } else if (batch.status[r] == RayStatus::CrossedCell) {
+                                state.paraxial = {point.x(), point.y(), d.x() / d.z(), d.y() / d.z()};
+                                trace_paraxial_ray(system, state, entry_z, 0, encoding);
+                            }
                         } else {
                             const Eigen::Vector3d through(point.x(), point.y(), entry_z);
                             // Start far enough in front of the vertex plane to clear any sag.
                             state.exact = Ray{through - (2.0 / d.z()) * d, d};
                             trace_exact(system, state, 0, encoding);
                         }
-                        landings[cell_index * offsets.size() + k] =
-                            state.arrived ? state.position() : Eigen::Vector2d(1e30, 1e30);  // off the sheet
+                        landings[r] = state.arrived ? state.position() : Eigen::Vector2d(1e30, 1e30);  // off the sheet
                     }
                 }
             });
             pattern.sample(landings, transmittance);
             // The pattern to the diffuser.
+            if (paraxial) {
+                parallel_for_chunks(ray_count, 4096, [&](std::size_t begin, std::size_t end) {
+                    for (std::size_t r = begin; r < end; ++r) {
+                        const RayState& state = rays[r];
+                        batch.x[r] = state.paraxial.x;
+                        batch.y[r] = state.paraxial.y;
+                        batch.tx[r] = state.paraxial.tx;
+                        batch.ty[r] = state.paraxial.ty;
+                        batch.status[r] = state.arrived ? RayStatus::Ok : RayStatus::Vignetted;
+                    }
+                });
+                trace_paraxial_batch(system, batch, system.surfaces[encoding].z, encoding + 1, diffuser_surface_);
+            }
             parallel_for_chunks(ray_count, 1024, [&](std::size_t begin, std::size_t end) {
                 for (std::size_t r = begin; r < end; ++r) {
                     RayState& state = rays[r];
                     if (!state.arrived) continue;
-                    if (paraxial)
-                        trace_paraxial_ray(system, state, system.surfaces[encoding].z, encoding + 1, diffuser_surface_);
-                    else
+                    if (!paraxial) {
                         trace_exact(system, state, encoding + 1, diffuser_surface_);
+                    } else if (batch.status[r] == RayStatus::Ok) {
+                        state.paraxial = {batch.x[r], batch.y[r], batch.tx[r], batch.ty[r]};
+                    } else if (batch.status[r] == RayStatus::CrossedCell) {
+                        trace_paraxial_ray(system, state, system.surfaces[encoding].z, encoding + 1, diffuser_surface_);
+                    } else {
+                        state.arrived = false;
+                    }
                 }
             });
             // Splatted in ray order, so the sums do not depend on the threads.
