@@ -70,4 +70,28 @@ done
 "$rfd" print moire designs/design1.toml --pitch 2.350:2.366:9 --out "$patterns/design1_moire.pdf" \
   | tee "$patterns/design1_moire.txt"
 
+# What the displays will show (thesis 8.2): Design I and II patterns of the bottle under a
+# light on the display's axis (field theta 45, phi 90 with the 45-degree tilt) and one off
+# it, a red and a green light together, and a disc light; each with the same lights
+# relighting the field in software beside it for comparison.
+predicted="$out/predicted"
+mkdir -p "$predicted"
+echo "== predicted display output" >&2
+for n in 1 2; do
+  for case in "axis:--light 45,90" "side:--light 45,70" "red_green:--light 45,75,1:0:0 --light 45,105,0:1:0" \
+              "disc:--light 45,90,8"; do
+    name="${case%%:*}"
+    samples=5
+    if [ "$name" = disc ]; then samples=3; fi  # 9 directions over the disc
+    # shellcheck disable=SC2086 # the lights are several words on purpose
+    "$rfd" simulate "designs/design$n.toml" "$patterns/design${n}_bottle.exr" ${case#*:} \
+      --area-samples "$samples" --out "$predicted/design${n}_${name}.png" --lenslets "$predicted/design${n}_${name}_lenslets.png" \
+      | tee "$predicted/design${n}_${name}.txt"
+    if [ "$n" = 1 ]; then
+      # shellcheck disable=SC2086
+      "$rfd" relight render "$patterns/bottle_field" ${case#*:} --out "$predicted/field_${name}.png" > /dev/null
+    fi
+  done
+done
+
 echo "demo written to $out" >&2
