@@ -65,10 +65,11 @@ std::vector<optics::DisplayLight> display_lights(const std::vector<std::string>&
     return lights;
 }
 
-void add_simulate(CLI::App& app, const GlobalOptions& global) {
+CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
     auto* cmd = app.add_subcommand(
         "simulate", "Predict what a Design I or II display shows under given lights, from its design and its "
-                    "pattern as printed (tone mapping, black level, density), before printing");
+                    "pattern as printed (tone mapping, black level, density), before printing; or a subcommand");
+    cmd->require_subcommand(0, 1);
     struct Options {
         std::string design, pattern, printer, out, lenslets, model = "auto";
         std::vector<std::string> lights;
@@ -77,13 +78,13 @@ void add_simulate(CLI::App& app, const GlobalOptions& global) {
         bool json = false;
     };
     auto opt = std::make_shared<Options>();
-    cmd->add_option("DESIGN", opt->design, "Design TOML file (Design I or II)")->required();
-    cmd->add_option("PATTERN", opt->pattern, "Pattern file from `rfd pattern encode`")->required();
+    // Not ->required(): `rfd simulate SUBCOMMAND ...` has none of them (checked in the callback).
+    cmd->add_option("DESIGN", opt->design, "Design TOML file (Design I or II)");
+    cmd->add_option("PATTERN", opt->pattern, "Pattern file from `rfd pattern encode`");
     cmd->add_option("--light", opt->lights,
                     std::string("A distant light behind the display, in the field's frame ") + kLightSyntax +
-                        "; repeat for several")
-        ->required();
-    cmd->add_option("--out", opt->out, "Predicted diffuser image: .exr (linear) or .png (sRGB)")->required();
+                        "; repeat for several");
+    cmd->add_option("--out", opt->out, "Predicted diffuser image: .exr (linear) or .png (sRGB)");
     cmd->add_option("--lenslets", opt->lenslets,
                     "Also the picture at the display's resolution: the mean over each lenslet (.exr or .png)");
     cmd->add_option("--model", opt->model, "paraxial, exact, or auto (paraxial where it is within --tolerance)")
@@ -102,8 +103,13 @@ void add_simulate(CLI::App& app, const GlobalOptions& global) {
                     "Directions per side of the grid over an area light's disc (default 5)")
         ->check(CLI::Range(1, 64));
     cmd->add_flag("--json", opt->json, "Machine-readable summary");
-    cmd->callback([opt, &global] {
+    cmd->callback([cmd, opt, &global] {
         (void)global;
+        if (!cmd->get_subcommands().empty()) return;  // a subcommand ran instead
+        if (opt->design.empty()) throw CLI::RequiredError("DESIGN");
+        if (opt->pattern.empty()) throw CLI::RequiredError("PATTERN");
+        if (opt->lights.empty()) throw CLI::RequiredError("--light");
+        if (opt->out.empty()) throw CLI::RequiredError("--out");
         const auto start = std::chrono::steady_clock::now();
         const optics::Design design = optics::load_design(opt->design);
         const optics::DisplaySimulator simulator(design);
@@ -167,10 +173,14 @@ void add_simulate(CLI::App& app, const GlobalOptions& global) {
                     result.rays ? 100.0 * static_cast<double>(result.crossed) / static_cast<double>(result.rays) : 0.0);
         std::printf("  time         %.2f s\n", seconds);
     });
+    return cmd;
 }
 
 }  // namespace
 
-void add_simulate_commands(CLI::App& app, const GlobalOptions& global) { add_simulate(app, global); }
+void add_simulate_commands(CLI::App& app, const GlobalOptions& global) {
+    CLI::App* simulate = add_simulate(app, global);
+    (void)simulate;  // the group's subcommands are added to it here
+}
 
 }  // namespace rfd::cli
