@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <memory>
 #include <string>
 
 #include <Eigen/Geometry>
@@ -14,64 +16,68 @@
 namespace rfd::optics {
 namespace {
 
-// A ray's state at a plane in either model: position, and for the exact model the whole
-// ray (the paraxial one keeps its slopes).
-struct RayState {
-    Ray exact;
-    ParaxialRay paraxial;
-    double transmittance = 1.0;  // Fresnel, exact model
-    bool arrived = false;
-    bool crossed = false;
-    Eigen::Vector2d position() const {
-        return paraxial_mode ? Eigen::Vector2d(paraxial.x, paraxial.y) : Eigen::Vector2d(exact.origin.head<2>());
-    }
-    bool paraxial_mode = false;
-};
-
 // A ray that leaves its lenslet is restarted at the surface where it left, now in the
 // lenslet it crossed into; each restart is one more cell boundary crossed.
 constexpr int kMaxCrossings = 4;
 // How far before a surface a restarted exact ray begins, mm: clear of its own surface.
 constexpr double kRestartBackoff = 1e-7;
+// Lenslets per side of the reference array the rays are traced through: a ray that crosses
+// kMaxCrossings cells from its centre lenslet still meets lenslets there.
+constexpr int kReferenceCells = 2 * (kMaxCrossings + 2) + 1;
+// (lenslet, ray) pairs handled at once: bounds the memory of the sample points.
+constexpr std::size_t kPairsPerBand = std::size_t{1} << 20;
+// Output rows per splatting task.
+constexpr int kStripRows = 16;
 
-void trace_exact(const SequentialSystem& system, RayState& state, std::size_t first, std::size_t last) {
-    for (int crossing = 0; crossing <= kMaxCrossings; ++crossing) {
-        const TraceResult r = trace(system, state.exact, first, last);
-        state.transmittance *= r.transmittance;
-        state.exact = r.ray;
-        if (r.status == RayStatus::Ok) {
-            state.arrived = true;
-            return;
-        }
-        if (r.status != RayStatus::CrossedCell) break;
-        state.crossed = true;
-        first = static_cast<std::size_t>(r.surface);
-        state.exact.origin -= kRestartBackoff * state.exact.direction;
-    }
-    state.arrived = false;
+// Where one ray of the reference lenslet goes.
+struct TracedRay {
+    bool arrived = false;
+    Eigen::Vector2d on_pattern = Eigen::Vector2d::Zero();   // mm, relative to the entry cell's centre
+    Eigen::Vector2d on_diffuser = Eigen::Vector2d::Zero();  // likewise
+    double transmittance = 1.0;                             // Fresnel, exact model
+    std::vector<CellIndex> visited;  // every lenslet it passed through (the first may be a
+                                     // neighbour: an oblique ray meets the curved surface
+                                     // beyond its vertex plane's cell)
+};
+
+void note_visit(std::vector<CellIndex>& visited, bool has_cell, CellIndex cell) {
+    if (has_cell && std::find(visited.begin(), visited.end(), cell) == visited.end()) visited.push_back(cell);
 }
 
-void trace_paraxial_ray(const SequentialSystem& system, RayState& state, double z_start, std::size_t first,
-                        std::size_t last) {
+// Traces `ray` through surfaces [first, last] restarting it in each lenslet it crosses into.
+bool trace_exact(const SequentialSystem& system, Ray& ray, double& transmittance, std::vector<CellIndex>& visited,
+                 std::size_t first, std::size_t last) {
     for (int crossing = 0; crossing <= kMaxCrossings; ++crossing) {
-        const ParaxialResult r = trace_paraxial(system, state.paraxial, z_start, first, last);
-        state.paraxial = r.ray;
-        if (r.status == RayStatus::Ok) {
-            state.arrived = true;
-            return;
-        }
-        if (r.status != RayStatus::CrossedCell) break;
-        state.crossed = true;
+        const TraceResult r = trace(system, ray, first, last);
+        transmittance *= r.transmittance;
+        ray = r.ray;
+        note_visit(visited, r.has_cell, r.cell);
+        if (r.status == RayStatus::Ok) return true;
+        if (r.status != RayStatus::CrossedCell) return false;
+        first = static_cast<std::size_t>(r.surface);
+        ray.origin -= kRestartBackoff * ray.direction;
+    }
+    return false;
+}
+
+bool trace_paraxial_ray(const SequentialSystem& system, ParaxialRay& ray, std::vector<CellIndex>& visited,
+                        double z_start, std::size_t first, std::size_t last) {
+    for (int crossing = 0; crossing <= kMaxCrossings; ++crossing) {
+        const ParaxialResult r = trace_paraxial(system, ray, z_start, first, last);
+        ray = r.ray;
+        note_visit(visited, r.has_cell, r.cell);
+        if (r.status == RayStatus::Ok) return true;
+        if (r.status != RayStatus::CrossedCell) return false;
         first = static_cast<std::size_t>(r.surface);
         z_start = system.surfaces[first].z;
     }
-    state.arrived = false;
+    return false;
 }
 
 // Directions sampling one light: its own for a point source, a square grid over the disc
 // of an area source (equal weights).
 std::vector<Eigen::Vector3d> light_samples(const DisplayLight& light, int per_side) {
-    if (light.angular_radius_rad <= 0.0 || per_side <= 1) return {light.direction};
+    if (light.angular_radius_rad <= 0.0 || per_side <= 1) return {light.direction.normalized()};
     const Eigen::Vector3d d = light.direction.normalized();
     const Eigen::Vector3d u = d.unitOrthogonal();
     const Eigen::Vector3d v = d.cross(u);
@@ -84,6 +90,41 @@ std::vector<Eigen::Vector3d> light_samples(const DisplayLight& light, int per_si
             samples.push_back((d + reach * (fx * u + fy * v)).normalized());
         }
     return samples;
+}
+
+// The design with every lenslet array widened to kReferenceCells x kReferenceCells: the
+// lenslets around the centre one that its rays can cross into, all present.
+Design reference_design(Design design) {
+    for (Plane& plane : design.planes) {
+        if (!plane.part) continue;
+        if (auto* array = std::get_if<LensletArrayPart>(&*plane.part)) {
+            const Lattice& l = array->lattice;
+            array->lattice = l.kind() == LatticeKind::Hexagonal
+                                 ? Lattice::hexagonal(l.pitch_x(), kReferenceCells, kReferenceCells)
+                                 : Lattice::rectangular(l.pitch_x(), l.pitch_y(), kReferenceCells, kReferenceCells);
+        }
+    }
+    return design;
+}
+
+// One traced ray as every lenslet of the display repeats it: what it carries and, for a
+// ray that crossed into neighbouring lenslets, where those lie relative to its own.
+struct LensletRay {
+    Eigen::Vector2d on_pattern, on_diffuser;
+    double entering = 0.0;            // power entering the lenslet: ray area x cos(incidence)
+    double reaching = 0.0;            // of which reaches the diffuser (Fresnel losses)
+    std::array<double, 3> colour{};   // the light's irradiance share per channel
+    std::size_t first_neighbour = 0, neighbours = 0;  // into `neighbour_offsets`
+    bool crossed = false;  // passed from one lenslet into another (wrap-over)
+};
+
+// A 2D low-discrepancy sequence (Roberts' R2): offsets when a lenslet gets fewer rays per
+// direction than a full grid, each direction continuing the sequence where the last stopped.
+Eigen::Vector2d r2_point(std::size_t index) {
+    constexpr double g = 1.32471795724474602596;  // the plastic number
+    const double a1 = 1.0 / g, a2 = 1.0 / (g * g);
+    const double i = static_cast<double>(index);
+    return {std::fmod(0.5 + a1 * i, 1.0), std::fmod(0.5 + a2 * i, 1.0)};
 }
 
 }  // namespace
@@ -99,20 +140,23 @@ RasterTransparency::RasterTransparency(int width, int height, int channels, doub
 void RasterTransparency::sample(std::span<const Eigen::Vector2d> points, std::span<float> out) const {
     const std::size_t c = static_cast<std::size_t>(channels_);
     RFD_CHECK(out.size() == points.size() * c);
-    for (std::size_t k = 0; k < points.size(); ++k) {
-        // The dot whose square holds the point (dot centres as in PatternGeometry).
-        const double fx = points[k].x() / dot_x_ + 0.5 * width_;
-        const double fy = 0.5 * height_ - points[k].y() / dot_y_;
-        const bool on_sheet = fx >= 0.0 && fy >= 0.0 && fx < width_ && fy < height_;
-        for (std::size_t ch = 0; ch < c; ++ch) out[k * c + ch] = 0.0f;
-        if (!on_sheet) continue;
-        const std::size_t index = (static_cast<std::size_t>(fy) * static_cast<std::size_t>(width_) +
-                                   static_cast<std::size_t>(fx)) * c;
-        for (std::size_t ch = 0; ch < c; ++ch) out[k * c + ch] = values_[index + ch];
-    }
+    parallel_for_chunks(points.size(), 1 << 14, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t k = begin; k < end; ++k) {
+            // The dot whose square holds the point (dot centres as in PatternGeometry).
+            const double fx = points[k].x() / dot_x_ + 0.5 * width_;
+            const double fy = 0.5 * height_ - points[k].y() / dot_y_;
+            const bool on_sheet = fx >= 0.0 && fy >= 0.0 && fx < width_ && fy < height_;
+            for (std::size_t ch = 0; ch < c; ++ch) out[k * c + ch] = 0.0f;
+            if (!on_sheet) continue;
+            const std::size_t index = (static_cast<std::size_t>(fy) * static_cast<std::size_t>(width_) +
+                                       static_cast<std::size_t>(fx)) * c;
+            for (std::size_t ch = 0; ch < c; ++ch) out[k * c + ch] = values_[index + ch];
+        }
+    });
 }
 
-DisplaySimulator::DisplaySimulator(const Design& design) : optics_(design) {
+DisplaySimulator::DisplaySimulator(const Design& design)
+    : optics_(design), reference_(std::make_shared<const DesignOptics>(reference_design(design))) {
     if (design.kind != DesignKind::I && design.kind != DesignKind::II)
         throw InputError(SourceLocation{design.file, 0, 0, "design.kind"},
                          "the display simulator handles Designs I and II (a diffuser shows the picture); Design " +
@@ -121,14 +165,14 @@ DisplaySimulator::DisplaySimulator(const Design& design) : optics_(design) {
     RFD_CHECK(diffuser != nullptr);  // parse_design requires one for Designs I and II
     diffuser_surface_ = optics_.system().find(diffuser->name + " diffuser");
     RFD_CHECK(diffuser_surface_ > optics_.encoding_surface());
+    RFD_CHECK(reference_->system().find(diffuser->name + " diffuser") == diffuser_surface_);
 }
 
 DiffuserImage DisplaySimulator::simulate(const Transparency& pattern, const std::vector<DisplayLight>& lights,
                                          const SimulationOptions& options) const {
-    const SequentialSystem& system = optics_.system();
     const Lattice& lattice = optics_.lattice();
     const std::string& file = optics_.design().file;
-    RFD_CHECK(options.rays_per_side > 0 && options.pixels_per_pitch > 0.0);
+    RFD_CHECK(options.rays_per_side > 0 && options.pixels_per_pitch > 0.0 && options.max_rays_per_lenslet > 0);
     for (std::size_t i = 0; i < lights.size(); ++i) {
         const DisplayLight& light = lights[i];
         const std::string which = "light " + std::to_string(i + 1);
@@ -145,6 +189,114 @@ DiffuserImage DisplaySimulator::simulate(const Transparency& pattern, const std:
     const int pattern_channels = pattern.channels();
     RFD_CHECK(pattern_channels == 1 || pattern_channels == 3);
 
+    // Every lenslet is the same and sits in the same neighbourhood of lenslets, so the rays
+    // of one (the centre lenslet of a reference array) are traced once and every lenslet
+    // repeats them, shifted to its centre. Only at the array's edge does a lenslet differ:
+    // a ray that would cross into a lenslet beyond the edge is lost there.
+    const SequentialSystem& system = reference_->system();
+    const Lattice& reference_lattice = reference_->lattice();
+    const CellIndex reference_cell = reference_->centre_cell();
+    const Eigen::Vector2d reference_centre = reference_lattice.center(reference_cell);
+    const std::size_t encoding = reference_->encoding_surface();
+    const double entry_z = system.surfaces.front().z;
+    const bool paraxial = options.model == Model::Paraxial;
+
+    // The entry grid over a cell's bounding box: a full square grid per direction while the
+    // budget allows, otherwise fewer rays per direction from a low-discrepancy sequence that
+    // runs on from direction to direction, so together they still cover the cell.
+    std::vector<std::vector<Eigen::Vector3d>> directions;
+    std::size_t direction_count = 0;
+    for (const DisplayLight& light : lights) {
+        directions.push_back(light_samples(light, options.area_samples_per_side));
+        direction_count += directions.back().size();
+    }
+    const double half_w = 0.5 * lattice.pitch_x();
+    const double half_h = lattice.kind() == LatticeKind::Hexagonal ? lattice.circumradius() : 0.5 * lattice.pitch_y();
+    const std::size_t grid = static_cast<std::size_t>(options.rays_per_side) * static_cast<std::size_t>(options.rays_per_side);
+    const bool full_grid = direction_count * grid <= options.max_rays_per_lenslet;
+    const std::size_t per_direction =
+        full_grid ? grid : std::max<std::size_t>(1, options.max_rays_per_lenslet / std::max<std::size_t>(1, direction_count));
+    const double ray_area = (2.0 * half_w) * (2.0 * half_h) / static_cast<double>(per_direction);
+    auto entry_offset = [&](std::size_t ray, std::size_t sequence) -> Eigen::Vector2d {
+        if (full_grid) {
+            const int n = options.rays_per_side;
+            const int ix = static_cast<int>(ray) % n, iy = static_cast<int>(ray) / n;
+            return {((ix + 0.5) / n * 2.0 - 1.0) * half_w, ((iy + 0.5) / n * 2.0 - 1.0) * half_h};
+        }
+        const Eigen::Vector2d u = r2_point(sequence);
+        return {(2.0 * u.x() - 1.0) * half_w, (2.0 * u.y() - 1.0) * half_h};
+    };
+
+    // Trace the reference lenslet's rays (in parallel; each is independent).
+    struct Job {
+        Eigen::Vector3d direction;
+        Eigen::Vector2d offset;
+        std::array<double, 3> colour;
+    };
+    std::vector<Job> jobs;
+    std::size_t sequence = 0;
+    for (std::size_t l = 0; l < lights.size(); ++l) {
+        const double share = 1.0 / static_cast<double>(directions[l].size());
+        const std::array<double, 3> colour{lights[l].colour[0] * share, lights[l].colour[1] * share,
+                                           lights[l].colour[2] * share};
+        for (const Eigen::Vector3d& d : directions[l])
+            for (std::size_t k = 0; k < per_direction; ++k) {
+                const Eigen::Vector2d offset = entry_offset(k, sequence++);
+                if (!reference_lattice.cell_contains(reference_cell, reference_centre + offset)) continue;
+                jobs.push_back({d, offset, colour});
+            }
+    }
+    std::vector<TracedRay> traced(jobs.size());
+    parallel_for_chunks(jobs.size(), 16, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t r = begin; r < end; ++r) {
+            const Job& job = jobs[r];
+            const Eigen::Vector3d& d = job.direction;
+            const Eigen::Vector2d point = reference_centre + job.offset;
+            TracedRay& out = traced[r];
+            if (paraxial) {
+                ParaxialRay ray{point.x(), point.y(), d.x() / d.z(), d.y() / d.z()};
+                if (!trace_paraxial_ray(system, ray, out.visited, entry_z, 0, encoding)) continue;
+                out.on_pattern = Eigen::Vector2d(ray.x, ray.y) - reference_centre;
+                if (!trace_paraxial_ray(system, ray, out.visited, system.surfaces[encoding].z, encoding + 1,
+                                        diffuser_surface_))
+                    continue;
+                out.on_diffuser = Eigen::Vector2d(ray.x, ray.y) - reference_centre;
+            } else {
+                // Start far enough in front of the vertex plane to clear any sag.
+                Ray ray{Eigen::Vector3d(point.x(), point.y(), entry_z) - (2.0 / d.z()) * d, d};
+                if (!trace_exact(system, ray, out.transmittance, out.visited, 0, encoding)) continue;
+                out.on_pattern = ray.origin.head<2>() - reference_centre;
+                if (!trace_exact(system, ray, out.transmittance, out.visited, encoding + 1, diffuser_surface_)) continue;
+                out.on_diffuser = ray.origin.head<2>() - reference_centre;
+            }
+            out.arrived = true;
+        }
+    });
+
+    // What every lenslet repeats. Lost rays stay (they count as entering light).
+    std::vector<LensletRay> rays;
+    std::vector<Eigen::Vector2d> neighbour_offsets;
+    rays.reserve(traced.size());
+    Eigen::Vector2d reach_min = Eigen::Vector2d::Constant(HUGE_VAL), reach_max = -reach_min;
+    for (std::size_t r = 0; r < traced.size(); ++r) {
+        LensletRay ray;
+        ray.entering = ray_area * jobs[r].direction.z();
+        ray.colour = jobs[r].colour;
+        if (traced[r].arrived) {
+            ray.on_pattern = traced[r].on_pattern;
+            ray.on_diffuser = traced[r].on_diffuser;
+            ray.reaching = ray.entering * traced[r].transmittance;
+            ray.first_neighbour = neighbour_offsets.size();
+            for (const CellIndex& cell : traced[r].visited)
+                if (!(cell == reference_cell)) neighbour_offsets.push_back(reference_lattice.center(cell) - reference_centre);
+            ray.neighbours = neighbour_offsets.size() - ray.first_neighbour;
+            ray.crossed = traced[r].visited.size() > 1;
+            reach_min = reach_min.cwiseMin(ray.on_diffuser);
+            reach_max = reach_max.cwiseMax(ray.on_diffuser);
+        }
+        rays.push_back(ray);
+    }
+
     // The output grid: the array plus one pitch of margin for light spilling past it.
     DiffuserImage result;
     result.pixel_mm = lattice.pitch_x() / options.pixels_per_pitch;
@@ -152,163 +304,126 @@ DiffuserImage DisplaySimulator::simulate(const Transparency& pattern, const std:
     const int width = static_cast<int>(std::ceil(2.0 * half.x() / result.pixel_mm));
     const int height = static_cast<int>(std::ceil(2.0 * half.y() / result.pixel_mm));
     result.first_pixel = Eigen::Vector2d(-0.5 * (width - 1) * result.pixel_mm, 0.5 * (height - 1) * result.pixel_mm);
-    std::vector<double> accumulated(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * 3, 0.0);
+    result.directions = direction_count;
+    const std::size_t plane_size = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+    std::vector<double> accumulated(plane_size * 3, 0.0);
+    const double pixel_area = result.pixel_mm * result.pixel_mm;
+    auto pixel_row = [&](double y_mm) { return (result.first_pixel.y() - y_mm) / result.pixel_mm; };
 
-    // Entry points of one cell, relative to its centre; every cell is the same shape.
-    const double half_w = 0.5 * lattice.pitch_x();
-    const double half_h = lattice.kind() == LatticeKind::Hexagonal ? lattice.circumradius() : 0.5 * lattice.pitch_y();
-    const CellIndex probe = optics_.centre_cell();
-    std::vector<Eigen::Vector2d> offsets;
-    const int n = options.rays_per_side;
-    for (int iy = 0; iy < n; ++iy)
-        for (int ix = 0; ix < n; ++ix) {
-            const Eigen::Vector2d offset(((ix + 0.5) / n * 2.0 - 1.0) * half_w, ((iy + 0.5) / n * 2.0 - 1.0) * half_h);
-            if (lattice.cell_contains(probe, lattice.center(probe) + offset)) offsets.push_back(offset);
-        }
-    const double ray_area = (2.0 * half_w) * (2.0 * half_h) / (n * n);
-    const std::size_t cells = static_cast<std::size_t>(lattice.count_x()) * static_cast<std::size_t>(lattice.count_y());
-    const std::size_t ray_count = cells * offsets.size();
-    const std::size_t encoding = optics_.encoding_surface();
-    const double entry_z = system.surfaces.front().z;
-    const bool paraxial = options.model == Model::Paraxial;
-
+    // Lenslets in bands of rows: sample the pattern under every (lenslet, ray) of a band, then
+    // splat onto the diffuser in strips of output rows, one task per strip; each pixel sums
+    // its band's lenslets and rays in order, so the image does not depend on the threads.
+    const std::size_t count_x = static_cast<std::size_t>(lattice.count_x());
+    const std::size_t count_y = static_cast<std::size_t>(lattice.count_y());
+    const std::size_t per_cell = rays.size();
+    const std::size_t band_rows =
+        std::clamp<std::size_t>(kPairsPerBand / std::max<std::size_t>(1, count_x * per_cell), 1, count_y);
+    const std::size_t pc = static_cast<std::size_t>(pattern_channels);
+    std::vector<Eigen::Vector2d> points;
+    std::vector<float> transmittance;
+    std::vector<std::uint8_t> present;  // the (lenslet, ray) pair exists (its lenslets do)
     double entering = 0.0, reaching = 0.0;
     std::array<double, 3> entering_colour{}, reaching_colour{};
-    std::vector<RayState> rays(ray_count);
-    std::vector<Eigen::Vector2d> landings(ray_count);
-    std::vector<float> transmittance(ray_count * static_cast<std::size_t>(pattern_channels));
-    const double pixel_area = result.pixel_mm * result.pixel_mm;
-    ParaxialBatch batch;
-    auto cell_of = [&](std::size_t index) {
-        return CellIndex{static_cast<int>(index % static_cast<std::size_t>(lattice.count_x())),
-                         static_cast<int>(index / static_cast<std::size_t>(lattice.count_x()))};
-    };
+    for (std::size_t j0 = 0; j0 < count_y; j0 += band_rows) {
+        const std::size_t j1 = std::min(count_y, j0 + band_rows);
+        const std::size_t band_cells = (j1 - j0) * count_x;
+        const std::size_t pairs = band_cells * per_cell;
+        points.resize(pairs);
+        present.resize(pairs);
+        transmittance.resize(pairs * pc);
+        parallel_for_chunks(band_cells, 8, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t b = begin; b < end; ++b) {
+                const CellIndex cell{static_cast<int>(b % count_x), static_cast<int>(j0 + b / count_x)};
+                const Eigen::Vector2d centre = lattice.center(cell);
+                for (std::size_t r = 0; r < per_cell; ++r) {
+                    const LensletRay& ray = rays[r];
+                    bool exists = ray.reaching > 0.0;
+                    for (std::size_t k = 0; exists && k < ray.neighbours; ++k)
+                        exists = lattice.contains(lattice.cell_at(centre + neighbour_offsets[ray.first_neighbour + k]));
+                    present[b * per_cell + r] = exists;
+                    points[b * per_cell + r] = exists ? Eigen::Vector2d(centre + ray.on_pattern)
+                                                      : Eigen::Vector2d(1e30, 1e30);  // off the sheet
+                }
+            }
+        });
+        pattern.sample(points, transmittance);
 
-    for (const DisplayLight& light : lights) {
-        const std::vector<Eigen::Vector3d> samples = light_samples(light, options.area_samples_per_side);
-        for (const Eigen::Vector3d& d : samples) {
-            ++result.directions;
-            // Lenslets to the pattern, in parallel; each ray is independent. Paraxial rays go
-            // as one batch; the few that cross into a neighbouring lenslet are traced again
-            // alone, through it.
-            if (paraxial) {
-                batch.resize(ray_count);
-                parallel_for_chunks(cells, 16, [&](std::size_t begin, std::size_t end) {
-                    for (std::size_t cell_index = begin; cell_index < end; ++cell_index) {
-                        const Eigen::Vector2d centre = lattice.center(cell_of(cell_index));
-                        for (std::size_t k = 0; k < offsets.size(); ++k) {
-                            const std::size_t r = cell_index * offsets.size() + k;
-                            batch.x[r] = centre.x() + offsets[k].x();
-                            batch.y[r] = centre.y() + offsets[k].y();
-                            batch.tx[r] = d.x() / d.z();
-                            batch.ty[r] = d.y() / d.z();
-                            batch.status[r] = RayStatus::Ok;
-                        }
-                    }
-                });
-                trace_paraxial_batch(system, batch, entry_z, 0, encoding);
-            }
-            parallel_for_chunks(cells, 16, [&](std::size_t begin, std::size_t end) {
-                for (std::size_t cell_index = begin; cell_index < end; ++cell_index) {
-                    const Eigen::Vector2d centre = lattice.center(cell_of(cell_index));
-                    for (std::size_t k = 0; k < offsets.size(); ++k) {
-                        const std::size_t r = cell_index * offsets.size() + k;
-                        RayState& state = rays[r];
-                        state = RayState{};
-                        state.paraxial_mode = paraxial;
-                        const Eigen::Vector2d point = centre + offsets[k];
-                        if (paraxial) {
-                            if (batch.status[r] == RayStatus::Ok) {
-                                state.paraxial = {batch.x[r], batch.y[r], batch.tx[r], batch.ty[r]};
-                                state.arrived = true;
-                            } else if (batch.status[r] == RayStatus::CrossedCell) {
-                                state.paraxial = {point.x(), point.y(), d.x() / d.z(), d.y() / d.z()};
-                                trace_paraxial_ray(system, state, entry_z, 0, encoding);
-                            }
-                        } else {
-                            const Eigen::Vector3d through(point.x(), point.y(), entry_z);
-                            // Start far enough in front of the vertex plane to clear any sag.
-                            state.exact = Ray{through - (2.0 / d.z()) * d, d};
-                            trace_exact(system, state, 0, encoding);
-                        }
-                        landings[r] = state.arrived ? state.position() : Eigen::Vector2d(1e30, 1e30);  // off the sheet
-                    }
-                }
-            });
-            pattern.sample(landings, transmittance);
-            // The pattern to the diffuser.
-            if (paraxial) {
-                parallel_for_chunks(ray_count, 4096, [&](std::size_t begin, std::size_t end) {
-                    for (std::size_t r = begin; r < end; ++r) {
-                        const RayState& state = rays[r];
-                        batch.x[r] = state.paraxial.x;
-                        batch.y[r] = state.paraxial.y;
-                        batch.tx[r] = state.paraxial.tx;
-                        batch.ty[r] = state.paraxial.ty;
-                        batch.status[r] = state.arrived ? RayStatus::Ok : RayStatus::Vignetted;
-                    }
-                });
-                trace_paraxial_batch(system, batch, system.surfaces[encoding].z, encoding + 1, diffuser_surface_);
-            }
-            parallel_for_chunks(ray_count, 1024, [&](std::size_t begin, std::size_t end) {
-                for (std::size_t r = begin; r < end; ++r) {
-                    RayState& state = rays[r];
-                    if (!state.arrived) continue;
-                    if (!paraxial) {
-                        trace_exact(system, state, encoding + 1, diffuser_surface_);
-                    } else if (batch.status[r] == RayStatus::Ok) {
-                        state.paraxial = {batch.x[r], batch.y[r], batch.tx[r], batch.ty[r]};
-                    } else if (batch.status[r] == RayStatus::CrossedCell) {
-                        trace_paraxial_ray(system, state, system.surfaces[encoding].z, encoding + 1, diffuser_surface_);
-                    } else {
-                        state.arrived = false;
-                    }
-                }
-            });
-            // Splatted in ray order, so the sums do not depend on the threads.
-            const double ray_power = ray_area * d.z();
-            const double share = 1.0 / static_cast<double>(samples.size());  // of the light's colour
-            for (std::size_t r = 0; r < ray_count; ++r) {
-                const RayState& state = rays[r];
-                entering += ray_power;
-                for (std::size_t c = 0; c < 3; ++c) entering_colour[c] += ray_power * light.colour[c] * share;
-                if (!state.arrived) {
+        // Bookkeeping, in lenslet order.
+        for (std::size_t b = 0; b < band_cells; ++b)
+            for (std::size_t r = 0; r < per_cell; ++r) {
+                const LensletRay& ray = rays[r];
+                const std::size_t pair = b * per_cell + r;
+                entering += ray.entering;
+                for (std::size_t c = 0; c < 3; ++c) entering_colour[c] += ray.entering * ray.colour[c];
+                if (!present[pair]) {
                     ++result.lost;
                     continue;
                 }
-                if (state.crossed) ++result.crossed;
-                const double power = ray_power * state.transmittance;
-                reaching += power;
-                const Eigen::Vector2d p = state.position();
-                const double fx = (p.x() - result.first_pixel.x()) / result.pixel_mm;
-                const double fy = (result.first_pixel.y() - p.y()) / result.pixel_mm;
-                const int x0 = static_cast<int>(std::floor(fx)), y0 = static_cast<int>(std::floor(fy));
-                const double tx = fx - x0, ty = fy - y0;
-                const float* t = transmittance.data() + r * static_cast<std::size_t>(pattern_channels);
-                for (std::size_t c = 0; c < 3; ++c) {
-                    const double value = power * light.colour[c] * share * t[pattern_channels == 3 ? c : 0];
-                    reaching_colour[c] += value;
-                    const double weights[4] = {(1 - tx) * (1 - ty), tx * (1 - ty), (1 - tx) * ty, tx * ty};
-                    const int xs[4] = {x0, x0 + 1, x0, x0 + 1}, ys[4] = {y0, y0, y0 + 1, y0 + 1};
-                    for (int k = 0; k < 4; ++k) {
-                        if (xs[k] < 0 || ys[k] < 0 || xs[k] >= width || ys[k] >= height) continue;
-                        accumulated[(c * static_cast<std::size_t>(height) + static_cast<std::size_t>(ys[k])) *
-                                        static_cast<std::size_t>(width) + static_cast<std::size_t>(xs[k])] +=
-                            weights[k] * value / pixel_area;
+                if (ray.crossed) ++result.crossed;
+                reaching += ray.reaching;
+                const float* t = transmittance.data() + pair * pc;
+                for (std::size_t c = 0; c < 3; ++c)
+                    reaching_colour[c] += ray.reaching * ray.colour[c] * t[pc == 3 ? c : 0];
+            }
+        result.rays += pairs;
+
+        // The output rows this band's light can reach, in strips.
+        const double top_mm = lattice.center({0, static_cast<int>(j1 - 1)}).y() + reach_max.y();
+        const double bottom_mm = lattice.center({0, static_cast<int>(j0)}).y() + reach_min.y();
+        if (!(top_mm >= bottom_mm)) continue;  // no ray reaches the diffuser
+        const int first_row = std::clamp(static_cast<int>(std::floor(pixel_row(top_mm))), 0, height);
+        const int last_row = std::clamp(static_cast<int>(std::floor(pixel_row(bottom_mm))) + 2, 0, height);
+        const int strips = (last_row - first_row + kStripRows - 1) / kStripRows;
+        parallel_for_chunks(static_cast<std::size_t>(std::max(strips, 0)), 1, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t s = begin; s < end; ++s) {
+                const int row0 = first_row + static_cast<int>(s) * kStripRows;
+                const int row1 = std::min(row0 + kStripRows, last_row);
+                for (std::size_t b = 0; b < band_cells; ++b) {
+                    const CellIndex cell{static_cast<int>(b % count_x), static_cast<int>(j0 + b / count_x)};
+                    const Eigen::Vector2d centre = lattice.center(cell);
+                    // Skip lenslets whose light falls wholly outside this strip.
+                    if (pixel_row(centre.y() + reach_max.y()) >= row1 || pixel_row(centre.y() + reach_min.y()) + 1.0 < row0)
+                        continue;
+                    for (std::size_t r = 0; r < per_cell; ++r) {
+                        const std::size_t pair = b * per_cell + r;
+                        if (!present[pair]) continue;
+                        const LensletRay& ray = rays[r];
+                        const Eigen::Vector2d p = centre + ray.on_diffuser;
+                        const double fx = (p.x() - result.first_pixel.x()) / result.pixel_mm;
+                        const double fy = pixel_row(p.y());
+                        const int x0 = static_cast<int>(std::floor(fx)), y0 = static_cast<int>(std::floor(fy));
+                        if (y0 + 1 < row0 || y0 >= row1) continue;
+                        const double tx = fx - x0, ty = fy - y0;
+                        const float* t = transmittance.data() + pair * pc;
+                        const double row_weight[2] = {1.0 - ty, ty};
+                        const double column_weight[2] = {1.0 - tx, tx};
+                        for (std::size_t c = 0; c < 3; ++c) {
+                            const double value = ray.reaching * ray.colour[c] * t[pc == 3 ? c : 0] / pixel_area;
+                            if (value == 0.0) continue;
+                            for (int dy = 0; dy < 2; ++dy) {
+                                const int y = y0 + dy;
+                                if (y < row0 || y >= row1) continue;
+                                double* line = accumulated.data() + c * plane_size +
+                                               static_cast<std::size_t>(y) * static_cast<std::size_t>(width);
+                                for (int dx = 0; dx < 2; ++dx) {
+                                    const int x = x0 + dx;
+                                    if (x < 0 || x >= width) continue;
+                                    line[x] += row_weight[dy] * column_weight[dx] * value;
+                                }
+                            }
+                        }
                     }
                 }
             }
-            result.rays += ray_count;
-        }
+        });
     }
 
     result.image = Image(width, height, 3);
-    for (int c = 0; c < 3; ++c)
-        for (int y = 0; y < height; ++y)
-            for (int x = 0; x < width; ++x)
-                result.image.at(x, y, c) = static_cast<float>(
-                    accumulated[(static_cast<std::size_t>(c) * static_cast<std::size_t>(height) + static_cast<std::size_t>(y)) *
-                                    static_cast<std::size_t>(width) + static_cast<std::size_t>(x)]);
+    for (int c = 0; c < 3; ++c) {
+        std::span<float> plane = result.image.plane(c);
+        for (std::size_t k = 0; k < plane_size; ++k)
+            plane[k] = static_cast<float>(accumulated[static_cast<std::size_t>(c) * plane_size + k]);
+    }
     result.optical_efficiency = entering > 0 ? reaching / entering : 0.0;
     for (std::size_t c = 0; c < 3; ++c)
         result.pattern_efficiency[c] = entering_colour[c] > 0 ? reaching_colour[c] / entering_colour[c] : 0.0;

@@ -7,7 +7,7 @@
 // lenslets holding them on their macro-pixel, wrap-over into the neighbouring lenslet at
 // steep angles, vignetting, several lights adding up.
 //
-// Method: for every light direction, a square grid of rays over every lenslet's cell at the
+// Method: for every light direction, a square grid of rays over a lenslet's cell at the
 // entrance plane (the rays inside the cell; the grids of neighbouring cells tile the
 // plane) is traced to the encoding surface, takes the transmittance of the print dot it
 // lands on, and is traced on to the diffuser's face, where its power is splatted
@@ -15,6 +15,13 @@
 // on through the lenslet it has crossed into (wrap-over is crosstalk, not darkness).
 // Paraxial: each lenslet's augmented matrices, no Fresnel losses. Exact: real surfaces,
 // Snell's law, apertures, total internal reflection, Fresnel transmittance.
+// Every lenslet is identical and sits among identical neighbours, so the rays are traced
+// once, through the centre lenslet of a wide reference array, and every lenslet of the
+// display repeats them shifted to its centre; the cost of the optics (either model) is
+// then independent of the lenslet count, and what remains per lenslet is one pattern
+// lookup and one splat per ray. At the array's edge a ray that would cross into a
+// lenslet beyond it is lost. Many directions (an environment map) share a budget of rays
+// per lenslet (SimulationOptions::max_rays_per_lenslet) instead of a full grid each.
 //
 // Units: an output value is the irradiance on the diffuser divided by the light's
 // irradiance on a plane facing it; a fully transparent pattern lit head-on averages the
@@ -27,6 +34,7 @@
 
 #include <array>
 #include <cstddef>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -78,6 +86,10 @@ struct SimulationOptions {
     double pixels_per_pitch = 8.0;  ///< output pixels per lenslet pitch along x
     /// Directions per side of the square grid over an area light's disc (1 for points).
     int area_samples_per_side = 5;
+    /// Rays per lenslet over all directions together. While every direction's full grid
+    /// fits, each gets it; beyond (an environment map's many directions), each direction
+    /// gets an equal share, at offsets that continue one low-discrepancy sequence.
+    std::size_t max_rays_per_lenslet = 4096;
 };
 
 /// What the diffuser shows.
@@ -121,6 +133,8 @@ public:
 
 private:
     DesignOptics optics_;
+    /// The design with wide lenslet arrays, whose centre lenslet's rays every lenslet repeats.
+    std::shared_ptr<const DesignOptics> reference_;
     std::size_t diffuser_surface_ = 0;
 };
 
