@@ -9,6 +9,8 @@
 
 #include <benchmark/benchmark.h>
 
+#include "core/parallel.hpp"
+#include "core/sphere.hpp"
 #include "optics/display.hpp"
 
 namespace {
@@ -30,11 +32,14 @@ class Checker final : public optics::Transparency {
 public:
     int channels() const override { return 1; }
     void sample(std::span<const Eigen::Vector2d> points, std::span<float> out) const override {
-        for (std::size_t k = 0; k < points.size(); ++k) {
-            const long x = std::lround(std::floor(points[k].x() / (25.4 / 2880)));
-            const long y = std::lround(std::floor(points[k].y() / (25.4 / 1440)));
-            out[k] = ((x + y) & 1) ? 1.0f : 0.25f;
-        }
+        // In parallel, as RasterTransparency samples.
+        parallel_for_chunks(points.size(), 1 << 14, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t k = begin; k < end; ++k) {
+                const long x = std::lround(std::floor(points[k].x() / (25.4 / 2880)));
+                const long y = std::lround(std::floor(points[k].y() / (25.4 / 1440)));
+                out[k] = ((x + y) & 1) ? 1.0f : 0.25f;
+            }
+        });
     }
 };
 
@@ -55,5 +60,28 @@ void BM_SimulatePointLight(benchmark::State& state) {
     state.counters["Mrays_per_s"] = benchmark::Counter(static_cast<double>(rays) / 1e6, benchmark::Counter::kIsIterationInvariantRate);
 }
 BENCHMARK(BM_SimulatePointLight)->Arg(0)->Arg(1)->ArgName("exact")->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// An environment map's worth of light: 1024 directions spread evenly over the back
+// hemisphere (as a 64 x 32 latitude-longitude map lights it), paraxial, with the default
+// ray budget (4096 rays per lenslet: 4 per direction). Target <= 2 s.
+void BM_SimulateEnvironment(benchmark::State& state) {
+    static const optics::DisplaySimulator simulator(design1_100x100());
+    const Checker checker;
+    optics::SimulationOptions options;
+    options.model = optics::Model::Paraxial;
+    std::vector<optics::DisplayLight> sky;
+    for (const Eigen::Vector3d& d : fibonacci_hemisphere(static_cast<std::size_t>(state.range(0))))
+        sky.push_back({d, {0.002, 0.002 * d.z(), 0.001}, 0.0});
+    std::size_t rays = 0;
+    for (auto _ : state) {
+        const optics::DiffuserImage image = simulator.simulate(checker, sky, options);
+        rays = image.rays;
+        benchmark::DoNotOptimize(image.image.plane(0).data());
+    }
+    state.counters["directions"] = static_cast<double>(sky.size());
+    state.counters["rays"] = static_cast<double>(rays);
+    state.counters["Mrays_per_s"] = benchmark::Counter(static_cast<double>(rays) / 1e6, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_SimulateEnvironment)->Arg(1024)->ArgName("directions")->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace

@@ -16,6 +16,7 @@
 #include "core/image_io.hpp"
 #include "core/units.hpp"
 #include "optics/display.hpp"
+#include "patterns/display_lights.hpp"
 #include "patterns/encode.hpp"
 #include "print/printed.hpp"
 #include "print/sheet.hpp"
@@ -40,41 +41,17 @@ double signed_attribute(const patterns::PatternFileInfo& info, const std::string
     return value;
 }
 
-// The field-frame lights of --light as the display meets them: through the angular
-// mapping the pattern was encoded with, so a light at (theta, phi) shows what the field
-// shows under a light from there.
-std::vector<optics::DisplayLight> display_lights(const std::vector<std::string>& texts,
-                                                 const patterns::AngularMapping& mapping) {
-    std::vector<optics::DisplayLight> lights;
-    for (const std::string& text : texts) {
-        const relight::Light light = parse_light(text);
-        optics::DisplayLight d;
-        Eigen::Vector3d colour;
-        if (const auto* point = std::get_if<relight::DirectionalLight>(&light)) {
-            d.direction = mapping.display_direction(point->direction);
-            colour = point->irradiance;
-        } else {
-            const auto& disc = std::get<relight::DiskLight>(light);
-            d.direction = mapping.display_direction(disc.direction);
-            d.angular_radius_rad = disc.radius / mapping.angle_scale;
-            colour = disc.irradiance;
-        }
-        d.colour = {colour.x(), colour.y(), colour.z()};
-        lights.push_back(d);
-    }
-    return lights;
-}
-
 CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
     auto* cmd = app.add_subcommand(
         "simulate", "Predict what a Design I or II display shows under given lights, from its design and its "
                     "pattern as printed (tone mapping, black level, density), before printing; or a subcommand");
     cmd->require_subcommand(0, 1);
     struct Options {
-        std::string design, pattern, printer, out, lenslets, model = "auto";
+        std::string design, pattern, printer, out, lenslets, envmap, model = "auto";
         std::vector<std::string> lights;
         double tolerance_dots = 0.25, brightness = 1.0, pixels_per_lenslet = 8.0;
         int sheets = 0, rays = 8, area_samples = 5;
+        std::size_t max_rays = 4096;
         bool json = false;
     };
     auto opt = std::make_shared<Options>();
@@ -84,6 +61,9 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
     cmd->add_option("--light", opt->lights,
                     std::string("A distant light behind the display, in the field's frame ") + kLightSyntax +
                         "; repeat for several");
+    cmd->add_option("--envmap", opt->envmap,
+                    "Light from an environment map: latitude-longitude radiance (.exr/.hdr) in the field's frame, "
+                    "row 0 at the zenith, column W/2 facing +x; with or without --light");
     cmd->add_option("--out", opt->out, "Predicted diffuser image: .exr (linear) or .png (sRGB)");
     cmd->add_option("--lenslets", opt->lenslets,
                     "Also the picture at the display's resolution: the mean over each lenslet (.exr or .png)");
@@ -100,15 +80,20 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
     cmd->add_option("--pixels-per-lenslet", opt->pixels_per_lenslet, "Output pixels per lenslet pitch (default 8)")
         ->check(CLI::Range(1.0, 64.0));
     cmd->add_option("--area-samples", opt->area_samples,
-                    "Directions per side of the grid over an area light's disc (default 5)")
+                    "At most this many directions per side of the grid over an area light's disc (default 5; "
+                    "fewer when the disc spans fewer print dots)")
         ->check(CLI::Range(1, 64));
+    cmd->add_option("--max-rays", opt->max_rays,
+                    "Rays per lenslet over all directions together (default 4096): a full grid per direction "
+                    "while it fits, else an equal share each; also caps an environment map's directions")
+        ->check(CLI::Range(1, 1 << 20));
     cmd->add_flag("--json", opt->json, "Machine-readable summary");
     cmd->callback([cmd, opt, &global] {
         (void)global;
         if (!cmd->get_subcommands().empty()) return;  // a subcommand ran instead
         if (opt->design.empty()) throw CLI::RequiredError("DESIGN");
         if (opt->pattern.empty()) throw CLI::RequiredError("PATTERN");
-        if (opt->lights.empty()) throw CLI::RequiredError("--light");
+        if (opt->lights.empty() && opt->envmap.empty()) throw CLI::RequiredError("--light or --envmap");
         if (opt->out.empty()) throw CLI::RequiredError("--out");
         const auto start = std::chrono::steady_clock::now();
         const optics::Design design = optics::load_design(opt->design);
@@ -123,12 +108,23 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
         mapping.angle_scale = signed_attribute(info, "angle_scale", opt->pattern, 1.0);
         if (!(mapping.angle_scale > 0.0))
             throw InputError(SourceLocation{opt->pattern, 0, 0, "rfd:angle_scale"}, "expected a positive number");
-        const std::vector<optics::DisplayLight> lights = display_lights(opt->lights, mapping);
-
+        std::vector<optics::DisplayLight> lights;
+        for (const std::string& text : opt->lights) lights.push_back(patterns::display_light(parse_light(text), mapping));
+        patterns::EnvironmentSampling sampling;
+        if (!opt->envmap.empty()) {
+            const std::vector<optics::DisplayLight> sky = patterns::environment_lights(
+                read_image(opt->envmap), opt->envmap, mapping,
+                patterns::display_resolution_rad(simulator.optics(), mapping), opt->max_rays, &sampling);
+            lights.insert(lights.end(), sky.begin(), sky.end());
+        }
+        if (lights.empty())
+            throw InputError(SourceLocation{opt->envmap, 0, 0, ""},
+                             "no light reaches the display from behind: the map is black there");
         optics::SimulationOptions options;
         options.rays_per_side = opt->rays;
         options.pixels_per_pitch = opt->pixels_per_lenslet;
         options.area_samples_per_side = opt->area_samples;
+        options.max_rays_per_lenslet = opt->max_rays;
         const patterns::ModelChoice choice = patterns::choose_model(design, pattern.geometry(), opt->tolerance_dots);
         options.model = opt->model == "paraxial" ? optics::Model::Paraxial
                         : opt->model == "exact"  ? optics::Model::Exact
@@ -139,13 +135,14 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
         const std::string model(optics::to_string(options.model));
-        const nlohmann::json summary = {
+        nlohmann::json summary = {
             {"out", opt->out},
             {"model", model},
             {"model_choice", opt->model},
             {"paraxial_error_dots", choice.paraxial_error_dots},
             {"lights", opt->lights.size()},
             {"directions", result.directions},
+            {"rays_per_direction", result.rays_per_direction},
             {"rays", result.rays},
             {"rays_lost", result.lost},
             {"rays_crossed", result.crossed},
@@ -154,6 +151,14 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
             {"pixels", {result.image.width(), result.image.height()}},
             {"pixel_mm", result.pixel_mm},
             {"seconds", seconds}};
+        if (!opt->envmap.empty())
+            summary["envmap"] = {{"file", opt->envmap},
+                                 {"size", {sampling.width, sampling.height}},
+                                 {"sampled_size", {sampling.sampled_width, sampling.sampled_height}},
+                                 {"box_filter", sampling.reduction},
+                                 {"reason", sampling.reason},
+                                 {"directions", sampling.directions},
+                                 {"directions_in_front", sampling.in_front}};
         if (opt->json) {
             std::printf("%s\n", summary.dump(2).c_str());
             return;
@@ -163,8 +168,18 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
         std::printf("  model        %s (%s; paraxial error up to %.2f dots, tolerance %.2f)\n", model.c_str(),
                     opt->model == "auto" ? "chosen automatically" : "as asked", choice.paraxial_error_dots,
                     opt->tolerance_dots);
-        std::printf("  light        %zu light(s), %zu direction(s) sampled, %zu rays\n", opt->lights.size(),
-                    result.directions, result.rays);
+        std::printf("  light        %zu light(s)%s, %zu direction(s) sampled, %zu ray(s) per direction and lenslet, "
+                    "%zu rays\n",
+                    opt->lights.size(), opt->envmap.empty() ? "" : " and an environment map", result.directions,
+                    result.rays_per_direction, result.rays);
+        if (!opt->envmap.empty()) {
+            std::printf("  envmap       %s: %d x %d", opt->envmap.c_str(), sampling.width, sampling.height);
+            if (sampling.reduction > 1)
+                std::printf(", sampled at %d x %d (box filter %d: %s)", sampling.sampled_width, sampling.sampled_height,
+                            sampling.reduction, sampling.reason.c_str());
+            std::printf("; %zu direction(s) light the display from behind, %zu from the front (dropped)\n",
+                        sampling.directions, sampling.in_front);
+        }
         std::printf("  efficiency   %.1f %% of the light entering the lenslets reaches the diffuser; "
                     "%.1f / %.1f / %.1f %% through the pattern (R/G/B)\n",
                     100 * result.optical_efficiency, 100 * result.pattern_efficiency[0],

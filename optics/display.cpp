@@ -10,6 +10,7 @@
 
 #include "core/error.hpp"
 #include "core/parallel.hpp"
+#include "core/sequence.hpp"
 #include "optics/exact.hpp"
 #include "optics/paraxial.hpp"
 
@@ -118,15 +119,6 @@ struct LensletRay {
     bool crossed = false;  // passed from one lenslet into another (wrap-over)
 };
 
-// A 2D low-discrepancy sequence (Roberts' R2): offsets when a lenslet gets fewer rays per
-// direction than a full grid, each direction continuing the sequence where the last stopped.
-Eigen::Vector2d r2_point(std::size_t index) {
-    constexpr double g = 1.32471795724474602596;  // the plastic number
-    const double a1 = 1.0 / g, a2 = 1.0 / (g * g);
-    const double i = static_cast<double>(index);
-    return {std::fmod(0.5 + a1 * i, 1.0), std::fmod(0.5 + a2 * i, 1.0)};
-}
-
 }  // namespace
 
 RasterTransparency::RasterTransparency(int width, int height, int channels, double dot_x, double dot_y,
@@ -206,8 +198,13 @@ DiffuserImage DisplaySimulator::simulate(const Transparency& pattern, const std:
     // runs on from direction to direction, so together they still cover the cell.
     std::vector<std::vector<Eigen::Vector3d>> directions;
     std::size_t direction_count = 0;
+    // An area light is sampled no finer than the print resolves: its disc spans about
+    // 2 r B / dot dots on the pattern plane, so more directions per side than that only
+    // repeat the same dots.
+    const double dot_angle = optics_.dot_mm().minCoeff() / std::abs(optics_.paraxial_b());
     for (const DisplayLight& light : lights) {
-        directions.push_back(light_samples(light, options.area_samples_per_side));
+        const int needed = static_cast<int>(std::ceil(2.0 * light.angular_radius_rad / dot_angle));
+        directions.push_back(light_samples(light, std::clamp(needed, 1, options.area_samples_per_side)));
         direction_count += directions.back().size();
     }
     const double half_w = 0.5 * lattice.pitch_x();
@@ -273,28 +270,40 @@ DiffuserImage DisplaySimulator::simulate(const Transparency& pattern, const std:
         }
     });
 
-    // What every lenslet repeats. Lost rays stay (they count as entering light).
+    // What every lenslet repeats: the rays that reach the diffuser, sorted by where they
+    // land along y (so the rays of a lenslet that land in a strip of output rows are a
+    // contiguous run), and the light entering it in all.
     std::vector<LensletRay> rays;
     std::vector<Eigen::Vector2d> neighbour_offsets;
-    rays.reserve(traced.size());
-    Eigen::Vector2d reach_min = Eigen::Vector2d::Constant(HUGE_VAL), reach_max = -reach_min;
+    double entering_per_lenslet = 0.0;
+    std::array<double, 3> entering_colour_per_lenslet{};
+    std::size_t lost_per_lenslet = 0;
     for (std::size_t r = 0; r < traced.size(); ++r) {
         LensletRay ray;
         ray.entering = ray_area * jobs[r].direction.z();
         ray.colour = jobs[r].colour;
-        if (traced[r].arrived) {
-            ray.on_pattern = traced[r].on_pattern;
-            ray.on_diffuser = traced[r].on_diffuser;
-            ray.reaching = ray.entering * traced[r].transmittance;
-            ray.first_neighbour = neighbour_offsets.size();
-            for (const CellIndex& cell : traced[r].visited)
-                if (!(cell == reference_cell)) neighbour_offsets.push_back(reference_lattice.center(cell) - reference_centre);
-            ray.neighbours = neighbour_offsets.size() - ray.first_neighbour;
-            ray.crossed = traced[r].visited.size() > 1;
-            reach_min = reach_min.cwiseMin(ray.on_diffuser);
-            reach_max = reach_max.cwiseMax(ray.on_diffuser);
+        entering_per_lenslet += ray.entering;
+        for (std::size_t c = 0; c < 3; ++c) entering_colour_per_lenslet[c] += ray.entering * ray.colour[c];
+        if (!traced[r].arrived) {
+            ++lost_per_lenslet;
+            continue;
         }
+        ray.on_pattern = traced[r].on_pattern;
+        ray.on_diffuser = traced[r].on_diffuser;
+        ray.reaching = ray.entering * traced[r].transmittance;
+        ray.first_neighbour = neighbour_offsets.size();
+        for (const CellIndex& cell : traced[r].visited)
+            if (!(cell == reference_cell)) neighbour_offsets.push_back(reference_lattice.center(cell) - reference_centre);
+        ray.neighbours = neighbour_offsets.size() - ray.first_neighbour;
+        ray.crossed = traced[r].visited.size() > 1;
         rays.push_back(ray);
+    }
+    std::stable_sort(rays.begin(), rays.end(),
+                     [](const LensletRay& a, const LensletRay& b) { return a.on_diffuser.y() > b.on_diffuser.y(); });
+    Eigen::Vector2d reach_min = Eigen::Vector2d::Constant(HUGE_VAL), reach_max = -reach_min;
+    for (const LensletRay& ray : rays) {
+        reach_min = reach_min.cwiseMin(ray.on_diffuser);
+        reach_max = reach_max.cwiseMax(ray.on_diffuser);
     }
 
     // The output grid: the array plus one pitch of margin for light spilling past it.
@@ -305,6 +314,7 @@ DiffuserImage DisplaySimulator::simulate(const Transparency& pattern, const std:
     const int height = static_cast<int>(std::ceil(2.0 * half.y() / result.pixel_mm));
     result.first_pixel = Eigen::Vector2d(-0.5 * (width - 1) * result.pixel_mm, 0.5 * (height - 1) * result.pixel_mm);
     result.directions = direction_count;
+    result.rays_per_direction = per_direction;
     const std::size_t plane_size = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
     std::vector<double> accumulated(plane_size * 3, 0.0);
     const double pixel_area = result.pixel_mm * result.pixel_mm;
@@ -322,8 +332,14 @@ DiffuserImage DisplaySimulator::simulate(const Transparency& pattern, const std:
     std::vector<Eigen::Vector2d> points;
     std::vector<float> transmittance;
     std::vector<std::uint8_t> present;  // the (lenslet, ray) pair exists (its lenslets do)
-    double entering = 0.0, reaching = 0.0;
-    std::array<double, 3> entering_colour{}, reaching_colour{};
+    struct LensletSums {
+        double reaching = 0.0;
+        std::array<double, 3> reaching_colour{};
+        std::size_t absent = 0, crossed = 0;
+    };
+    std::vector<LensletSums> sums;
+    double reaching = 0.0;
+    std::array<double, 3> reaching_colour{};
     for (std::size_t j0 = 0; j0 < count_y; j0 += band_rows) {
         const std::size_t j1 = std::min(count_y, j0 + band_rows);
         const std::size_t band_cells = (j1 - j0) * count_x;
@@ -331,13 +347,15 @@ DiffuserImage DisplaySimulator::simulate(const Transparency& pattern, const std:
         points.resize(pairs);
         present.resize(pairs);
         transmittance.resize(pairs * pc);
+        auto cell_of = [&](std::size_t b) {
+            return CellIndex{static_cast<int>(b % count_x), static_cast<int>(j0 + b / count_x)};
+        };
         parallel_for_chunks(band_cells, 8, [&](std::size_t begin, std::size_t end) {
             for (std::size_t b = begin; b < end; ++b) {
-                const CellIndex cell{static_cast<int>(b % count_x), static_cast<int>(j0 + b / count_x)};
-                const Eigen::Vector2d centre = lattice.center(cell);
+                const Eigen::Vector2d centre = lattice.center(cell_of(b));
                 for (std::size_t r = 0; r < per_cell; ++r) {
                     const LensletRay& ray = rays[r];
-                    bool exists = ray.reaching > 0.0;
+                    bool exists = true;
                     for (std::size_t k = 0; exists && k < ray.neighbours; ++k)
                         exists = lattice.contains(lattice.cell_at(centre + neighbour_offsets[ray.first_neighbour + k]));
                     present[b * per_cell + r] = exists;
@@ -348,29 +366,38 @@ DiffuserImage DisplaySimulator::simulate(const Transparency& pattern, const std:
         });
         pattern.sample(points, transmittance);
 
-        // Bookkeeping, in lenslet order.
-        for (std::size_t b = 0; b < band_cells; ++b)
-            for (std::size_t r = 0; r < per_cell; ++r) {
-                const LensletRay& ray = rays[r];
-                const std::size_t pair = b * per_cell + r;
-                entering += ray.entering;
-                for (std::size_t c = 0; c < 3; ++c) entering_colour[c] += ray.entering * ray.colour[c];
-                if (!present[pair]) {
-                    ++result.lost;
-                    continue;
+        // Bookkeeping per lenslet in parallel, summed in lenslet order.
+        sums.assign(band_cells, LensletSums{});
+        parallel_for_chunks(band_cells, 8, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t b = begin; b < end; ++b) {
+                LensletSums& sum = sums[b];
+                for (std::size_t r = 0; r < per_cell; ++r) {
+                    const std::size_t pair = b * per_cell + r;
+                    const LensletRay& ray = rays[r];
+                    if (!present[pair]) {
+                        ++sum.absent;
+                        continue;
+                    }
+                    if (ray.crossed) ++sum.crossed;
+                    sum.reaching += ray.reaching;
+                    const float* t = transmittance.data() + pair * pc;
+                    for (std::size_t c = 0; c < 3; ++c)
+                        sum.reaching_colour[c] += ray.reaching * ray.colour[c] * t[pc == 3 ? c : 0];
                 }
-                if (ray.crossed) ++result.crossed;
-                reaching += ray.reaching;
-                const float* t = transmittance.data() + pair * pc;
-                for (std::size_t c = 0; c < 3; ++c)
-                    reaching_colour[c] += ray.reaching * ray.colour[c] * t[pc == 3 ? c : 0];
             }
-        result.rays += pairs;
+        });
+        for (const LensletSums& sum : sums) {
+            reaching += sum.reaching;
+            for (std::size_t c = 0; c < 3; ++c) reaching_colour[c] += sum.reaching_colour[c];
+            result.lost += lost_per_lenslet + sum.absent;
+            result.crossed += sum.crossed;
+        }
+        result.rays += band_cells * (per_cell + lost_per_lenslet);
+        if (per_cell == 0) continue;
 
         // The output rows this band's light can reach, in strips.
         const double top_mm = lattice.center({0, static_cast<int>(j1 - 1)}).y() + reach_max.y();
         const double bottom_mm = lattice.center({0, static_cast<int>(j0)}).y() + reach_min.y();
-        if (!(top_mm >= bottom_mm)) continue;  // no ray reaches the diffuser
         const int first_row = std::clamp(static_cast<int>(std::floor(pixel_row(top_mm))), 0, height);
         const int last_row = std::clamp(static_cast<int>(std::floor(pixel_row(bottom_mm))) + 2, 0, height);
         const int strips = (last_row - first_row + kStripRows - 1) / kStripRows;
@@ -379,15 +406,20 @@ DiffuserImage DisplaySimulator::simulate(const Transparency& pattern, const std:
                 const int row0 = first_row + static_cast<int>(s) * kStripRows;
                 const int row1 = std::min(row0 + kStripRows, last_row);
                 for (std::size_t b = 0; b < band_cells; ++b) {
-                    const CellIndex cell{static_cast<int>(b % count_x), static_cast<int>(j0 + b / count_x)};
-                    const Eigen::Vector2d centre = lattice.center(cell);
-                    // Skip lenslets whose light falls wholly outside this strip.
-                    if (pixel_row(centre.y() + reach_max.y()) >= row1 || pixel_row(centre.y() + reach_min.y()) + 1.0 < row0)
-                        continue;
-                    for (std::size_t r = 0; r < per_cell; ++r) {
+                    const Eigen::Vector2d centre = lattice.center(cell_of(b));
+                    // The run of rays that land in rows [row0 - 1, row1] (one row of margin
+                    // either side against rounding; the test below is exact).
+                    const auto first = std::partition_point(rays.begin(), rays.end(), [&](const LensletRay& ray) {
+                        return pixel_row(centre.y() + ray.on_diffuser.y()) < row0 - 2;
+                    });
+                    const auto last = std::partition_point(first, rays.end(), [&](const LensletRay& ray) {
+                        return pixel_row(centre.y() + ray.on_diffuser.y()) < row1 + 1;
+                    });
+                    for (auto it = first; it != last; ++it) {
+                        const std::size_t r = static_cast<std::size_t>(it - rays.begin());
                         const std::size_t pair = b * per_cell + r;
                         if (!present[pair]) continue;
-                        const LensletRay& ray = rays[r];
+                        const LensletRay& ray = *it;
                         const Eigen::Vector2d p = centre + ray.on_diffuser;
                         const double fx = (p.x() - result.first_pixel.x()) / result.pixel_mm;
                         const double fy = pixel_row(p.y());
@@ -417,6 +449,10 @@ DiffuserImage DisplaySimulator::simulate(const Transparency& pattern, const std:
             }
         });
     }
+    const double entering = entering_per_lenslet * static_cast<double>(count_x * count_y);
+    std::array<double, 3> entering_colour{};
+    for (std::size_t c = 0; c < 3; ++c)
+        entering_colour[c] = entering_colour_per_lenslet[c] * static_cast<double>(count_x * count_y);
 
     result.image = Image(width, height, 3);
     for (int c = 0; c < 3; ++c) {

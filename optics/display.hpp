@@ -84,7 +84,8 @@ struct SimulationOptions {
     Model model = Model::Paraxial;
     int rays_per_side = 8;          ///< per lenslet, over the cell's bounding box
     double pixels_per_pitch = 8.0;  ///< output pixels per lenslet pitch along x
-    /// Directions per side of the square grid over an area light's disc (1 for points).
+    /// At most this many directions per side of the square grid over an area light's disc;
+    /// fewer when the disc spans fewer print dots on the pattern plane (1 for points).
     int area_samples_per_side = 5;
     /// Rays per lenslet over all directions together. While every direction's full grid
     /// fits, each gets it; beyond (an environment map's many directions), each direction
@@ -99,6 +100,7 @@ struct DiffuserImage {
     Eigen::Vector2d first_pixel = Eigen::Vector2d::Zero();  ///< centre of pixel (0, 0), mm
     std::size_t rays = 0;        ///< rays traced
     std::size_t directions = 0;  ///< light directions sampled
+    std::size_t rays_per_direction = 0;  ///< per lenslet (over its cell's bounding box)
     std::size_t lost = 0;        ///< rays that did not reach the diffuser
     std::size_t crossed = 0;     ///< rays that reached it through a neighbouring lenslet
     /// Power reaching the diffuser over the power entering the lenslets, per channel, with

@@ -1,0 +1,172 @@
+#include "patterns/display_lights.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <variant>
+
+#include "core/error.hpp"
+#include "core/sequence.hpp"
+#include "core/sphere.hpp"
+#include "core/units.hpp"
+
+namespace rfd::patterns {
+namespace {
+
+// An environment map as power per pixel (radiance x solid angle, per channel), box-filtered
+// `reduction` x `reduction`: pixel (u, v) covers the original columns [u r, (u + 1) r) and
+// rows [v r, (v + 1) r), clipped to the map.
+struct PowerMap {
+    int width = 0, height = 0, reduction = 1;
+    int source_width = 0, source_height = 0;
+    std::vector<Eigen::Vector3d> power;  // row-major
+
+    Eigen::Vector3d& at(int u, int v) { return power[static_cast<std::size_t>(v) * static_cast<std::size_t>(width) + static_cast<std::size_t>(u)]; }
+    const Eigen::Vector3d& at(int u, int v) const {
+        return power[static_cast<std::size_t>(v) * static_cast<std::size_t>(width) + static_cast<std::size_t>(u)];
+    }
+    // The pixel's ranges of theta and phi, radians.
+    double theta0(int v) const { return kPi * (v * reduction) / source_height; }
+    double theta1(int v) const { return kPi * std::min((v + 1) * reduction, source_height) / source_height; }
+    double phi0(int u) const { return -kPi + 2.0 * kPi * (u * reduction) / source_width; }
+    double phi1(int u) const { return -kPi + 2.0 * kPi * std::min((u + 1) * reduction, source_width) / source_width; }
+    // The finest angle a pixel spans: its phi extent on the equator or its theta extent.
+    double pixel_angle() const {
+        return std::min(2.0 * kPi * reduction / source_width, kPi * reduction / source_height);
+    }
+    // A direction inside pixel (u, v), uniform in solid angle: a low-discrepancy point of
+    // its cos(theta) x phi rectangle, the sequence indexed by the pixel.
+    Eigen::Vector3d direction(int u, int v) const {
+        const Eigen::Vector2d s = r2_point(static_cast<std::size_t>(v) * static_cast<std::size_t>(width) + static_cast<std::size_t>(u));
+        const double c0 = std::cos(theta0(v)), c1 = std::cos(theta1(v));
+        const double cos_theta = c0 + s.y() * (c1 - c0);
+        const double phi = phi0(u) + s.x() * (phi1(u) - phi0(u));
+        return direction_from_angles(std::acos(std::clamp(cos_theta, -1.0, 1.0)), phi);
+    }
+};
+
+PowerMap power_of(const Image& radiance) {
+    PowerMap map;
+    map.width = map.source_width = radiance.width();
+    map.height = map.source_height = radiance.height();
+    map.power.resize(static_cast<std::size_t>(map.width) * static_cast<std::size_t>(map.height));
+    const int channels = radiance.channels();
+    for (int v = 0; v < map.height; ++v) {
+        const double solid_angle = (2.0 * kPi / map.width) * (std::cos(map.theta0(v)) - std::cos(map.theta1(v)));
+        for (int u = 0; u < map.width; ++u)
+            for (int c = 0; c < 3; ++c)
+                map.at(u, v)[c] = solid_angle * radiance.at(u, v, channels == 1 ? 0 : c);
+    }
+    return map;
+}
+
+PowerMap halve(const PowerMap& fine) {
+    PowerMap coarse;
+    coarse.source_width = fine.source_width;
+    coarse.source_height = fine.source_height;
+    coarse.reduction = 2 * fine.reduction;
+    coarse.width = (fine.width + 1) / 2;
+    coarse.height = (fine.height + 1) / 2;
+    coarse.power.assign(static_cast<std::size_t>(coarse.width) * static_cast<std::size_t>(coarse.height),
+                        Eigen::Vector3d::Zero());
+    for (int v = 0; v < fine.height; ++v)
+        for (int u = 0; u < fine.width; ++u) coarse.at(u / 2, v / 2) += fine.at(u, v);
+    return coarse;
+}
+
+struct Count {
+    std::size_t behind = 0, in_front = 0;
+};
+
+// Pixels with light, by the side of the display their light meets.
+Count count_lit(const PowerMap& map, const AngularMapping& mapping) {
+    Count count;
+    for (int v = 0; v < map.height; ++v)
+        for (int u = 0; u < map.width; ++u) {
+            if (map.at(u, v).isZero()) continue;
+            if (mapping.display_direction(map.direction(u, v)).z() > 1e-9) ++count.behind;
+            else ++count.in_front;
+        }
+    return count;
+}
+
+}  // namespace
+
+optics::DisplayLight display_light(const relight::Light& light, const AngularMapping& mapping) {
+    optics::DisplayLight d;
+    Eigen::Vector3d colour;
+    if (const auto* point = std::get_if<relight::DirectionalLight>(&light)) {
+        d.direction = mapping.display_direction(point->direction);
+        colour = point->irradiance;
+    } else if (const auto* disc = std::get_if<relight::DiskLight>(&light)) {
+        d.direction = mapping.display_direction(disc->direction);
+        d.angular_radius_rad = disc->radius / mapping.angle_scale;
+        colour = disc->irradiance;
+    } else {
+        throw InputError("an environment map is not a single light: sample it with environment_lights()");
+    }
+    d.colour = {colour.x(), colour.y(), colour.z()};
+    return d;
+}
+
+double display_resolution_rad(const optics::DesignOptics& optics, const AngularMapping& mapping) {
+    return mapping.angle_scale * optics.dot_mm().minCoeff() / std::abs(optics.paraxial_b());
+}
+
+std::vector<optics::DisplayLight> environment_lights(const Image& radiance, const std::string& name,
+                                                     const AngularMapping& mapping, double resolution_rad,
+                                                     std::size_t max_directions, EnvironmentSampling* report) {
+    if (radiance.empty() || (radiance.channels() != 1 && radiance.channels() != 3))
+        throw InputError(SourceLocation{name, 0, 0, ""},
+                         "an environment map is a latitude-longitude image with 1 or 3 channels, got " +
+                             std::to_string(radiance.channels()) + " channel(s)");
+    if (radiance.width() != 2 * radiance.height())
+        throw InputError(SourceLocation{name, 0, 0, ""},
+                         "a latitude-longitude environment map is twice as wide as high, got " +
+                             std::to_string(radiance.width()) + " x " + std::to_string(radiance.height()));
+    for (int v = 0; v < radiance.height(); ++v)
+        for (int u = 0; u < radiance.width(); ++u)
+            for (int c = 0; c < radiance.channels(); ++c) {
+                const float s = radiance.at(u, v, c);
+                if (std::isfinite(s) && s >= 0.0f) continue;
+                throw InputError(SourceLocation{name, 0, 0, ""},
+                                 "pixel (" + std::to_string(u) + ", " + std::to_string(v) + ") channel " +
+                                     std::to_string(c) + " is " + (std::isnan(s) ? "NaN" : std::to_string(s)) +
+                                     ": an environment map holds radiance, finite and not negative");
+            }
+    RFD_CHECK(max_directions > 0 && resolution_rad >= 0.0);
+
+    PowerMap map = power_of(radiance);
+    Count count = count_lit(map, mapping);
+    std::string reason;
+    while ((map.pixel_angle() < resolution_rad || count.behind > max_directions) && (map.width > 1 || map.height > 1)) {
+        reason = map.pixel_angle() < resolution_rad ? "finer than the display resolves" : "more lit directions than the ray budget";
+        map = halve(map);
+        count = count_lit(map, mapping);
+    }
+
+    std::vector<optics::DisplayLight> lights;
+    for (int v = 0; v < map.height; ++v)
+        for (int u = 0; u < map.width; ++u) {
+            const Eigen::Vector3d& power = map.at(u, v);
+            if (power.isZero()) continue;
+            const Eigen::Vector3d direction = mapping.display_direction(map.direction(u, v));
+            if (!(direction.z() > 1e-9)) continue;
+            optics::DisplayLight light;
+            light.direction = direction;
+            light.colour = {power.x(), power.y(), power.z()};
+            lights.push_back(light);
+        }
+    if (report) {
+        report->width = radiance.width();
+        report->height = radiance.height();
+        report->sampled_width = map.width;
+        report->sampled_height = map.height;
+        report->reduction = map.reduction;
+        report->reason = reason;
+        report->directions = lights.size();
+        report->in_front = count.in_front;
+    }
+    return lights;
+}
+
+}  // namespace rfd::patterns

@@ -1,0 +1,60 @@
+#pragma once
+// The lights a user names in the field's frame (core/sphere.hpp: z toward the camera,
+// direction toward the light), as a display encoded with an AngularMapping meets them:
+// optics::DisplayLight in the display's frame (direction of travel, z > 0 from behind).
+// A light at field direction L shows on the display what the field shows under L, so the
+// display direction is mapping.display_direction(L); a disc's radius shrinks by the
+// mapping's angle scale.
+//
+// Environment maps. A latitude-longitude map of radiance in the field's frame (the
+// convention of relight::EnvironmentMap: row 0 at the zenith +z, column W/2 facing +x, phi
+// growing toward +y) becomes one point light per pixel: irradiance = radiance x the
+// pixel's solid angle, from a direction inside the pixel (a low-discrepancy point in its
+// cos(theta) x phi rectangle, so neighbouring pixels' directions do not line up), mapped to
+// the display. Pixels whose light meets the display from the front are dropped (counted);
+// black pixels cost nothing.
+// No finer than needed: the display resolves directions no finer than one print dot on
+// the pattern plane (angle dot / B), and a simulation gives each direction at least one
+// ray per lenslet; so the map is box-filtered (power-weighted, 2 x 2 at a time) while its
+// pixels are smaller than that angle (in the field's frame) or while more pixels carry
+// light from behind than `max_directions`.
+//
+// Example: auto lights = environment_lights(read_image("sky.exr"), mapping, 0.003, 1024, &report);
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "core/image.hpp"
+#include "optics/display.hpp"
+#include "patterns/encode.hpp"
+#include "relight/render.hpp"
+
+namespace rfd::patterns {
+
+/// A directional or disc light of the field's frame, for the display. An environment map
+/// is refused (InputError): use environment_lights().
+optics::DisplayLight display_light(const relight::Light& light, const AngularMapping& mapping);
+
+/// How an environment map was sampled.
+struct EnvironmentSampling {
+    int width = 0, height = 0;                 ///< the map as given
+    int sampled_width = 0, sampled_height = 0; ///< after box filtering
+    int reduction = 1;                         ///< box filter size per side
+    std::string reason;                        ///< why it was filtered ("" when not)
+    std::size_t directions = 0;                ///< lights made: pixels lighting the display from behind
+    std::size_t in_front = 0;                  ///< pixels with light that meets the display from the front
+};
+
+/// Checks `radiance` (1 or 3 channels, every sample finite and >= 0; InputError naming
+/// `name`, the pixel and the channel otherwise) and turns it into point lights, see above.
+/// `resolution_rad` is the display's finest angle in the field's frame; 0 means any.
+std::vector<optics::DisplayLight> environment_lights(const Image& radiance, const std::string& name,
+                                                     const AngularMapping& mapping, double resolution_rad,
+                                                     std::size_t max_directions, EnvironmentSampling* report = nullptr);
+
+/// The display's finest resolved angle in the field's frame: one print dot on the pattern
+/// plane seen from the lenslet (dot / B), times the mapping's angle scale.
+double display_resolution_rad(const optics::DesignOptics& optics, const AngularMapping& mapping);
+
+}  // namespace rfd::patterns
