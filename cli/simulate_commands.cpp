@@ -52,6 +52,8 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
         double tolerance_dots = 0.25, brightness = 1.0, pixels_per_lenslet = 8.0;
         int sheets = 0, rays = 8, area_samples = 5;
         std::size_t max_rays = 4096;
+        std::vector<double> front{0.0, 0.1, 0.3, 1.0};
+        optics::DiffuserScatter diffuser;
         bool json = false;
     };
     auto opt = std::make_shared<Options>();
@@ -87,6 +89,18 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
                     "Rays per lenslet over all directions together (default 4096): a full grid per direction "
                     "while it fits, else an equal share each; also caps an environment map's directions")
         ->check(CLI::Range(1, 1 << 20));
+    cmd->add_option("--front", opt->front,
+                    "Contrast with light on the front too: front illuminance / back irradiance ratios "
+                    "(default 0,0.1,0.3,1; 0 is a dark room)")
+        ->delimiter(',')
+        ->check(CLI::NonNegativeNumber);
+    cmd->add_option("--diffuser-transmittance", opt->diffuser.transmittance,
+                    "Fraction of the light from behind the diffuser passes to the observer (default 0.47, thesis "
+                    "figure 8.7)")
+        ->check(CLI::Range(0.0, 1.0));
+    cmd->add_option("--diffuser-reflectance", opt->diffuser.reflectance,
+                    "Fraction of the front light the diffuser scatters back to the observer (default 0.5, nominal)")
+        ->check(CLI::Range(0.0, 1.0));
     cmd->add_flag("--json", opt->json, "Machine-readable summary");
     cmd->callback([cmd, opt, &global] {
         (void)global;
@@ -131,7 +145,9 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
                                                  : choice.model;
         const optics::DiffuserImage result = simulator.simulate(pattern, lights, options);
         write_image(opt->out, result.image);
-        if (!opt->lenslets.empty()) write_image(opt->lenslets, simulator.per_lenslet(result));
+        const Image picture = simulator.per_lenslet(result);
+        if (!opt->lenslets.empty()) write_image(opt->lenslets, picture);
+        const optics::PictureContrast contrast = optics::picture_contrast(picture, opt->diffuser, opt->front);
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
         const std::string model(optics::to_string(options.model));
@@ -151,6 +167,16 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
             {"pixels", {result.image.width(), result.image.height()}},
             {"pixel_mm", result.pixel_mm},
             {"seconds", seconds}};
+        nlohmann::json front = nlohmann::json::array();
+        for (const optics::FrontLightContrast& c : contrast.with_front)  // JSON has no infinity: null
+            front.push_back({{"front_ratio", c.front_ratio},
+                             {"contrast", std::isfinite(c.contrast) ? nlohmann::json(c.contrast) : nlohmann::json()}});
+        summary["contrast"] = {{"white", contrast.white},
+                               {"black", contrast.black},
+                               {"transmissivity", contrast.transmissivity},
+                               {"diffuser_transmittance", opt->diffuser.transmittance},
+                               {"diffuser_reflectance", opt->diffuser.reflectance},
+                               {"with_front_light", front}};
         if (!opt->envmap.empty())
             summary["envmap"] = {{"file", opt->envmap},
                                  {"size", {sampling.width, sampling.height}},
@@ -186,6 +212,17 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
                     100 * result.pattern_efficiency[1], 100 * result.pattern_efficiency[2]);
         std::printf("  crosstalk    %.2f %% of the rays reach the diffuser through a neighbouring lenslet\n",
                     result.rays ? 100.0 * static_cast<double>(result.crossed) / static_cast<double>(result.rays) : 0.0);
+        std::printf("  contrast     white %.4f, black %.4f (99th / 1st percentile over the lenslets); %.1f %% as bright "
+                    "as the back light through the diffuser\n",
+                    contrast.white, contrast.black, 100 * contrast.transmissivity);
+        for (const optics::FrontLightContrast& c : contrast.with_front) {
+            if (std::isfinite(c.contrast))
+                std::printf("               %.1f : 1 with front / back light %g%s\n", c.contrast, c.front_ratio,
+                            c.front_ratio == 0.0 ? " (dark room)" : "");
+            else
+                std::printf("               unbounded with front / back light %g%s (the blacks are black)\n",
+                            c.front_ratio, c.front_ratio == 0.0 ? " (dark room)" : "");
+        }
         std::printf("  time         %.2f s\n", seconds);
     });
     return cmd;

@@ -466,6 +466,35 @@ DiffuserImage DisplaySimulator::simulate(const Transparency& pattern, const std:
     return result;
 }
 
+PictureContrast picture_contrast(const Image& per_lenslet, const DiffuserScatter& diffuser,
+                                 std::span<const double> front_ratios) {
+    RFD_CHECK(!per_lenslet.empty());
+    std::vector<double> luminance;
+    for (int y = 0; y < per_lenslet.height(); ++y)
+        for (int x = 0; x < per_lenslet.width(); ++x) {
+            if (per_lenslet.channels() < 3) {
+                luminance.push_back(per_lenslet.at(x, y, 0));
+                continue;
+            }
+            luminance.push_back(0.2126 * per_lenslet.at(x, y, 0) + 0.7152 * per_lenslet.at(x, y, 1) +
+                                0.0722 * per_lenslet.at(x, y, 2));
+        }
+    std::sort(luminance.begin(), luminance.end());
+    auto percentile = [&](double p) {
+        return luminance[static_cast<std::size_t>(std::lround(p * static_cast<double>(luminance.size() - 1)))];
+    };
+    PictureContrast out;
+    out.white = percentile(0.99);
+    out.black = percentile(0.01);
+    out.transmissivity = diffuser.transmittance * out.white;
+    for (double r : front_ratios) {
+        const double bright = diffuser.transmittance * out.white + diffuser.reflectance * r;
+        const double dark = diffuser.transmittance * out.black + diffuser.reflectance * r;
+        out.with_front.push_back({r, dark > 0.0 ? bright / dark : HUGE_VAL});
+    }
+    return out;
+}
+
 Image DisplaySimulator::per_lenslet(const DiffuserImage& image) const {
     const Lattice& lattice = optics_.lattice();
     const int count_x = lattice.count_x(), count_y = lattice.count_y();

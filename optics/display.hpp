@@ -114,6 +114,31 @@ struct DiffuserImage {
     }
 };
 
+/// What the observer sees when light also falls on the display's front (thesis 8.2.2,
+/// figure 8.7): the diffuser passes a fraction `transmittance` of the irradiance reaching it
+/// from behind toward the observer and scatters back a fraction `reflectance` of the
+/// illuminance on its front, both as Lambertian sources. With the back light's irradiance
+/// as unit and r = front illuminance / back irradiance, a place of relative irradiance E
+/// (DiffuserImage units) looks like T E + rho r, so
+///     contrast(r) = (T white + rho r) / (T black + rho r),
+/// white and black being the 99th and 1st percentiles of the picture's luminance (Rec. 709
+/// weights) over its lenslets. r = 0 is the dark room; contrast is infinite when black is 0.
+struct DiffuserScatter {
+    double transmittance = 0.47;  ///< figure 8.7: 28 % with the Intellicoat film vs 60 % without
+    double reflectance = 0.5;     ///< nominal: film diffusers send back about half the front light
+};
+struct FrontLightContrast {
+    double front_ratio = 0.0;
+    double contrast = 0.0;
+};
+struct PictureContrast {
+    double white = 0.0, black = 0.0;  ///< relative irradiance on the diffuser
+    double transmissivity = 0.0;      ///< T white: the display's brightness over its back light's
+    std::vector<FrontLightContrast> with_front;
+};
+PictureContrast picture_contrast(const Image& per_lenslet, const DiffuserScatter& diffuser,
+                                 std::span<const double> front_ratios);
+
 class DisplaySimulator {
 public:
     /// Designs I and II only; InputError otherwise.

@@ -285,6 +285,31 @@ TEST(DisplaySimulator, ManyDirectionsShareTheRayBudgetAndConverge) {
     EXPECT_GT(agreement, 35.0);
 }
 
+TEST(PictureContrast, FrontLightFillsInTheBlacksAsTheDiffuserScattersIt) {
+    // A picture of 100 lenslets: 50 at 0.4, 50 at 0.01 (grey). Percentiles: white 0.4,
+    // black 0.01; the closed form of the header for each ratio, and the dark room w / b.
+    Image picture(10, 10, 3);
+    for (int y = 0; y < 10; ++y)
+        for (int x = 0; x < 10; ++x)
+            for (int c = 0; c < 3; ++c) picture.at(x, y, c) = y < 5 ? 0.4f : 0.01f;
+    const DiffuserScatter diffuser{0.5, 0.4};
+    const std::vector<double> ratios{0.0, 0.1, 1.0};
+    const PictureContrast contrast = picture_contrast(picture, diffuser, ratios);
+    EXPECT_NEAR(contrast.white, 0.4, 1e-6);
+    EXPECT_NEAR(contrast.black, 0.01, 1e-6);
+    EXPECT_NEAR(contrast.transmissivity, 0.2, 1e-6);
+    ASSERT_EQ(contrast.with_front.size(), 3u);
+    EXPECT_NEAR(contrast.with_front[0].contrast, 40.0, 1e-4);
+    EXPECT_NEAR(contrast.with_front[1].contrast, (0.2 + 0.04) / (0.005 + 0.04), 1e-4);
+    EXPECT_NEAR(contrast.with_front[2].contrast, (0.2 + 0.4) / (0.005 + 0.4), 1e-4);
+    // A black that is truly black: infinite in the dark room, finite once the front is lit.
+    Image black_and_white(2, 100, 1);
+    for (int y = 0; y < 100; ++y) black_and_white.at(1, y, 0) = 1.0f;
+    const PictureContrast ideal = picture_contrast(black_and_white, diffuser, ratios);
+    EXPECT_TRUE(std::isinf(ideal.with_front[0].contrast));
+    EXPECT_NEAR(ideal.with_front[2].contrast, (0.5 + 0.4) / 0.4, 1e-9);
+}
+
 TEST(DisplaySimulator, BadInputIsNamed) {
     const DisplaySimulator sim(design2());
     const RasterTransparency clear = transparency(sim.optics(), [](CellIndex) { return true; });
