@@ -285,6 +285,46 @@ TEST(DisplaySimulator, ManyDirectionsShareTheRayBudgetAndConverge) {
     EXPECT_GT(agreement, 35.0);
 }
 
+TEST(DisplaySimulator, DesignTwoVignettesAtTheMacroPixelBorders) {
+    // Thesis 8.2.4: "some vignetting is noticeable at the borders of the macro-pixels". One
+    // clear macro-pixel: the real lenses (Fresnel losses and aberrations grow toward the
+    // lenslet's rim) light its border ring less than its centre; paraxial optics do not.
+    const DisplaySimulator sim(design2());
+    const DesignOptics& optics = sim.optics();
+    const Lattice& lattice = optics.lattice();
+    const CellIndex centre = optics.centre_cell();
+    const RasterTransparency only_centre = transparency(optics, [&](CellIndex c) { return c == centre; });
+    auto border_over_centre = [&](Model model) {
+        SimulationOptions options;
+        options.model = model;
+        options.rays_per_side = 48;
+        options.pixels_per_pitch = 16;
+        const DiffuserImage image = sim.simulate(only_centre, {{Eigen::Vector3d::UnitZ(), {1, 1, 1}, 0.0}}, options);
+        double inner = 0.0, outer = 0.0;
+        int inner_count = 0, outer_count = 0;
+        for (int y = 0; y < image.image.height(); ++y)
+            for (int x = 0; x < image.image.width(); ++x) {
+                const Eigen::Vector2d p = image.pixel_centre(x, y);
+                if (!(lattice.cell_at(p) == centre)) continue;
+                const Eigen::Vector2d q = (p - lattice.center(centre)).cwiseAbs();
+                const double f = std::max(q.x() / (0.5 * lattice.pitch_x()), q.y() / (0.5 * lattice.pitch_y()));
+                if (f < 0.6) {
+                    inner += image.image.at(x, y, 0);
+                    ++inner_count;
+                } else if (f > 0.8) {
+                    outer += image.image.at(x, y, 0);
+                    ++outer_count;
+                }
+            }
+        return (outer / outer_count) / (inner / inner_count);
+    };
+    const double exact = border_over_centre(Model::Exact);
+    RecordProperty("exact_border_over_centre", std::to_string(exact));
+    EXPECT_LT(exact, 0.97);
+    EXPECT_GT(exact, 0.8);
+    EXPECT_NEAR(border_over_centre(Model::Paraxial), 1.0, 0.02);
+}
+
 TEST(PictureContrast, FrontLightFillsInTheBlacksAsTheDiffuserScattersIt) {
     // A picture of 100 lenslets: 50 at 0.4, 50 at 0.01 (grey). Percentiles: white 0.4,
     // black 0.01; the closed form of the header for each ratio, and the dark room w / b.
