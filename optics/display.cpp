@@ -25,8 +25,9 @@ constexpr double kRestartBackoff = 1e-7;
 // Lenslets per side of the reference array the rays are traced through: a ray that crosses
 // kMaxCrossings cells from its centre lenslet still meets lenslets there.
 constexpr int kReferenceCells = 2 * (kMaxCrossings + 2) + 1;
-// (lenslet, ray) pairs handled at once: bounds the memory of the sample points.
-constexpr std::size_t kPairsPerBand = std::size_t{1} << 20;
+// (lenslet, ray) pairs handled at once: bounds the memory of the sample points (about
+// 30 bytes each); the larger, the fewer pattern rows two bands both read.
+constexpr std::size_t kPairsPerBand = std::size_t{1} << 22;
 // Output rows per splatting task.
 constexpr int kStripRows = 16;
 

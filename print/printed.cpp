@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/parallel.hpp"
 #include "print/sheet.hpp"
 
 namespace rfd::print {
@@ -36,17 +37,31 @@ void PrintedTransparency::sample(std::span<const Eigen::Vector2d> points, std::s
     std::fill(out.begin(), out.end(), 0.0f);
     // The dot under each point (off the sheet: none), then the points in row order.
     const patterns::PatternGeometry& g = geometry_;
-    std::vector<std::size_t> order;
     std::vector<int> row(points.size(), -1), column(points.size(), -1);
-    for (std::size_t k = 0; k < points.size(); ++k) {
-        const Eigen::Vector2d r = g.raster_position(points[k]);
-        const double x = std::floor(r.x() + 0.5), y = std::floor(r.y() + 0.5);
-        if (!(x >= 0.0 && y >= 0.0 && x < g.width && y < g.height)) continue;
-        row[k] = static_cast<int>(y);
-        column[k] = static_cast<int>(x);
-        order.push_back(k);
-    }
-    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return row[a] < row[b]; });
+    parallel_for_chunks(points.size(), 1 << 14, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t k = begin; k < end; ++k) {
+            const Eigen::Vector2d r = g.raster_position(points[k]);
+            const double x = std::floor(r.x() + 0.5), y = std::floor(r.y() + 0.5);
+            if (!(x >= 0.0 && y >= 0.0 && x < g.width && y < g.height)) continue;
+            row[k] = static_cast<int>(y);
+            column[k] = static_cast<int>(x);
+        }
+    });
+    // Counting sort by row (stable): millions of points per call, so no comparison sort.
+    int first_row = g.height, last_row = -1;
+    for (int y : row)
+        if (y >= 0) {
+            first_row = std::min(first_row, y);
+            last_row = std::max(last_row, y);
+        }
+    if (last_row < 0) return;
+    std::vector<std::size_t> starts(static_cast<std::size_t>(last_row - first_row + 2), 0);
+    for (int y : row)
+        if (y >= 0) ++starts[static_cast<std::size_t>(y - first_row) + 1];
+    for (std::size_t i = 1; i < starts.size(); ++i) starts[i] += starts[i - 1];
+    std::vector<std::size_t> order(starts.back());
+    for (std::size_t k = 0; k < points.size(); ++k)
+        if (row[k] >= 0) order[starts[static_cast<std::size_t>(row[k] - first_row)]++] = k;
 
     constexpr int kStripRows = 64;
     patterns::PatternReader reader(file_);

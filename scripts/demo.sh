@@ -77,6 +77,15 @@ done
 predicted="$out/predicted"
 mkdir -p "$predicted"
 echo "== predicted display output" >&2
+# An environment map for them: a dim blue-grey room (64 x 32, latitude-longitude, field
+# frame) with a bright window around the display's axis (field theta 45, phi 90).
+oiiotool --pattern constant:color=4,3.6,3.2 10x6 3 --pattern constant:color=0.04,0.05,0.07 64x32 3 \
+  --paste +43+5 -d float -o "$predicted/window_room.exr"
+for n in 1 2; do
+  "$rfd" simulate "designs/design$n.toml" "$patterns/design${n}_bottle.exr" --envmap "$predicted/window_room.exr" \
+    --out "$predicted/design${n}_window_room.png" --lenslets "$predicted/design${n}_window_room_lenslets.png" \
+    | tee "$predicted/design${n}_window_room.txt"
+done
 for n in 1 2; do
   for case in "axis:--light 45,90" "side:--light 45,70" "red_green:--light 45,75,1:0:0 --light 45,105,0:1:0" \
               "disc:--light 45,90,8"; do
