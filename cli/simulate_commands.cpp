@@ -78,6 +78,7 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
         bool json = false;
     };
     auto opt = std::make_shared<Options>();
+    const auto observer_variant = add_observer_variant_options(*cmd);
     // Not ->required(): `rfd simulate SUBCOMMAND ...` has none of them (checked in the callback).
     cmd->add_option("DESIGN", opt->design, "Design TOML file (Design I or II)");
     cmd->add_option("PATTERN", opt->pattern, "Pattern file from `rfd pattern encode`");
@@ -103,7 +104,7 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
                     "Directions per side of the grid over an area light's disc (default 5)")
         ->check(CLI::Range(1, 64));
     cmd->add_flag("--json", opt->json, "Machine-readable summary");
-    cmd->callback([cmd, opt, &global] {
+    cmd->callback([cmd, opt, observer_variant, &global] {
         (void)global;
         if (!cmd->get_subcommands().empty()) return;  // a subcommand ran instead
         if (opt->design.empty()) throw CLI::RequiredError("DESIGN");
@@ -112,6 +113,8 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
         if (opt->out.empty()) throw CLI::RequiredError("--out");
         const auto start = std::chrono::steady_clock::now();
         const optics::Design design = optics::load_design(opt->design);
+        if (design.kind == optics::DesignKind::III || design.kind == optics::DesignKind::IV)
+            return simulate_observer_variant(*cmd, *observer_variant, global);
         const optics::DisplaySimulator simulator(design);
         const print::PrinterProfile printer = printer_for(design, opt->printer);
         const print::PrintedTransparency pattern(design, printer, opt->pattern, opt->brightness, opt->sheets);

@@ -248,7 +248,7 @@ TEST(AngularDisplay, ReproducesAnEncodedFieldThroughThePrintedPattern) {
     // The printed dots are 42 um: the field changes by up to 0.02 of white from dot to dot
     // (dR/dtan ~ 1.8 / white, |gain| * 42 um of slope); the kernel spans several dots and
     // averages the steps of a linear field out, leaving a fraction of that.
-    EXPECT_GT(psnr, 45.0);
+    EXPECT_GT(psnr, 50.0);  // measured 60 dB
     EXPECT_LT(worst, 0.01);
     RecordProperty("psnr_db", std::to_string(psnr));
 }
@@ -283,7 +283,7 @@ TEST(AngularDisplay, ReproducesAnEncodedFieldWithTheExactOptics) {
         }
     }
     const double psnr = psnr_of(got, want, 1.0);
-    EXPECT_GT(psnr, 35.0);
+    EXPECT_GT(psnr, 45.0);  // measured 57 dB
     RecordProperty("psnr_db", std::to_string(psnr));
 }
 
