@@ -335,6 +335,8 @@ AngularDisplayOutput AngularDisplaySimulator::simulate(const Transparency& patte
                         if (!(options.distributions[q] == macro)) continue;
                         std::vector<double>& image = distribution_sums[q];
                         const double T = result.distribution_half_tan;
+                        // Off the image (and clear of int overflow for grazing rays).
+                        if (std::abs(ray.tan_x) > T + spread || std::abs(ray.tan_y) > T + spread) continue;
                         const int x0 = std::max(0, static_cast<int>(std::floor((ray.tan_x - spread + T) / step - 0.5)));
                         const int x1 = std::min(grid - 1, static_cast<int>(std::ceil((ray.tan_x + spread + T) / step - 0.5)));
                         const int y0 = std::max(0, static_cast<int>(std::floor((T - ray.tan_y - spread) / step - 0.5)));
