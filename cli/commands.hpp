@@ -2,6 +2,8 @@
 // Registration of the rfd subcommands. Each command is thin: it parses its arguments,
 // calls the libraries, and prints. No science lives in cli/.
 
+#include <memory>
+
 #include <CLI/CLI.hpp>
 
 namespace rfd::cli {
@@ -31,5 +33,12 @@ void add_pattern_angular_command(CLI::App& pattern, const GlobalOptions& global)
 
 /// `simulate`: the predicted output of a Design I/II display under lights.
 void add_simulate_commands(CLI::App& app, const GlobalOptions& global);
+
+/// `simulate` for Designs III and IV (cli/simulate_angular_commands.cpp): their options,
+/// added to the `simulate` command, and the run its callback hands over to.
+struct ObserverVariantOptions;
+std::shared_ptr<ObserverVariantOptions> add_observer_variant_options(CLI::App& simulate);
+void simulate_observer_variant(const CLI::App& simulate, const ObserverVariantOptions& options,
+                               const GlobalOptions& global);
 
 }  // namespace rfd::cli

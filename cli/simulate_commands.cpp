@@ -43,8 +43,9 @@ double signed_attribute(const patterns::PatternFileInfo& info, const std::string
 
 CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
     auto* cmd = app.add_subcommand(
-        "simulate", "Predict what a Design I or II display shows under given lights, from its design and its "
-                    "pattern as printed (tone mapping, black level, density), before printing; or a subcommand");
+        "simulate", "Predict what a display shows under given lights, from its design and its pattern as printed "
+                    "(tone mapping, black level, density), before printing: Designs I/II on the diffuser, "
+                    "III/IV from viewpoints; or a subcommand");
     cmd->require_subcommand(0, 1);
     struct Options {
         std::string design, pattern, printer, out, lenslets, envmap, model = "auto";
@@ -57,8 +58,9 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
         bool json = false;
     };
     auto opt = std::make_shared<Options>();
+    const auto observer_variant = add_observer_variant_options(*cmd);
     // Not ->required(): `rfd simulate SUBCOMMAND ...` has none of them (checked in the callback).
-    cmd->add_option("DESIGN", opt->design, "Design TOML file (Design I or II)");
+    cmd->add_option("DESIGN", opt->design, "Design TOML file");
     cmd->add_option("PATTERN", opt->pattern, "Pattern file from `rfd pattern encode`");
     cmd->add_option("--light", opt->lights,
                     std::string("A distant light behind the display, in the field's frame ") + kLightSyntax +
@@ -102,7 +104,7 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
                     "Fraction of the front light the diffuser scatters back to the observer (default 0.5, nominal)")
         ->check(CLI::Range(0.0, 1.0));
     cmd->add_flag("--json", opt->json, "Machine-readable summary");
-    cmd->callback([cmd, opt, &global] {
+    cmd->callback([cmd, opt, observer_variant, &global] {
         (void)global;
         if (!cmd->get_subcommands().empty()) return;  // a subcommand ran instead
         if (opt->design.empty()) throw CLI::RequiredError("DESIGN");
@@ -111,6 +113,8 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
         if (opt->out.empty()) throw CLI::RequiredError("--out");
         const auto start = std::chrono::steady_clock::now();
         const optics::Design design = optics::load_design(opt->design);
+        if (design.kind == optics::DesignKind::III || design.kind == optics::DesignKind::IV)
+            return simulate_observer_variant(*cmd, *observer_variant, global);
         const optics::DisplaySimulator simulator(design);
         const print::PrinterProfile printer = printer_for(design, opt->printer);
         const print::PrintedTransparency pattern(design, printer, opt->pattern, opt->brightness, opt->sheets);

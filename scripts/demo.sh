@@ -103,4 +103,33 @@ for n in 1 2; do
   done
 done
 
+# Designs III and IV (thesis 8.3): figure 8.13's letters, one per incident bin, encoded for
+# Design III at the printer's resolution and predicted under a light in the bin of "0" and
+# in that of "7" (the field's frame), with the angular distribution a screen in front of
+# the display would show (figure 8.13's projected letter) and the 6 x 5 meso-pixels seen
+# head-on and from 8 degrees to the right. Figure 8.15's diamonds for Design IV at 150 dpi
+# (a preview printer profile written here keeps the 238 mm pattern to 1400 x 1400 dots),
+# lit from below and from the left (lights at meso-cell centres), seen from an eye 1 m away and from 8 degrees right.
+echo "== predicted display output: Designs III and IV" >&2
+"$rfd" pattern encode-angular designs/design3.toml --procedural letters --out "$predicted/design3_letters.exr" \
+  | tee "$predicted/design3_letters.txt"
+for case in "bin0:--light 15.5,43.8" "bin7:--light 8.7,38.7"; do
+  name="${case%%:*}"
+  # shellcheck disable=SC2086
+  "$rfd" simulate designs/design3.toml "$predicted/design3_letters.exr" ${case#*:} --view 0,0 --view 8,0 --zoom 16 \
+    --out "$predicted/design3_${name}.png" --distribution 0,0 --distribution-out "$predicted/design3_${name}_screen.png" \
+    --distribution-pixels 128 | tee "$predicted/design3_${name}.txt"
+done
+sed -e 's/^dpi_x = .*/dpi_x = 150/' -e 's/^dpi_y = .*/dpi_y = 150/' -e 's/^name = "generic 720 dpi inkjet"/name = "150 dpi preview"/' \
+  printers/inkjet_720.toml > "$predicted/preview_150dpi.toml"
+"$rfd" pattern encode-angular designs/design4.toml --procedural diamonds --dpi 150 --table 65 \
+  --out "$predicted/design4_diamonds.exr" | tee "$predicted/design4_diamonds.txt"
+for case in "below:--light 8.5,285.5" "side:--light 6.8,180"; do
+  name="${case%%:*}"
+  # shellcheck disable=SC2086
+  "$rfd" simulate designs/design4.toml "$predicted/design4_diamonds.exr" ${case#*:} --printer "$predicted/preview_150dpi.toml" \
+    --eye 0,0,1000 --view 8,0 --zoom 8 --out "$predicted/design4_${name}.png" --macro "$predicted/design4_${name}_macro.png" \
+    | tee "$predicted/design4_${name}.txt"
+done
+
 echo "demo written to $out" >&2

@@ -1,0 +1,279 @@
+// rfd simulate for Designs III and IV: what leaves an observer-variant display under given
+// lights, seen from chosen viewpoints, predicted from its design and its pattern as printed.
+// The `simulate` command's own arguments (DESIGN, PATTERN, --light, --out, --model, --printer,
+// --brightness, --sheets, --area-samples, --json) are read from it; the options below only
+// matter for these designs.
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "cli/arguments.hpp"
+#include "cli/commands.hpp"
+#include "core/error.hpp"
+#include "core/image_io.hpp"
+#include "core/sphere.hpp"
+#include "core/units.hpp"
+#include "optics/display_angular.hpp"
+#include "patterns/angular.hpp"
+#include "print/printed.hpp"
+
+namespace rfd::cli {
+
+struct ObserverVariantOptions {
+    std::vector<std::string> views, eyes, distributions;
+    std::string macro_out, distribution_out;
+    int lens_rays = 128, distribution_pixels = 64, zoom = 1;
+    double kernel = 2.0;
+};
+
+namespace {
+
+// "A,B[,C]" as numbers, naming the option in the error.
+std::vector<double> numbers(const std::string& text, const std::string& option, std::size_t count) {
+    std::vector<double> values;
+    std::stringstream in(text);
+    std::string part;
+    while (std::getline(in, part, ',')) {
+        std::size_t used = 0;
+        double value = std::nan("");
+        try {
+            value = std::stod(part, &used);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (part.empty() || used != part.size() || !std::isfinite(value))
+            throw InputError(option + " '" + text + "': expected " + std::to_string(count) + " numbers separated by commas");
+        values.push_back(value);
+    }
+    if (values.size() != count)
+        throw InputError(option + " '" + text + "': expected " + std::to_string(count) + " numbers separated by commas");
+    return values;
+}
+
+// name.ext -> name_SUFFIX.ext
+std::filesystem::path with_suffix(const std::filesystem::path& path, const std::string& suffix) {
+    return path.parent_path() / (path.stem().string() + "_" + suffix + path.extension().string());
+}
+
+// Nearest-neighbour enlargement, so that a 7 x 7 picture can be looked at.
+Image zoomed(const Image& image, int zoom) {
+    if (zoom <= 1) return image;
+    Image out(image.width() * zoom, image.height() * zoom, image.channels());
+    for (int c = 0; c < image.channels(); ++c)
+        for (int y = 0; y < out.height(); ++y)
+            for (int x = 0; x < out.width(); ++x) out.at(x, y, c) = image.at(x / zoom, y / zoom, c);
+    return out;
+}
+
+// The value of one of `simulate`'s own options; `fallback` (its default there) when not given:
+// CLI11 keeps a default in the bound variable, which lives in simulate_commands.cpp.
+template <typename T>
+T option_value(const CLI::App& app, const std::string& name, T fallback = T{}) {
+    const CLI::Option* option = app.get_option(name);
+    return option->count() > 0 ? option->as<T>() : fallback;
+}
+
+}  // namespace
+
+std::shared_ptr<ObserverVariantOptions> add_observer_variant_options(CLI::App& simulate) {
+    auto opt = std::make_shared<ObserverVariantOptions>();
+    const std::string group = "Designs III and IV";
+    simulate.add_option("--view", opt->views,
+                        "III/IV: a distant observer at THETA,PHI (degrees, field frame: the direction toward the "
+                        "observer); repeat for several (one image each, --out gets _view1, _view2, ...); default 0,0")
+        ->group(group);
+    simulate.add_option("--eye", opt->eyes,
+                        "III/IV: an observer's eye at X,Y,Z mm (display frame; Z in front of the last lens surface); "
+                        "repeatable, numbered after the --view images")
+        ->group(group);
+    simulate.add_option("--macro", opt->macro_out,
+                        "III/IV: also the picture of each view at the macro-pixel resolution (mean over its "
+                        "meso-pixels), as a distant observer sees it; suffixed like --out")
+        ->group(group);
+    simulate.add_option("--distribution", opt->distributions,
+                        "III/IV: the angular distribution of macro-pixel U,V (0,0 bottom left); repeatable")
+        ->group(group);
+    simulate.add_option("--distribution-out", opt->distribution_out,
+                        "III/IV: file for the distributions (.exr/.png), suffixed _U_V")
+        ->group(group);
+    simulate.add_option("--distribution-pixels", opt->distribution_pixels,
+                        "III/IV: pixels per side of a distribution image (default 64)")
+        ->check(CLI::Range(2, 4096))
+        ->group(group);
+    simulate.add_option("--lens-rays", opt->lens_rays, "III/IV: rays per side across the main lens (default 128)")
+        ->check(CLI::Range(2, 4096))
+        ->group(group);
+    simulate.add_option("--kernel", opt->kernel,
+                        "III/IV: radius of the kernel over output directions, in ray spacings (default 2)")
+        ->check(CLI::Range(0.5, 64.0))
+        ->group(group);
+    simulate.add_option("--zoom", opt->zoom, "III/IV: enlarge the view images N times (nearest; default 1)")
+        ->check(CLI::Range(1, 256))
+        ->group(group);
+    return opt;
+}
+
+void simulate_observer_variant(const CLI::App& simulate, const ObserverVariantOptions& opt, const GlobalOptions&) {
+    const auto start = std::chrono::steady_clock::now();
+    const auto design_file = option_value<std::string>(simulate, "DESIGN");
+    const auto pattern_file = option_value<std::string>(simulate, "PATTERN");
+    const auto out = option_value<std::string>(simulate, "--out");
+    const auto light_texts = option_value<std::vector<std::string>>(simulate, "--light");
+    const auto model_choice = option_value<std::string>(simulate, "--model", "auto");
+    if (simulate.get_option("--rays")->count() > 0 || simulate.get_option("--lenslets")->count() > 0 ||
+        simulate.get_option("--pixels-per-lenslet")->count() > 0)
+        throw InputError(SourceLocation{design_file, 0, 0, "design.kind"},
+                         "--rays, --lenslets and --pixels-per-lenslet are for Designs I and II; Designs III and IV "
+                         "take --lens-rays, --view, --eye, --macro and --distribution");
+    for (const char* name : {"--envmap", "--max-rays", "--front", "--diffuser-transmittance", "--diffuser-reflectance"})
+        if (simulate.get_option(name)->count() > 0)
+            throw InputError(SourceLocation{design_file, 0, 0, "design.kind"},
+                             std::string(name) + " is for Designs I and II (a diffuser shows the picture); Designs III "
+                                                 "and IV take --light");
+    if (light_texts.empty())
+        throw InputError(SourceLocation{design_file, 0, 0, "design.kind"}, "Designs III and IV need --light");
+    if (!opt.distributions.empty() && opt.distribution_out.empty())
+        throw InputError("--distribution needs --distribution-out FILE");
+
+    const optics::Design design = optics::load_design(design_file);
+    const optics::AngularDisplaySimulator simulator(design);
+    const print::PrinterProfile printer = printer_for(design, option_value<std::string>(simulate, "--printer"));
+    const print::PrintedTransparency pattern(design, printer, pattern_file,
+                                             option_value<double>(simulate, "--brightness", 1.0),
+                                             option_value<int>(simulate, "--sheets"));
+
+    // Field-frame lights to display lights: the mirror of patterns/angular.hpp's field_light_of.
+    std::vector<optics::DisplayLight> lights;
+    for (const std::string& text : light_texts) {
+        const relight::Light light = parse_light(text);
+        optics::DisplayLight d;
+        Eigen::Vector3d toward, colour;
+        if (const auto* point = std::get_if<relight::DirectionalLight>(&light)) {
+            toward = point->direction;
+            colour = point->irradiance;
+        } else {
+            const auto& disc = std::get<relight::DiskLight>(light);
+            toward = disc.direction;
+            d.angular_radius_rad = disc.radius;
+            colour = disc.irradiance;
+        }
+        d.direction = patterns::field_light_of(toward);  // its own inverse
+        d.colour = {colour.x(), colour.y(), colour.z()};
+        lights.push_back(d);
+    }
+
+    optics::AngularSimulationOptions options;
+    // auto: exact. The rays are traced once for all macro-pixels, so the exact model costs
+    // little, and the paraxial one misplaces the bins' edges off axis.
+    options.model = model_choice == "paraxial" ? optics::Model::Paraxial : optics::Model::Exact;
+    options.rays_per_side = opt.lens_rays;
+    options.kernel_spacings = opt.kernel;
+    options.area_samples_per_side = option_value<int>(simulate, "--area-samples", 5);
+    options.distribution_pixels = opt.distribution_pixels;
+    std::vector<std::string> view_names;
+    for (const std::string& text : opt.views) {
+        const auto v = numbers(text, "--view", 2);
+        optics::Viewpoint view;
+        view.direction = direction_from_angles(degrees_to_radians(v[0]), degrees_to_radians(v[1]));
+        options.views.push_back(view);
+        view_names.push_back("view " + text);
+    }
+    for (const std::string& text : opt.eyes) {
+        const auto v = numbers(text, "--eye", 3);
+        optics::Viewpoint view;
+        view.eye_mm = Eigen::Vector3d(v[0], v[1], v[2]);
+        options.views.push_back(view);
+        view_names.push_back("eye " + text);
+    }
+    if (options.views.empty()) {
+        options.views.push_back(optics::Viewpoint{});
+        view_names.push_back("view 0,0");
+    }
+    std::vector<std::string> distribution_texts;
+    for (const std::string& text : opt.distributions) {
+        const auto v = numbers(text, "--distribution", 2);
+        if (v[0] != std::floor(v[0]) || v[1] != std::floor(v[1]))
+            throw InputError("--distribution '" + text + "': expected whole macro-pixel indices U,V");
+        options.distributions.push_back({static_cast<int>(v[0]), static_cast<int>(v[1])});
+        distribution_texts.push_back(std::to_string(static_cast<int>(v[0])) + "_" + std::to_string(static_cast<int>(v[1])));
+    }
+
+    const optics::AngularDisplayOutput result = simulator.simulate(pattern, lights, options);
+    const bool several = result.views.size() > 1;
+    std::vector<std::string> written;
+    for (std::size_t w = 0; w < result.views.size(); ++w) {
+        const std::string suffix = "view" + std::to_string(w + 1);
+        const std::filesystem::path path = several ? with_suffix(out, suffix) : std::filesystem::path(out);
+        write_image(path, zoomed(result.views[w], opt.zoom));
+        written.push_back(path.string());
+        if (!opt.macro_out.empty()) {
+            const std::filesystem::path macro = several ? with_suffix(opt.macro_out, suffix) : std::filesystem::path(opt.macro_out);
+            write_image(macro, zoomed(simulator.per_macro_pixel(result.views[w]), opt.zoom));
+            written.push_back(macro.string());
+        }
+    }
+    for (std::size_t q = 0; q < result.distributions.size(); ++q) {
+        const std::filesystem::path path = with_suffix(opt.distribution_out, distribution_texts[q]);
+        write_image(path, result.distributions[q]);
+        written.push_back(path.string());
+    }
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+    const std::string model(optics::to_string(options.model));
+    const double rays = static_cast<double>(std::max<std::size_t>(result.rays, 1));
+    nlohmann::json losses = nlohmann::json::object();
+    for (const auto& [surface, fraction] : result.lost_fraction) losses[surface] = fraction;
+    const int lattice_x = simulator.meso().lattice().count_x(), lattice_y = simulator.meso().lattice().count_y();
+    const nlohmann::json summary = {
+        {"out", written},
+        {"design_kind", std::string(optics::to_string(design.kind))},
+        {"model", model},
+        {"model_choice", model_choice},
+        {"lights", light_texts.size()},
+        {"views", view_names},
+        {"directions", result.directions},
+        {"rays", result.rays},
+        {"rays_lost", result.lost},
+        {"rays_crossed", result.crossed},
+        {"optical_efficiency", result.optical_efficiency},
+        {"pattern_efficiency", result.pattern_efficiency},
+        {"crosstalk_fraction", result.crossed_fraction},
+        {"lost_fraction", losses},
+        {"meso_pixels", {simulator.macro_x() * lattice_x, simulator.macro_y() * lattice_y}},
+        {"macro_grid", {simulator.macro_x(), simulator.macro_y()}},
+        {"kernel_deg", radians_to_degrees(std::atan(result.kernel_half_tan))},
+        {"distribution_half_angle_deg", radians_to_degrees(std::atan(result.distribution_half_tan))},
+        {"reference_radiance_per_sr", result.reference_radiance_per_sr},
+        {"seconds", seconds}};
+    if (option_value<bool>(simulate, "--json")) {
+        std::printf("%s\n", summary.dump(2).c_str());
+        return;
+    }
+    std::printf("%s: what '%s' sends toward %zu viewpoint(s), %d x %d meso-pixels (%d x %d macro-pixels)\n",
+                written.front().c_str(), design.name.c_str(), result.views.size(), simulator.macro_x() * lattice_x,
+                simulator.macro_y() * lattice_y, simulator.macro_x(), simulator.macro_y());
+    std::printf("  model        %s (%s)\n", model.c_str(), model_choice == "auto" ? "auto: exact" : "as asked");
+    std::printf("  light        %zu light(s), %zu direction(s) sampled, %zu rays per macro-pixel\n", light_texts.size(),
+                result.directions, result.rays);
+    std::printf("  efficiency   %.1f %% of the light entering the main lens leaves the display; "
+                "%.1f / %.1f / %.1f %% through the pattern (R/G/B)\n",
+                100 * result.optical_efficiency, 100 * result.pattern_efficiency[0], 100 * result.pattern_efficiency[1],
+                100 * result.pattern_efficiency[2]);
+    std::printf("  crosstalk    %.2f %% of the light leaves through a neighbouring lenslet (%.2f %% of the rays)\n",
+                100 * result.crossed_fraction, 100.0 * static_cast<double>(result.crossed) / rays);
+    for (const auto& [surface, fraction] : result.lost_fraction)
+        std::printf("  lost         %5.1f %% at %s\n", 100 * fraction, surface.c_str());
+    std::printf("  kernel       %.2f deg over output directions; 1.0 = %.4g /sr per unit irradiance\n",
+                radians_to_degrees(std::atan(result.kernel_half_tan)), result.reference_radiance_per_sr);
+    std::printf("  time         %.2f s\n", seconds);
+}
+
+}  // namespace rfd::cli
