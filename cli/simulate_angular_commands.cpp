@@ -23,6 +23,7 @@
 #include "core/units.hpp"
 #include "optics/display_angular.hpp"
 #include "patterns/angular.hpp"
+#include "patterns/display_lights.hpp"
 #include "print/printed.hpp"
 
 namespace rfd::cli {
@@ -133,13 +134,11 @@ void simulate_observer_variant(const CLI::App& simulate, const ObserverVariantOp
         throw InputError(SourceLocation{design_file, 0, 0, "design.kind"},
                          "--rays, --lenslets and --pixels-per-lenslet are for Designs I and II; Designs III and IV "
                          "take --lens-rays, --view, --eye, --macro and --distribution");
-    for (const char* name : {"--envmap", "--max-rays", "--front", "--diffuser-transmittance", "--diffuser-reflectance"})
+    for (const char* name : {"--front", "--diffuser-transmittance", "--diffuser-reflectance"})
         if (simulate.get_option(name)->count() > 0)
             throw InputError(SourceLocation{design_file, 0, 0, "design.kind"},
-                             std::string(name) + " is for Designs I and II (a diffuser shows the picture); Designs III "
-                                                 "and IV take --light");
-    if (light_texts.empty())
-        throw InputError(SourceLocation{design_file, 0, 0, "design.kind"}, "Designs III and IV need --light");
+                             std::string(name) + " is for Designs I and II (a diffuser shows the picture)");
+    const auto envmap = option_value<std::string>(simulate, "--envmap");
     if (!opt.distributions.empty() && opt.distribution_out.empty())
         throw InputError("--distribution needs --distribution-out FILE");
 
@@ -169,6 +168,23 @@ void simulate_observer_variant(const CLI::App& simulate, const ObserverVariantOp
         d.colour = {colour.x(), colour.y(), colour.z()};
         lights.push_back(d);
     }
+
+    // An environment map: one light per lit pixel, mapped as the lights above. Every
+    // direction traces the whole main lens (--lens-rays squared rays), so the map is
+    // box-filtered to at most --max-rays / 16 lit directions (default 256), which still
+    // puts many directions in each of the display's few incident bins.
+    patterns::EnvironmentSampling sampling;
+    if (!envmap.empty()) {
+        const std::size_t budget = std::max<std::size_t>(1, option_value<std::size_t>(simulate, "--max-rays", 4096) / 16);
+        const std::vector<optics::DisplayLight> sky = patterns::environment_lights(
+            read_image(envmap), envmap, [](const Eigen::Vector3d& field) { return patterns::field_light_of(field); },
+            0.0, budget, &sampling);
+        lights.insert(lights.end(), sky.begin(), sky.end());
+    }
+    if (lights.empty())
+        throw InputError(SourceLocation{envmap.empty() ? design_file : envmap, 0, 0, ""},
+                         envmap.empty() ? "Designs III and IV need --light or --envmap"
+                                        : "no light reaches the display from behind: the map is black there");
 
     optics::AngularSimulationOptions options;
     // auto: exact. The rays are traced once for all macro-pixels, so the exact model costs
@@ -232,7 +248,7 @@ void simulate_observer_variant(const CLI::App& simulate, const ObserverVariantOp
     nlohmann::json losses = nlohmann::json::object();
     for (const auto& [surface, fraction] : result.lost_fraction) losses[surface] = fraction;
     const int lattice_x = simulator.meso().lattice().count_x(), lattice_y = simulator.meso().lattice().count_y();
-    const nlohmann::json summary = {
+    nlohmann::json summary = {
         {"out", written},
         {"design_kind", std::string(optics::to_string(design.kind))},
         {"model", model},
@@ -253,6 +269,14 @@ void simulate_observer_variant(const CLI::App& simulate, const ObserverVariantOp
         {"distribution_half_angle_deg", radians_to_degrees(std::atan(result.distribution_half_tan))},
         {"reference_radiance_per_sr", result.reference_radiance_per_sr},
         {"seconds", seconds}};
+    if (!envmap.empty())
+        summary["envmap"] = {{"file", envmap},
+                             {"size", {sampling.width, sampling.height}},
+                             {"sampled_size", {sampling.sampled_width, sampling.sampled_height}},
+                             {"box_filter", sampling.reduction},
+                             {"reason", sampling.reason},
+                             {"directions", sampling.directions},
+                             {"directions_in_front", sampling.in_front}};
     if (option_value<bool>(simulate, "--json")) {
         std::printf("%s\n", summary.dump(2).c_str());
         return;
@@ -261,8 +285,16 @@ void simulate_observer_variant(const CLI::App& simulate, const ObserverVariantOp
                 written.front().c_str(), design.name.c_str(), result.views.size(), simulator.macro_x() * lattice_x,
                 simulator.macro_y() * lattice_y, simulator.macro_x(), simulator.macro_y());
     std::printf("  model        %s (%s)\n", model.c_str(), model_choice == "auto" ? "auto: exact" : "as asked");
-    std::printf("  light        %zu light(s), %zu direction(s) sampled, %zu rays per macro-pixel\n", light_texts.size(),
-                result.directions, result.rays);
+    std::printf("  light        %zu light(s)%s, %zu direction(s) sampled, %zu rays per macro-pixel\n", light_texts.size(),
+                envmap.empty() ? "" : " and an environment map", result.directions, result.rays);
+    if (!envmap.empty()) {
+        std::printf("  envmap       %s: %d x %d", envmap.c_str(), sampling.width, sampling.height);
+        if (sampling.reduction > 1)
+            std::printf(", sampled at %d x %d (box filter %d: %s)", sampling.sampled_width, sampling.sampled_height,
+                        sampling.reduction, sampling.reason.c_str());
+        std::printf("; %zu direction(s) light the display from behind, %zu from the front (dropped)\n",
+                    sampling.directions, sampling.in_front);
+    }
     std::printf("  efficiency   %.1f %% of the light entering the main lens leaves the display; "
                 "%.1f / %.1f / %.1f %% through the pattern (R/G/B)\n",
                 100 * result.optical_efficiency, 100 * result.pattern_efficiency[0], 100 * result.pattern_efficiency[1],

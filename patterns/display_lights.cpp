@@ -78,12 +78,12 @@ struct Count {
 };
 
 // Pixels with light, by the side of the display their light meets.
-Count count_lit(const PowerMap& map, const AngularMapping& mapping) {
+Count count_lit(const PowerMap& map, const FieldToDisplay& to_display) {
     Count count;
     for (int v = 0; v < map.height; ++v)
         for (int u = 0; u < map.width; ++u) {
             if (map.at(u, v).isZero()) continue;
-            if (mapping.display_direction(map.direction(u, v)).z() > 1e-9) ++count.behind;
+            if (to_display(map.direction(u, v)).z() > 1e-9) ++count.behind;
             else ++count.in_front;
         }
     return count;
@@ -115,6 +115,14 @@ double display_resolution_rad(const optics::DesignOptics& optics, const AngularM
 std::vector<optics::DisplayLight> environment_lights(const Image& radiance, const std::string& name,
                                                      const AngularMapping& mapping, double resolution_rad,
                                                      std::size_t max_directions, EnvironmentSampling* report) {
+    return environment_lights(
+        radiance, name, [&](const Eigen::Vector3d& field) { return mapping.display_direction(field); }, resolution_rad,
+        max_directions, report);
+}
+
+std::vector<optics::DisplayLight> environment_lights(const Image& radiance, const std::string& name,
+                                                     const FieldToDisplay& to_display, double resolution_rad,
+                                                     std::size_t max_directions, EnvironmentSampling* report) {
     if (radiance.empty() || (radiance.channels() != 1 && radiance.channels() != 3))
         throw InputError(SourceLocation{name, 0, 0, ""},
                          "an environment map is a latitude-longitude image with 1 or 3 channels, got " +
@@ -136,12 +144,12 @@ std::vector<optics::DisplayLight> environment_lights(const Image& radiance, cons
     RFD_CHECK(max_directions > 0 && resolution_rad >= 0.0);
 
     PowerMap map = power_of(radiance);
-    Count count = count_lit(map, mapping);
+    Count count = count_lit(map, to_display);
     std::string reason;
     while ((map.pixel_angle() < resolution_rad || count.behind > max_directions) && (map.width > 1 || map.height > 1)) {
         reason = map.pixel_angle() < resolution_rad ? "finer than the display resolves" : "more lit directions than the ray budget";
         map = halve(map);
-        count = count_lit(map, mapping);
+        count = count_lit(map, to_display);
     }
 
     std::vector<optics::DisplayLight> lights;
@@ -149,7 +157,7 @@ std::vector<optics::DisplayLight> environment_lights(const Image& radiance, cons
         for (int u = 0; u < map.width; ++u) {
             const Eigen::Vector3d& power = map.at(u, v);
             if (power.isZero()) continue;
-            const Eigen::Vector3d direction = mapping.display_direction(map.direction(u, v));
+            const Eigen::Vector3d direction = to_display(map.direction(u, v));
             if (!(direction.z() > 1e-9)) continue;
             optics::DisplayLight light;
             light.direction = direction;

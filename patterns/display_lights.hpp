@@ -22,6 +22,7 @@
 // Example: auto lights = environment_lights(read_image("sky.exr"), mapping, 0.003, 1024, &report);
 
 #include <cstddef>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -46,11 +47,19 @@ struct EnvironmentSampling {
     std::size_t in_front = 0;                  ///< pixels with light that meets the display from the front
 };
 
-/// Checks `radiance` (1 or 3 channels, every sample finite and >= 0; InputError naming
-/// `name`, the pixel and the channel otherwise) and turns it into point lights, see above.
-/// `resolution_rad` is the display's finest angle in the field's frame; 0 means any.
+/// Checks `radiance` (2:1, 1 or 3 channels, every sample finite and >= 0; InputError
+/// naming `name`, the pixel and the channel otherwise) and turns it into point lights, see
+/// above. `resolution_rad` is the display's finest angle in the field's frame; 0 means any.
 std::vector<optics::DisplayLight> environment_lights(const Image& radiance, const std::string& name,
                                                      const AngularMapping& mapping, double resolution_rad,
+                                                     std::size_t max_directions, EnvironmentSampling* report = nullptr);
+
+/// The same for any field-to-display mapping of directions (unit toward the light in, unit
+/// direction of travel out; z <= 0 out means the light meets the display from the front),
+/// e.g. Designs III/IV's patterns::field_light_of.
+using FieldToDisplay = std::function<Eigen::Vector3d(const Eigen::Vector3d&)>;
+std::vector<optics::DisplayLight> environment_lights(const Image& radiance, const std::string& name,
+                                                     const FieldToDisplay& to_display, double resolution_rad,
                                                      std::size_t max_directions, EnvironmentSampling* report = nullptr);
 
 /// The display's finest resolved angle in the field's frame: one print dot on the pattern

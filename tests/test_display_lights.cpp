@@ -107,13 +107,13 @@ TEST(EnvironmentLights, LightFromInFrontOfATiltedDisplayIsDropped) {
 TEST(EnvironmentLights, BadMapsAreRefusedNamingThePixel) {
     Image nan_map(8, 4, 3);
     nan_map.at(5, 2, 1) = std::numeric_limits<float>::quiet_NaN();
-    EXPECT_THAT(error_of([&] { environment_lights(nan_map, "sky.exr", {}, 0.0, 100); }),
+    EXPECT_THAT(error_of([&] { environment_lights(nan_map, "sky.exr", AngularMapping{}, 0.0, 100); }),
                 HasSubstr("sky.exr: pixel (5, 2) channel 1 is NaN"));
     Image negative(8, 4, 1);
     negative.at(0, 3, 0) = -0.5f;
-    EXPECT_THAT(error_of([&] { environment_lights(negative, "sky.exr", {}, 0.0, 100); }),
+    EXPECT_THAT(error_of([&] { environment_lights(negative, "sky.exr", AngularMapping{}, 0.0, 100); }),
                 HasSubstr("pixel (0, 3) channel 0 is -0.5"));
-    EXPECT_THAT(error_of([&] { environment_lights(Image(8, 4, 2), "sky.exr", {}, 0.0, 100); }),
+    EXPECT_THAT(error_of([&] { environment_lights(Image(8, 4, 2), "sky.exr", AngularMapping{}, 0.0, 100); }),
                 HasSubstr("1 or 3 channels"));
 }
 

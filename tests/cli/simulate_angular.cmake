@@ -27,6 +27,12 @@ string(REPLACE "count = [7, 7]" "count = [2, 2]" text "${text}")
 file(WRITE ${OUT}/design4.toml "${text}")
 
 run(0 pattern encode-angular ${OUT}/design3.toml --procedural letters --table 33 --out ${OUT}/letters.exr)
+# Under an environment map (a 16 x 8 latitude-longitude image: a bars field's first image).
+run(0 pattern field bars --resolution 16x8 --spread 8 --out ${OUT}/sky)
+run(0 simulate ${OUT}/design3.toml ${OUT}/letters.exr --envmap ${OUT}/sky/bars_0000.exr --out ${OUT}/env.exr
+    --lens-rays 24 --json)
+expect("\"envmap\"")
+expect("\"directions\": [1-9]")
 foreach(name a b)
   run(0 simulate ${OUT}/design3.toml ${OUT}/letters.exr --light 5,0 --view 0,0 --view 6,90 --out ${OUT}/${name}.exr
       --macro ${OUT}/${name}_macro.exr --distribution 0,0 --distribution-out ${OUT}/${name}_dist.exr --lens-rays 48 --json)
