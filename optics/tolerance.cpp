@@ -111,10 +111,10 @@ ToleranceOptions default_tolerance_ranges(const DesignOptics& optics) {
     const double pitch = std::min(lattice.pitch_x(), lattice.pitch_y());
     const double radius = std::max(largest_centre_radius(lattice), pitch);
     ToleranceOptions options;
-    options.max_shift_mm = pitch / 4.0;
-    options.max_rotation_rad = std::atan(pitch / 4.0 / radius);
-    options.max_pitch_error = pitch / 4.0 / radius;
-    options.max_spacer_mm = pattern_to_diffuser_mm(optics.design()) / 10.0;
+    options.max_shift_mm = pitch / 2.0;
+    options.max_rotation_rad = std::atan(pitch / 2.0 / radius);
+    options.max_pitch_error = pitch / 2.0 / radius;
+    options.max_spacer_mm = pattern_to_diffuser_mm(optics.design()) / 4.0;
     return options;
 }
 
@@ -124,7 +124,7 @@ std::vector<DisplayLight> default_tolerance_lights(const DesignOptics& optics, M
         if (const auto angle = wrap_over_angle(optics, phi, model)) wrap_deg = std::min(wrap_deg, *angle);
     const double theta = wrap_deg / 2.0 * std::numbers::pi / 180.0;
     std::vector<DisplayLight> lights(1);
-    for (int k = 0; k < 4; ++k) {
+    for (int k = 0; k < 2; ++k) {
         DisplayLight light;
         light.direction = incident_direction(theta, k * std::numbers::pi / 2);
         lights.push_back(light);

@@ -51,19 +51,21 @@ struct ToleranceOptions {
     double max_rotation_rad = 0.0;  ///< about the axis; 0 leaves it out
     double max_pitch_error = 0.0;   ///< relative (1e-6 = 1 ppm); 0 leaves it out
     double max_spacer_mm = 0.0;     ///< pattern-to-diffuser distance; 0 leaves it out
-    int steps = 8;                  ///< sweep values after zero
-    int refinements = 5;            ///< bisection steps on the bracket
+    int steps = 6;                  ///< sweep values after zero
+    int refinements = 4;            ///< bisection steps on the bracket
     double threshold_db = 30.0;
     SimulationOptions simulation;
 };
 
 /// Defaults for `design`: each maximum moves the pattern under the outermost lenslet by
-/// a quarter of the lenslet pitch (shift: pitch / 4; rotation and pitch error: pitch / 4
-/// over the largest lenslet-centre radius), the spacer by a tenth of its thickness.
+/// half a lenslet pitch (shift: pitch / 2; rotation and pitch error: pitch / 2 over the
+/// largest lenslet-centre radius), where it shows the neighbour's content; the spacer by a
+/// quarter of the pattern-to-diffuser distance.
 ToleranceOptions default_tolerance_ranges(const DesignOptics& optics);
 
-/// A few directions inside the field of view: the axis and four at half the wrap-over
-/// angle (thesis 8.2.3) along +-x and +-y, white.
+/// A few directions inside the field of view: the axis and two at half the wrap-over
+/// angle (thesis 8.2.3) along +x and +y, white. (Their mirror images along -x and -y add
+/// little: every error is tried with both signs.)
 std::vector<DisplayLight> default_tolerance_lights(const DesignOptics& optics, Model model);
 
 struct TolerancePoint {
