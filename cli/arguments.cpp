@@ -9,6 +9,8 @@
 #include "core/error.hpp"
 #include "core/sphere.hpp"
 #include "core/units.hpp"
+#include "patterns/display_lights.hpp"
+#include "patterns/raster.hpp"
 
 namespace rfd::cli {
 
@@ -98,6 +100,45 @@ print::PrinterProfile printer_for(const optics::Design& design, const std::strin
     printer.dpi_y = design.printer.dpi_y;
     printer.name += " (default profile at the design's resolution)";
     return printer;
+}
+
+namespace {
+
+// A signed number from the pattern's rfd: attributes, or `fallback` when absent.
+double signed_attribute(const patterns::PatternFileInfo& info, const std::string& key, const std::string& file,
+                        double fallback) {
+    const auto it = info.attributes.find(key);
+    if (it == info.attributes.end()) return fallback;
+    std::size_t used = 0;
+    double value = std::nan("");
+    try {
+        value = std::stod(it->second, &used);
+    } catch (const std::exception&) {
+        used = 0;
+    }
+    if (used != it->second.size() || !std::isfinite(value))
+        throw InputError(SourceLocation{file, 0, 0, "rfd:" + key}, "expected a number, got '" + it->second + "'");
+    return value;
+}
+
+}  // namespace
+
+patterns::AngularMapping read_pattern_mapping(const std::string& pattern_file) {
+    const patterns::PatternFileInfo info = patterns::read_pattern_info(pattern_file);
+    patterns::AngularMapping mapping;
+    mapping.tilt_deg = signed_attribute(info, "tilt_deg", pattern_file, 0.0);
+    mapping.turn_deg = signed_attribute(info, "turn_deg", pattern_file, 0.0);
+    mapping.angle_scale = signed_attribute(info, "angle_scale", pattern_file, 1.0);
+    if (!(mapping.angle_scale > 0.0))
+        throw InputError(SourceLocation{pattern_file, 0, 0, "rfd:angle_scale"}, "expected a positive number");
+    return mapping;
+}
+
+std::vector<optics::DisplayLight> to_display_lights(const std::vector<std::string>& texts,
+                                                 const patterns::AngularMapping& mapping) {
+    std::vector<optics::DisplayLight> lights;
+    for (const std::string& text : texts) lights.push_back(patterns::display_light(parse_light(text), mapping));
+    return lights;
 }
 
 }  // namespace rfd::cli

@@ -3,8 +3,11 @@
 
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "optics/design.hpp"
+#include "optics/display.hpp"
+#include "patterns/encode.hpp"
 #include "print/printer.hpp"
 #include "relight/interpolation.hpp"
 #include "relight/render.hpp"
@@ -30,5 +33,14 @@ relight::Interpolation parse_interpolation(const std::string& text);
 /// The --printer profile (a file or a bundled name); without one, the thesis's printer's
 /// tone values at the design's own [printer] resolution.
 print::PrinterProfile printer_for(const optics::Design& design, const std::string& option);
+
+/// The angular mapping a pattern was encoded with, from its rfd: attributes (identity
+/// where absent); InputError naming the file and attribute when one is not a number.
+patterns::AngularMapping read_pattern_mapping(const std::string& pattern_file);
+
+/// The field-frame lights of --light as the display meets them: through `mapping`, so a
+/// light at (theta, phi) shows what the field shows under a light from there.
+std::vector<optics::DisplayLight> to_display_lights(const std::vector<std::string>& texts,
+                                                    const patterns::AngularMapping& mapping);
 
 }  // namespace rfd::cli

@@ -33,6 +33,8 @@ void add_pattern_angular_command(CLI::App& pattern, const GlobalOptions& global)
 
 /// `simulate`: the predicted output of a Design I/II display under lights.
 void add_simulate_commands(CLI::App& app, const GlobalOptions& global);
+/// `simulate tolerance`: PSNR against assembly errors (shift, rotation, pitch, spacer).
+void add_simulate_tolerance_command(CLI::App& simulate, const GlobalOptions& global);
 
 /// `simulate` for Designs III and IV (cli/simulate_angular_commands.cpp): their options,
 /// added to the `simulate` command, and the run its callback hands over to.

@@ -24,23 +24,6 @@
 namespace rfd::cli {
 namespace {
 
-// A signed number from the pattern's rfd: attributes (the mapping it was encoded with).
-double signed_attribute(const patterns::PatternFileInfo& info, const std::string& key, const std::string& file,
-                        double fallback) {
-    const auto it = info.attributes.find(key);
-    if (it == info.attributes.end()) return fallback;
-    std::size_t used = 0;
-    double value = std::nan("");
-    try {
-        value = std::stod(it->second, &used);
-    } catch (const std::exception&) {
-        used = 0;
-    }
-    if (used != it->second.size() || !std::isfinite(value))
-        throw InputError(SourceLocation{file, 0, 0, "rfd:" + key}, "expected a number, got '" + it->second + "'");
-    return value;
-}
-
 CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
     auto* cmd = app.add_subcommand(
         "simulate", "Predict what a display shows under given lights, from its design and its pattern as printed "
@@ -119,15 +102,8 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
         const print::PrinterProfile printer = printer_for(design, opt->printer);
         const print::PrintedTransparency pattern(design, printer, opt->pattern, opt->brightness, opt->sheets);
 
-        const patterns::PatternFileInfo info = patterns::read_pattern_info(opt->pattern);
-        patterns::AngularMapping mapping;
-        mapping.tilt_deg = signed_attribute(info, "tilt_deg", opt->pattern, 0.0);
-        mapping.turn_deg = signed_attribute(info, "turn_deg", opt->pattern, 0.0);
-        mapping.angle_scale = signed_attribute(info, "angle_scale", opt->pattern, 1.0);
-        if (!(mapping.angle_scale > 0.0))
-            throw InputError(SourceLocation{opt->pattern, 0, 0, "rfd:angle_scale"}, "expected a positive number");
-        std::vector<optics::DisplayLight> lights;
-        for (const std::string& text : opt->lights) lights.push_back(patterns::display_light(parse_light(text), mapping));
+        const patterns::AngularMapping mapping = read_pattern_mapping(opt->pattern);
+        std::vector<optics::DisplayLight> lights = to_display_lights(opt->lights, mapping);
         patterns::EnvironmentSampling sampling;
         if (!opt->envmap.empty()) {
             const std::vector<optics::DisplayLight> sky = patterns::environment_lights(
@@ -237,6 +213,7 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
 void add_simulate_commands(CLI::App& app, const GlobalOptions& global) {
     CLI::App* simulate = add_simulate(app, global);
     (void)simulate;  // the group's subcommands are added to it here
+    add_simulate_tolerance_command(*simulate, global);
 }
 
 }  // namespace rfd::cli

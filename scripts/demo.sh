@@ -102,6 +102,13 @@ for n in 1 2; do
     fi
   done
 done
+# How precisely to assemble Design II (issue 5): PSNR of the predicted picture against
+# pattern shift, rotation, pitch error and spacer error, for a smooth and a sharp pattern.
+# (Design I takes about two minutes: see the README's "Assembly tolerances".)
+for pattern in bottle sig08; do
+  "$rfd" simulate tolerance designs/design2.toml "$patterns/design2_${pattern}.exr" \
+    --out "$predicted/tolerance_design2_${pattern}" | tee "$predicted/tolerance_design2_${pattern}.txt"
+done
 
 # Designs III and IV (thesis 8.3): figure 8.13's letters, one per incident bin, encoded for
 # Design III at the printer's resolution and predicted under a light in the bin of "0" and
