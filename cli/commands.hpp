@@ -31,5 +31,7 @@ void add_pattern_angular_command(CLI::App& pattern, const GlobalOptions& global)
 
 /// `simulate`: the predicted output of a Design I/II display under lights.
 void add_simulate_commands(CLI::App& app, const GlobalOptions& global);
+/// `simulate compare`: predicted output against the software relighting of the same field.
+void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& global);
 
 }  // namespace rfd::cli
