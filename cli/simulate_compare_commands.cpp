@@ -281,9 +281,15 @@ void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& globa
 
         nlohmann::json accuracy = nlohmann::json::array();
         std::vector<patterns::AccuracyPoint> points;
+        std::size_t accuracy_directions = 0;
         if (opt->chart_accuracy) {
+            // Inside the field of view, where a model's error matters (all when none is).
             std::vector<Eigen::Vector3d> display_directions;
-            for (const auto& r : results) display_directions.push_back(r.display_direction);
+            for (const auto& r : results)
+                if (r.inside_field_of_view) display_directions.push_back(r.display_direction);
+            if (display_directions.empty())
+                for (const auto& r : results) display_directions.push_back(r.display_direction);
+            accuracy_directions = display_directions.size();
             points = patterns::accuracy_sweep(simulator, pattern, display_directions, accuracy_models, accuracy_rays,
                                               opt->reference_rays, options);
         }
@@ -294,9 +300,11 @@ void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& globa
                      format("%.5f", p.seconds) + "," + format("%.6g", p.mse) + "," + format("%.4f", p.psnr_db) + "," +
                      format("%.4f", p.worst_psnr_db) + "," + format("%.4f", p.fitted_psnr_db) + "\n";
             nlohmann::json per_direction = nlohmann::json::array();
+            std::vector<const patterns::DirectionComparison*> used;
+            for (const auto& r : results)
+                if (r.inside_field_of_view || accuracy_directions == results.size()) used.push_back(&r);
             for (std::size_t k = 0; k < p.psnr_per_direction_db.size(); ++k)
-                per_direction.push_back({{"display_angle_deg", results[k].display_angle_deg},
-                                         {"inside_fov", results[k].inside_field_of_view},
+                per_direction.push_back({{"display_angle_deg", used[k]->display_angle_deg},
                                          {"psnr_db", db(p.psnr_per_direction_db[k])},
                                          {"fitted_psnr_db", db(p.fitted_psnr_per_direction_db[k])}});
             accuracy.push_back({{"model", p.label},
@@ -324,7 +332,7 @@ void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& globa
             {"lenslets", {count_x, encoder.lattice().count_y()}},
             {"display_range_deg", radians_to_degrees(encoder.display_range().max_angle_rad)},
             {"peak", "largest reference value per direction"},
-            {"reference_scale", "optical efficiency of the simulation (design factor, not fitted)"},
+            {"reference_scale", "the display's simulated response to a clear print under the same light (not fitted)"},
             {"directions", rows},
             {"macro_pixel_core", {{"fraction", comparison.core().fraction},
                                   {"magnification", comparison.core().magnification}}},
@@ -338,6 +346,7 @@ void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& globa
             {"min_psnr_crosstalk_free_db", clean.count ? db(clean.min) : nlohmann::json(nullptr)},
             {"mean_psnr_crosstalk_free_db", clean.count ? db(clean.mean()) : nlohmann::json(nullptr)},
             {"min_psnr_cell_crosstalk_free_db", clean.count ? db(clean_cell.min) : nlohmann::json(nullptr)},
+            {"accuracy_directions", accuracy_directions},
             {"accuracy", accuracy},
             {"seconds", seconds}};
         write_text_file(out / "summary.json", summary.dump(2) + "\n");
@@ -345,12 +354,12 @@ void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& globa
         if (opt->chart_accuracy) {
             LineChart speed;
             speed.title = "Simulator speed against accuracy: " + design.name;
-            speed.x_label = "simulation time over " + std::to_string(results.size()) + " directions (s)";
-            speed.y_label = "PSNR against exact, " + std::to_string(opt->reference_rays) + " rays per side (dB)";
-            speed.y2_label = "the same, scale fitted per direction (dB)";
+            speed.x_label = "simulation time over " + std::to_string(accuracy_directions) +
+                            " directions in the field of view (s)";
+            speed.y_label = "PSNR per lenslet against exact, " + std::to_string(opt->reference_rays) + " rays per side (dB)";
             speed.key_position = "bottom right";
             for (const auto& model : accuracy_models) {
-                PlotSeries raw{model.label, {}, {}}, fitted{model.label + ", scale fitted", {}, {}, true};
+                PlotSeries raw{model.label, {}, {}}, fitted{model.label + ", scale fitted", {}, {}};
                 for (const auto& p : points)
                     if (p.label == model.label) {
                         raw.x.push_back(p.seconds);
@@ -395,7 +404,8 @@ void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& globa
         else
             std::printf("  no direction inside the field of view\n");
         if (!points.empty()) {
-            std::printf("  speed against accuracy (reference: exact, %d rays per side):\n", opt->reference_rays);
+            std::printf("  speed against accuracy over %zu directions (reference: exact, %d rays per side):\n",
+                        accuracy_directions, opt->reference_rays);
             std::printf("  %-16s %6s %10s %10s %9s %9s %10s\n", "model", "rays", "traced", "seconds", "PSNR dB", "worst dB",
                         "fitted dB");
             for (const auto& p : points)

@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "core/error.hpp"
+#include "core/progress.hpp"
 #include "core/sphere.hpp"
 #include "core/units.hpp"
 
@@ -309,10 +310,12 @@ std::vector<AccuracyPoint> accuracy_sweep(const optics::DisplaySimulator& simula
         if (traced) *traced += image.rays;
         return simulator.per_lenslet(image);
     };
+    Progress progress("speed against accuracy", display_directions.size() * (1 + models.size() * rays_per_side.size()));
     std::vector<Image> converged;
     double peak = 0.0;
     for (const Eigen::Vector3d& d : display_directions) {
         converged.push_back(simulate(d, optics::Model::Exact, reference_rays, nullptr));
+        progress.advance();
         for (float v : converged.back().samples()) peak = std::max(peak, static_cast<double>(v));
     }
     std::vector<AccuracyPoint> points;
@@ -326,6 +329,7 @@ std::vector<AccuracyPoint> accuracy_sweep(const optics::DisplaySimulator& simula
             const auto start = Clock::now();
             for (const Eigen::Vector3d& d : display_directions) predictions.push_back(simulate(d, model.model, rays, &point.rays));
             point.seconds = seconds_since(start);
+            progress.advance(display_directions.size());
             const double directions = static_cast<double>(predictions.size());
             for (std::size_t k = 0; k < predictions.size(); ++k) {
                 const ImageComparison c = compare_images(predictions[k], converged[k]);
