@@ -84,7 +84,7 @@ void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& globa
                                                         accuracy_rays = "2,4,8,16";
         std::vector<std::string> lights;
         double pixels_per_lenslet = 16.0;
-        int sweep = 9, rays = 32, reference_rays = 32, view_pixels = 0;
+        int sweep = 9, rays = 0, reference_rays = 32, view_pixels = 0;
         double tolerance_dots = 0.25, brightness = 1.0, error_gain = 4.0;
         int sheets = 0;
         bool json = false, chart_accuracy = false;
@@ -95,7 +95,7 @@ void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& globa
     cmd->add_option("FIELD", opt->field, "The reflectance field the pattern was encoded from (folder or .lp)")->required();
     cmd->add_option("--out", opt->out, "Output folder")->required();
     cmd->add_option("--light", opt->lights,
-                    "Also compare under a light from THETA,PHI (degrees, the field's frame); repeat for several");
+                    "Also compare under a white light from THETA,PHI (degrees, the field's frame); repeat for several");
     cmd->add_option("--sweep", opt->sweep,
                     "Light directions spread over the display's range, the first on its axis (default 9; 0: only --light)")
         ->check(CLI::Range(0, 1000));
@@ -104,7 +104,10 @@ void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& globa
     cmd->add_option("--tolerance", opt->tolerance_dots,
                     "auto: largest paraxial error on the pattern plane, in print dots (default 0.25)")
         ->check(CLI::PositiveNumber);
-    cmd->add_option("--rays", opt->rays, "Rays per side of each lenslet's grid (default 32: macro-pixel cores need many)")->check(CLI::Range(1, 256));
+    cmd->add_option("--rays", opt->rays,
+                    "Rays per side of each lenslet's grid (default 32 where macro-pixel cores are compared, "
+                    "Design II; 8 otherwise)")
+        ->check(CLI::Range(1, 256));
     cmd->add_option("--pixels-per-lenslet", opt->pixels_per_lenslet,
                     "Diffuser pixels per lenslet pitch in the simulation (default 16)")
         ->check(CLI::Range(4.0, 64.0));
@@ -177,12 +180,15 @@ void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& globa
         for (const std::string& text : opt->lights) {
             const relight::Light light = parse_light(text);
             const auto* point = std::get_if<relight::DirectionalLight>(&light);
-            if (!point) throw InputError("--light " + text + ": compare takes point lights (THETA,PHI)");
+            if (!point || point->irradiance != Eigen::Vector3d::Ones())
+                throw InputError("--light " + text + ": compare takes point lights of white light (THETA,PHI)");
             directions.push_back(point->direction.normalized());
         }
 
         optics::SimulationOptions options;
-        options.rays_per_side = opt->rays;
+        // A core's mean needs many rays (8 per side alias against the pixels: +-10 dB);
+        // whole cells are within a dB at 8 (Design I, tests/test_compare.cpp).
+        options.rays_per_side = opt->rays > 0 ? opt->rays : comparison.core().fraction < 1.0 ? 32 : 8;
         options.pixels_per_pitch = opt->pixels_per_lenslet;
         options.model = opt->model == "paraxial" ? optics::Model::Paraxial
                         : opt->model == "exact"  ? optics::Model::Exact
@@ -328,7 +334,7 @@ void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& globa
             {"model", std::string(optics::to_string(options.model))},
             {"model_choice", opt->model},
             {"paraxial_error_dots", choice.paraxial_error_dots},
-            {"rays_per_side", opt->rays},
+            {"rays_per_side", options.rays_per_side},
             {"lenslets", {count_x, encoder.lattice().count_y()}},
             {"display_range_deg", radians_to_degrees(encoder.display_range().max_angle_rad)},
             {"peak", "largest reference value per direction"},
@@ -379,7 +385,7 @@ void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& globa
         }
         std::printf("%s: '%s' predicted against the relit field at %d x %d lenslets (model %s, %d rays per side)\n",
                     opt->out.c_str(), design.name.c_str(), count_x, encoder.lattice().count_y(),
-                    std::string(optics::to_string(options.model)).c_str(), opt->rays);
+                    std::string(optics::to_string(options.model)).c_str(), options.rays_per_side);
         if (comparison.core().fraction < 1.0)
             std::printf("  macro-pixels %.3fx their cells: PSNR over each cell's core (%.0f %% of its width), "
                         "\"cell\" over whole cells\n",

@@ -52,7 +52,7 @@ if(NOT last_output MATCHES "letters: not the field the pattern .*diamonds\\.exr'
   message(FATAL_ERROR "unexpected message: ${last_output}")
 endif()
 run(2 simulate compare ${DESIGN} ${OUT}/diamonds.exr ${OUT}/diamonds --light 5,0,3 --out ${OUT}/never)
-if(NOT last_output MATCHES "--light 5,0,3: compare takes point lights")
+if(NOT last_output MATCHES "--light 5,0,3: compare takes point lights of white light")
   message(FATAL_ERROR "unexpected message: ${last_output}")
 endif()
 run(2 simulate compare ${DESIGN} ${OUT}/diamonds.exr ${OUT}/diamonds --sweep 0 --out ${OUT}/never)
