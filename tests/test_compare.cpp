@@ -172,12 +172,66 @@ TEST(EncodeOptionsOf, RoundTripsTheEncodersAttributes) {
     EXPECT_DOUBLE_EQ(read.mapping.turn_deg, -30.0);
     EXPECT_DOUBLE_EQ(read.mapping.angle_scale, 1.25);
 
+    // Patterns written before the two were recorded: the encoder's defaults.
+    PatternFileInfo older = info;
+    older.attributes.erase("interpolation");
+    older.attributes.erase("fit");
+    EXPECT_EQ(encode_options_of(older, "p.exr").interpolation, relight::Interpolation::delaunay);
+    EXPECT_EQ(encode_options_of(older, "p.exr").fit, ImageFit::cover);
+
     info.attributes["interpolation"] = "cubic";
     EXPECT_THAT(error_of([&] { encode_options_of(info, "p.exr"); }),
                 HasSubstr("p.exr: rfd:interpolation: expected 'delaunay', 'solid-angle' or 'nearest', got 'cubic'"));
     info.attributes["interpolation"] = "nearest";
     info.attributes["tilt_deg"] = "4x";
     EXPECT_THAT(error_of([&] { encode_options_of(info, "p.exr"); }), HasSubstr("rfd:tilt_deg: expected a number"));
+}
+
+// Design II's corrective pair images A onto the diffuser at 1.157x (`rfd design show`):
+// neighbours reach (1.157 - 1)/2 of a pitch into a cell from each side, leaving a core of
+// 2 - 1.157 = 0.843 of its width. Design I has no such imaging: whole cells.
+TEST(MacroPixelCore, FromTheCorrectivePairsMagnification) {
+    const MacroPixelCore two = macro_pixel_core(optics::DesignOptics(design2()));
+    EXPECT_NEAR(two.magnification, 1.157, 0.001);
+    EXPECT_NEAR(two.fraction, 2.0 - two.magnification, 1e-12);
+    const MacroPixelCore one = macro_pixel_core(optics::DesignOptics(small_design1(4, 4)));
+    EXPECT_EQ(one.fraction, 1.0);
+    EXPECT_EQ(one.magnification, 1.0);
+}
+
+// The whole cell is DisplaySimulator::per_lenslet; a core of a field that is uniform
+// within each cell reads the cell's value; side_by_side lays the panels out as documented.
+TEST(PerLensletCore, AgreesWithPerLensletAndReadsCellValues) {
+    const optics::Design design = design2();
+    const optics::DisplaySimulator simulator(design);
+    const optics::Lattice& lattice = simulator.optics().lattice();
+    optics::DiffuserImage image;
+    image.pixel_mm = 0.25;
+    image.image = Image(110, 100, 3);
+    image.first_pixel = Eigen::Vector2d(-0.5 * 109 * image.pixel_mm, 0.5 * 99 * image.pixel_mm);
+    for (int y = 0; y < image.image.height(); ++y)
+        for (int x = 0; x < image.image.width(); ++x) {
+            const optics::CellIndex cell = lattice.cell_at(image.pixel_centre(x, y));
+            for (int c = 0; c < 3; ++c)
+                image.image.at(x, y, c) = static_cast<float>(cell.i + 10 * cell.j + 100 * c + (x % 3) * 0.001);
+        }
+    EXPECT_EQ(per_lenslet_core(lattice, image, 1.0), simulator.per_lenslet(image));
+    const Image core = per_lenslet_core(lattice, image, 0.5);
+    for (int j = 0; j < lattice.count_y(); ++j)
+        for (int i = 0; i < lattice.count_x(); ++i)
+            EXPECT_NEAR(core.at(i, lattice.count_y() - 1 - j, 2), i + 10 * j + 200, 0.002) << i << ", " << j;
+
+    DirectionComparison r;
+    r.prediction = Image(2, 1, 3, 0.5f);
+    r.reference = Image(2, 1, 3, 2.0f);
+    r.comparison = compare_images(r.prediction, r.reference);
+    const Image panels = side_by_side(r, 4, 4.0);
+    EXPECT_EQ(panels.width(), 3 * 8 + 2 * 4);
+    EXPECT_EQ(panels.height(), 4);
+    EXPECT_FLOAT_EQ(panels.at(0, 0, 0), 0.25f);          // prediction / peak
+    EXPECT_FLOAT_EQ(panels.at(8, 0, 0), 0.5f);           // the gap
+    EXPECT_FLOAT_EQ(panels.at(12, 3, 1), 1.0f);          // reference / peak
+    EXPECT_FLOAT_EQ(panels.at(31, 0, 2), 4.0f * 0.75f);  // |error| x 4 / peak
 }
 
 TEST(DisplayComparison, SweepSpreadsOverTheDisplaysRange) {
