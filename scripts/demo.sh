@@ -100,7 +100,7 @@ done
 # pictures and error maps, and the simulator's speed-versus-accuracy chart (paraxial and
 # exact against exact with many rays, inside the field of view). Design I's 4599 lenslets
 # take 8 rays per side (the default for whole cells: within a dB of 16) and a 16-ray
-# reference. About 40 s on 2 cores.
+# reference. About 30 s on 2 cores.
 echo "== predicted against relit" >&2
 "$rfd" simulate compare designs/design2.toml "$patterns/design2_bottle.exr" "$patterns/bottle_field" --sweep 9 \
   --light 45,70 --chart-accuracy --out "$predicted/compare_design2" | tee "$predicted/compare_design2.txt"
