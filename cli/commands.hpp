@@ -43,4 +43,7 @@ std::shared_ptr<ObserverVariantOptions> add_observer_variant_options(CLI::App& s
 void simulate_observer_variant(const CLI::App& simulate, const ObserverVariantOptions& options,
                                const GlobalOptions& global);
 
+/// `simulate compare`: predicted output against the software relighting of the same field.
+void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& global);
+
 }  // namespace rfd::cli

@@ -212,8 +212,8 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
 
 void add_simulate_commands(CLI::App& app, const GlobalOptions& global) {
     CLI::App* simulate = add_simulate(app, global);
-    (void)simulate;  // the group's subcommands are added to it here
     add_simulate_tolerance_command(*simulate, global);
+    add_simulate_compare_command(*simulate, global);
 }
 
 }  // namespace rfd::cli

@@ -461,9 +461,12 @@ DiffuserImage DisplaySimulator::simulate(const Transparency& pattern, const std:
         for (std::size_t k = 0; k < plane_size; ++k)
             plane[k] = static_cast<float>(accumulated[static_cast<std::size_t>(c) * plane_size + k]);
     }
-    result.optical_efficiency = entering > 0 ? reaching / entering : 0.0;
+    // Reaching <= entering ray by ray; the sums run in different orders, so clamp the last
+    // bit of rounding rather than report an efficiency of 1 + 1e-16.
+    result.optical_efficiency = entering > 0 ? std::min(1.0, reaching / entering) : 0.0;
     for (std::size_t c = 0; c < 3; ++c)
-        result.pattern_efficiency[c] = entering_colour[c] > 0 ? reaching_colour[c] / entering_colour[c] : 0.0;
+        result.pattern_efficiency[c] =
+            entering_colour[c] > 0 ? std::min(1.0, reaching_colour[c] / entering_colour[c]) : 0.0;
     return result;
 }
 

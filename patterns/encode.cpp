@@ -50,6 +50,24 @@ Eigen::Vector3d from_slopes(const Eigen::Vector2d& slopes) {
 
 }  // namespace
 
+std::string_view to_string(ImageFit fit) {
+    switch (fit) {
+        case ImageFit::cover: return "cover";
+        case ImageFit::contain: return "contain";
+        case ImageFit::stretch: return "stretch";
+    }
+    return "cover";
+}
+
+std::string_view interpolation_name(relight::Interpolation method) {
+    switch (method) {
+        case relight::Interpolation::delaunay: return "delaunay";
+        case relight::Interpolation::solid_angle: return "solid-angle";
+        case relight::Interpolation::nearest: return "nearest";
+    }
+    return "delaunay";
+}
+
 Eigen::Matrix3d AngularMapping::rotation() const {
     return (Eigen::AngleAxisd(degrees_to_radians(turn_deg), Eigen::Vector3d::UnitZ()) *
             Eigen::AngleAxisd(-degrees_to_radians(tilt_deg), Eigen::Vector3d::UnitX()))
@@ -733,6 +751,8 @@ PatternAttributes Encoder::attributes() const {
             {"tilt_deg", number(options_.mapping.tilt_deg)},
             {"turn_deg", number(options_.mapping.turn_deg)},
             {"angle_scale", number(options_.mapping.angle_scale)},
+            {"interpolation", std::string(interpolation_name(options_.interpolation))},
+            {"fit", std::string(to_string(options_.fit))},
             {"white", white}};
 }
 

@@ -37,6 +37,7 @@
 
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -67,6 +68,10 @@ struct AngularMapping {
 };
 
 enum class ImageFit { cover, contain, stretch };
+
+/// Names as the CLI spells them and the pattern's rfd: attributes record them.
+std::string_view to_string(ImageFit fit);
+std::string_view interpolation_name(relight::Interpolation method);
 
 struct EncodeOptions {
     optics::Model model = optics::Model::Paraxial;
