@@ -4,13 +4,11 @@
 // the figure is the simulator's, not a pattern file's.
 
 #include <cmath>
-#include <fstream>
-#include <sstream>
 
 #include <benchmark/benchmark.h>
 
-#include "core/parallel.hpp"
 #include "core/sphere.hpp"
+#include "bench/checker.hpp"
 #include "optics/display.hpp"
 
 namespace {
@@ -18,30 +16,10 @@ namespace {
 using namespace rfd;
 
 optics::Design design1_100x100() {
-    std::ifstream in(std::string(RFD_SOURCE_DIR) + "/designs/design1.toml");
-    std::stringstream text;
-    text << in.rdbuf();
-    std::string design = text.str();
-    const std::string preset = "count = [63, 73]";
-    design.replace(design.find(preset), preset.size(), "count = [100, 100]");
-    return optics::parse_design(design, "design1-100x100.toml");
+    return optics::with_lenslet_count(optics::load_design(std::string(RFD_SOURCE_DIR) + "/designs/design1.toml"), 100, 100);
 }
 
-// Alternate print dots (2880 x 1440 dpi) opaque and clear.
-class Checker final : public optics::Transparency {
-public:
-    int channels() const override { return 1; }
-    void sample(std::span<const Eigen::Vector2d> points, std::span<float> out) const override {
-        // In parallel, as RasterTransparency samples.
-        parallel_for_chunks(points.size(), 1 << 14, [&](std::size_t begin, std::size_t end) {
-            for (std::size_t k = begin; k < end; ++k) {
-                const long x = std::lround(std::floor(points[k].x() / (25.4 / 2880)));
-                const long y = std::lround(std::floor(points[k].y() / (25.4 / 1440)));
-                out[k] = ((x + y) & 1) ? 1.0f : 0.25f;
-            }
-        });
-    }
-};
+using bench::Checker;
 
 void BM_SimulatePointLight(benchmark::State& state) {
     static const optics::DisplaySimulator simulator(design1_100x100());

@@ -4,8 +4,6 @@
 
 #include <algorithm>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
 #include <sys/resource.h>
 
@@ -22,13 +20,7 @@ using namespace rfd;
 
 // Design I with an array covering A4 portrait (210 x 297 mm): 88 lenslets by 145 rows.
 optics::Design a4_design1() {
-    std::ifstream in(std::string(RFD_SOURCE_DIR) + "/designs/design1.toml");
-    std::stringstream text;
-    text << in.rdbuf();
-    std::string design = text.str();
-    const std::string preset = "count = [63, 73]";
-    design.replace(design.find(preset), preset.size(), "count = [88, 145]");
-    return optics::parse_design(design, "design1-a4.toml");
+    return optics::with_lenslet_count(optics::load_design(std::string(RFD_SOURCE_DIR) + "/designs/design1.toml"), 88, 145);
 }
 
 // A bottle-sized field: 1024 directions of 128 x 64 RGB (only those near the display's

@@ -6,11 +6,10 @@
 // BM_MountedPattern shows the decorator's own overhead on one simulation.
 
 #include <cmath>
-#include <fstream>
-#include <sstream>
 
 #include <benchmark/benchmark.h>
 
+#include "bench/checker.hpp"
 #include "optics/display.hpp"
 #include "optics/misalignment.hpp"
 #include "optics/tolerance.hpp"
@@ -20,27 +19,10 @@ namespace {
 using namespace rfd;
 
 optics::Design design1_30x30() {
-    std::ifstream in(std::string(RFD_SOURCE_DIR) + "/designs/design1.toml");
-    std::stringstream text;
-    text << in.rdbuf();
-    std::string design = text.str();
-    const std::string preset = "count = [63, 73]";
-    design.replace(design.find(preset), preset.size(), "count = [30, 30]");
-    return optics::parse_design(design, "design1-30x30.toml");
+    return optics::with_lenslet_count(optics::load_design(std::string(RFD_SOURCE_DIR) + "/designs/design1.toml"), 30, 30);
 }
 
-// Alternate print dots (2880 x 1440 dpi) opaque and clear.
-class Checker final : public optics::Transparency {
-public:
-    int channels() const override { return 1; }
-    void sample(std::span<const Eigen::Vector2d> points, std::span<float> out) const override {
-        for (std::size_t k = 0; k < points.size(); ++k) {
-            const long x = std::lround(std::floor(points[k].x() / (25.4 / 2880)));
-            const long y = std::lround(std::floor(points[k].y() / (25.4 / 1440)));
-            out[k] = ((x + y) & 1) ? 1.0f : 0.25f;
-        }
-    }
-};
+using bench::Checker;
 
 void BM_ToleranceBaselineOneSimulationPerLight(benchmark::State& state) {
     static const optics::Design design = design1_30x30();

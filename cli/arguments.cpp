@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/number.hpp"
 #include "core/sphere.hpp"
 #include "core/units.hpp"
 #include "patterns/display_lights.hpp"
@@ -17,17 +18,11 @@ namespace rfd::cli {
 namespace {
 
 double parse_number(const std::string& text, const std::string& light, const char* what) {
-    std::size_t used = 0;
-    double value = std::numeric_limits<double>::quiet_NaN();
-    try {
-        value = std::stod(text, &used);
-    } catch (const std::exception&) {
-        used = 0;
-    }
-    if (text.empty() || used != text.size() || !std::isfinite(value))
+    const std::optional<double> value = finite_number(text);
+    if (!value)
         throw InputError("--light '" + light + "': " + what + " '" + text + "' is not a number; expected " +
                          kLightSyntax);
-    return value;
+    return *value;
 }
 
 }  // namespace
@@ -102,36 +97,41 @@ print::PrinterProfile printer_for(const optics::Design& design, const std::strin
     return printer;
 }
 
-namespace {
-
-// A signed number from the pattern's rfd: attributes, or `fallback` when absent.
-double signed_attribute(const patterns::PatternFileInfo& info, const std::string& key, const std::string& file,
-                        double fallback) {
-    const auto it = info.attributes.find(key);
-    if (it == info.attributes.end()) return fallback;
-    std::size_t used = 0;
-    double value = std::nan("");
-    try {
-        value = std::stod(it->second, &used);
-    } catch (const std::exception&) {
-        used = 0;
-    }
-    if (used != it->second.size() || !std::isfinite(value))
-        throw InputError(SourceLocation{file, 0, 0, "rfd:" + key}, "expected a number, got '" + it->second + "'");
-    return value;
+nlohmann::json environment_json(const std::string& file, const patterns::EnvironmentSampling& sampling) {
+    return {{"file", file},
+            {"size", {sampling.width, sampling.height}},
+            {"sampled_size", {sampling.sampled_width, sampling.sampled_height}},
+            {"box_filter", sampling.reduction},
+            {"reason", sampling.reason},
+            {"directions", sampling.directions},
+            {"directions_in_front", sampling.in_front}};
 }
 
-}  // namespace
+void print_environment_line(const std::string& file, const patterns::EnvironmentSampling& sampling) {
+    std::printf("  envmap       %s: %d x %d", file.c_str(), sampling.width, sampling.height);
+    if (sampling.reduction > 1)
+        std::printf(", sampled at %d x %d (box filter %d: %s)", sampling.sampled_width, sampling.sampled_height,
+                    sampling.reduction, sampling.reason.c_str());
+    std::printf("; %zu direction(s) light the display from behind, %zu from the front (dropped)\n",
+                sampling.directions, sampling.in_front);
+}
+
+void add_print_options(CLI::App& command, PrintOptions& options) {
+    command.add_option("--printer", options.printer,
+                       "Printer profile (tone mapping); default the Epson's at the design's dpi");
+    command.add_option("--brightness", options.brightness, "Tone mapping: transmittance = brightness * value / white")
+        ->check(CLI::PositiveNumber);
+    command.add_option("--sheets", options.sheets, "Sheets back to back (1 or 2); default the profile's");
+}
+
+print::PrintedTransparency printed_pattern(const optics::Design& design, const std::string& pattern_file,
+                                           const PrintOptions& options) {
+    return print::PrintedTransparency(design, printer_for(design, options.printer), pattern_file, options.brightness,
+                                      options.sheets);
+}
 
 patterns::AngularMapping read_pattern_mapping(const std::string& pattern_file) {
-    const patterns::PatternFileInfo info = patterns::read_pattern_info(pattern_file);
-    patterns::AngularMapping mapping;
-    mapping.tilt_deg = signed_attribute(info, "tilt_deg", pattern_file, 0.0);
-    mapping.turn_deg = signed_attribute(info, "turn_deg", pattern_file, 0.0);
-    mapping.angle_scale = signed_attribute(info, "angle_scale", pattern_file, 1.0);
-    if (!(mapping.angle_scale > 0.0))
-        throw InputError(SourceLocation{pattern_file, 0, 0, "rfd:angle_scale"}, "expected a positive number");
-    return mapping;
+    return patterns::mapping_of(patterns::read_pattern_info(pattern_file), pattern_file);
 }
 
 std::vector<optics::DisplayLight> to_display_lights(const std::vector<std::string>& texts,

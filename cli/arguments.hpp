@@ -5,9 +5,14 @@
 #include <utility>
 #include <vector>
 
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
 #include "optics/design.hpp"
 #include "optics/display.hpp"
+#include "patterns/display_lights.hpp"
 #include "patterns/encode.hpp"
+#include "print/printed.hpp"
 #include "print/printer.hpp"
 #include "relight/interpolation.hpp"
 #include "relight/render.hpp"
@@ -33,6 +38,23 @@ relight::Interpolation parse_interpolation(const std::string& text);
 /// The --printer profile (a file or a bundled name); without one, the thesis's printer's
 /// tone values at the design's own [printer] resolution.
 print::PrinterProfile printer_for(const optics::Design& design, const std::string& option);
+
+/// How `rfd simulate` sampled an environment map: for the --json summary, and the
+/// "envmap" line of the text report (printed to stdout).
+nlohmann::json environment_json(const std::string& file, const patterns::EnvironmentSampling& sampling);
+void print_environment_line(const std::string& file, const patterns::EnvironmentSampling& sampling);
+
+/// How a pattern is printed, for `rfd simulate` and its subcommands: --printer,
+/// --brightness, --sheets (added to `command` by add_print_options).
+struct PrintOptions {
+    std::string printer;
+    double brightness = 1.0;
+    int sheets = 0;  ///< 0: the profile's
+};
+void add_print_options(CLI::App& command, PrintOptions& options);
+/// The pattern file as printed with those options, checked against the design.
+print::PrintedTransparency printed_pattern(const optics::Design& design, const std::string& pattern_file,
+                                           const PrintOptions& options);
 
 /// The angular mapping a pattern was encoded with, from its rfd: attributes (identity
 /// where absent); InputError naming the file and attribute when one is not a number.

@@ -18,6 +18,7 @@
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "core/error.hpp"
+#include "core/number.hpp"
 #include "core/image_io.hpp"
 #include "core/sphere.hpp"
 #include "core/units.hpp"
@@ -43,16 +44,10 @@ std::vector<double> numbers(const std::string& text, const std::string& option, 
     std::stringstream in(text);
     std::string part;
     while (std::getline(in, part, ',')) {
-        std::size_t used = 0;
-        double value = std::nan("");
-        try {
-            value = std::stod(part, &used);
-        } catch (const std::exception&) {
-            used = 0;
-        }
-        if (part.empty() || used != part.size() || !std::isfinite(value))
+        const std::optional<double> value = finite_number(part);
+        if (!value)
             throw InputError(option + " '" + text + "': expected " + std::to_string(count) + " numbers separated by commas");
-        values.push_back(value);
+        values.push_back(*value);
     }
     if (values.size() != count)
         throw InputError(option + " '" + text + "': expected " + std::to_string(count) + " numbers separated by commas");
@@ -270,13 +265,7 @@ void simulate_observer_variant(const CLI::App& simulate, const ObserverVariantOp
         {"reference_radiance_per_sr", result.reference_radiance_per_sr},
         {"seconds", seconds}};
     if (!envmap.empty())
-        summary["envmap"] = {{"file", envmap},
-                             {"size", {sampling.width, sampling.height}},
-                             {"sampled_size", {sampling.sampled_width, sampling.sampled_height}},
-                             {"box_filter", sampling.reduction},
-                             {"reason", sampling.reason},
-                             {"directions", sampling.directions},
-                             {"directions_in_front", sampling.in_front}};
+        summary["envmap"] = environment_json(envmap, sampling);
     if (option_value<bool>(simulate, "--json")) {
         std::printf("%s\n", summary.dump(2).c_str());
         return;
@@ -287,14 +276,7 @@ void simulate_observer_variant(const CLI::App& simulate, const ObserverVariantOp
     std::printf("  model        %s (%s)\n", model.c_str(), model_choice == "auto" ? "auto: exact" : "as asked");
     std::printf("  light        %zu light(s)%s, %zu direction(s) sampled, %zu rays per macro-pixel\n", light_texts.size(),
                 envmap.empty() ? "" : " and an environment map", result.directions, result.rays);
-    if (!envmap.empty()) {
-        std::printf("  envmap       %s: %d x %d", envmap.c_str(), sampling.width, sampling.height);
-        if (sampling.reduction > 1)
-            std::printf(", sampled at %d x %d (box filter %d: %s)", sampling.sampled_width, sampling.sampled_height,
-                        sampling.reduction, sampling.reason.c_str());
-        std::printf("; %zu direction(s) light the display from behind, %zu from the front (dropped)\n",
-                    sampling.directions, sampling.in_front);
-    }
+    if (!envmap.empty()) print_environment_line(envmap, sampling);
     std::printf("  efficiency   %.1f %% of the light entering the main lens leaves the display; "
                 "%.1f / %.1f / %.1f %% through the pattern (R/G/B)\n",
                 100 * result.optical_efficiency, 100 * result.pattern_efficiency[0], 100 * result.pattern_efficiency[1],

@@ -31,10 +31,11 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
                     "III/IV from viewpoints; or a subcommand");
     cmd->require_subcommand(0, 1);
     struct Options {
-        std::string design, pattern, printer, out, lenslets, envmap, model = "auto";
+        std::string design, pattern, out, lenslets, envmap, model = "auto";
+        PrintOptions print;
         std::vector<std::string> lights;
-        double tolerance_dots = 0.25, brightness = 1.0, pixels_per_lenslet = 8.0;
-        int sheets = 0, rays = 8, area_samples = 5;
+        double tolerance_dots = 0.25, pixels_per_lenslet = 8.0;
+        int rays = 8, area_samples = 5;
         std::size_t max_rays = 4096;
         std::vector<double> front{0.0, 0.1, 0.3, 1.0};
         optics::DiffuserScatter diffuser;
@@ -59,10 +60,7 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
     cmd->add_option("--tolerance", opt->tolerance_dots,
                     "auto: largest paraxial error on the pattern plane, in print dots (default 0.25)")
         ->check(CLI::PositiveNumber);
-    cmd->add_option("--printer", opt->printer, "Printer profile (tone mapping); default the Epson's at the design's dpi");
-    cmd->add_option("--brightness", opt->brightness, "Tone mapping: transmittance = brightness * value / white")
-        ->check(CLI::PositiveNumber);
-    cmd->add_option("--sheets", opt->sheets, "Sheets back to back (1 or 2); default the profile's");
+    add_print_options(*cmd, opt->print);
     cmd->add_option("--rays", opt->rays, "Rays per side of each lenslet's grid (default 8)")->check(CLI::Range(1, 256));
     cmd->add_option("--pixels-per-lenslet", opt->pixels_per_lenslet, "Output pixels per lenslet pitch (default 8)")
         ->check(CLI::Range(1.0, 64.0));
@@ -99,8 +97,7 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
         if (design.kind == optics::DesignKind::III || design.kind == optics::DesignKind::IV)
             return simulate_observer_variant(*cmd, *observer_variant, global);
         const optics::DisplaySimulator simulator(design);
-        const print::PrinterProfile printer = printer_for(design, opt->printer);
-        const print::PrintedTransparency pattern(design, printer, opt->pattern, opt->brightness, opt->sheets);
+        const print::PrintedTransparency pattern = printed_pattern(design, opt->pattern, opt->print);
 
         const patterns::AngularMapping mapping = read_pattern_mapping(opt->pattern);
         std::vector<optics::DisplayLight> lights = to_display_lights(opt->lights, mapping);
@@ -158,13 +155,7 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
                                {"diffuser_reflectance", opt->diffuser.reflectance},
                                {"with_front_light", front}};
         if (!opt->envmap.empty())
-            summary["envmap"] = {{"file", opt->envmap},
-                                 {"size", {sampling.width, sampling.height}},
-                                 {"sampled_size", {sampling.sampled_width, sampling.sampled_height}},
-                                 {"box_filter", sampling.reduction},
-                                 {"reason", sampling.reason},
-                                 {"directions", sampling.directions},
-                                 {"directions_in_front", sampling.in_front}};
+            summary["envmap"] = environment_json(opt->envmap, sampling);
         if (opt->json) {
             std::printf("%s\n", summary.dump(2).c_str());
             return;
@@ -178,14 +169,7 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
                     "%zu rays\n",
                     opt->lights.size(), opt->envmap.empty() ? "" : " and an environment map", result.directions,
                     result.rays_per_direction, result.rays);
-        if (!opt->envmap.empty()) {
-            std::printf("  envmap       %s: %d x %d", opt->envmap.c_str(), sampling.width, sampling.height);
-            if (sampling.reduction > 1)
-                std::printf(", sampled at %d x %d (box filter %d: %s)", sampling.sampled_width, sampling.sampled_height,
-                            sampling.reduction, sampling.reason.c_str());
-            std::printf("; %zu direction(s) light the display from behind, %zu from the front (dropped)\n",
-                        sampling.directions, sampling.in_front);
-        }
+        if (!opt->envmap.empty()) print_environment_line(opt->envmap, sampling);
         std::printf("  efficiency   %.1f %% of the light entering the lenslets reaches the diffuser; "
                     "%.1f / %.1f / %.1f %% through the pattern (R/G/B)\n",
                     100 * result.optical_efficiency, 100 * result.pattern_efficiency[0],

@@ -80,13 +80,13 @@ void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& globa
         "compare", "Predicted display output beside the software relighting of the same field, at the display's "
                    "resolution, with PSNR and error maps, for a sweep of light directions (Designs I and II)");
     struct Options {
-        std::string design, pattern, field, out, printer, model = "auto", models = "paraxial,exact,auto",
+        PrintOptions print;
+        std::string design, pattern, field, out, model = "auto", models = "paraxial,exact,auto",
                                                         accuracy_rays = "2,4,8,16";
         std::vector<std::string> lights;
         double pixels_per_lenslet = 16.0;
         int sweep = 9, rays = 0, reference_rays = 32, view_pixels = 0;
-        double tolerance_dots = 0.25, brightness = 1.0, error_gain = 4.0;
-        int sheets = 0;
+        double tolerance_dots = 0.25, error_gain = 4.0;
         bool json = false, chart_accuracy = false;
     };
     auto opt = std::make_shared<Options>();
@@ -111,10 +111,7 @@ void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& globa
     cmd->add_option("--pixels-per-lenslet", opt->pixels_per_lenslet,
                     "Diffuser pixels per lenslet pitch in the simulation (default 16)")
         ->check(CLI::Range(4.0, 64.0));
-    cmd->add_option("--printer", opt->printer, "Printer profile (tone mapping); default the Epson's at the design's dpi");
-    cmd->add_option("--brightness", opt->brightness, "Tone mapping: transmittance = brightness * value / white")
-        ->check(CLI::PositiveNumber);
-    cmd->add_option("--sheets", opt->sheets, "Sheets back to back (1 or 2); default the profile's");
+    add_print_options(*cmd, opt->print);
     cmd->add_option("--view-pixels", opt->view_pixels,
                     "Pixels per lenslet in the side-by-side PNGs (default: about 240 pixels per panel)")
         ->check(CLI::Range(0, 256));
@@ -133,8 +130,7 @@ void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& globa
         const auto start = std::chrono::steady_clock::now();
         const optics::Design design = optics::load_design(opt->design);
         const optics::DisplaySimulator simulator(design);
-        const print::PrinterProfile printer = printer_for(design, opt->printer);
-        const print::PrintedTransparency pattern(design, printer, opt->pattern, opt->brightness, opt->sheets);
+        const print::PrintedTransparency pattern = printed_pattern(design, opt->pattern, opt->print);
         const patterns::PatternFileInfo info = patterns::read_pattern_info(opt->pattern);
         if (opt->sweep == 0 && opt->lights.empty()) throw InputError("--sweep 0 needs at least one --light");
         std::vector<patterns::AccuracyModel> accuracy_models;

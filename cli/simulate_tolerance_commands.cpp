@@ -18,6 +18,7 @@
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "core/error.hpp"
+#include "core/number.hpp"
 #include "core/files.hpp"
 #include "core/plot.hpp"
 #include "optics/display.hpp"
@@ -41,14 +42,8 @@ double parse_pitch_error(const std::string& text) {
         number.resize(number.size() - 1);
         unit = 1e-2;
     }
-    std::size_t used = 0;
-    double value = std::nan("");
-    try {
-        value = std::stod(number, &used);
-    } catch (const std::exception&) {
-        used = 0;
-    }
-    if (used == 0 || used != number.size() || !std::isfinite(value) || value < 0.0)
+    const double value = finite_number(number).value_or(-1.0);
+    if (value < 0.0)
         throw InputError(SourceLocation{"", 0, 0, "--pitch-error"},
                          "expected a number >= 0 in ppm ('500', '500ppm') or percent ('0.05%'), got '" + text + "'");
     return value * unit;
@@ -87,11 +82,12 @@ void add_simulate_tolerance_command(CLI::App& simulate, const GlobalOptions& glo
                      "lenslet) against pattern shift, rotation, pitch error and spacer error, and the largest error "
                      "of each that keeps it above a threshold");
     struct Options {
-        std::string design, pattern, out, printer, model = "paraxial", pitch_error;
+        PrintOptions print;
+        std::string design, pattern, out, model = "paraxial", pitch_error;
         std::vector<std::string> lights;
         std::optional<double> shift_mm, rotation_deg, spacer_mm;
-        double threshold = 30.0, brightness = 1.0, tolerance_dots = 0.25;
-        int steps = 6, refinements = 4, rays = 8, sheets = 0;
+        double threshold = 30.0, tolerance_dots = 0.25;
+        int steps = 6, refinements = 4, rays = 8;
         bool json = false;
     };
     auto opt = std::make_shared<Options>();
@@ -123,10 +119,7 @@ void add_simulate_tolerance_command(CLI::App& simulate, const GlobalOptions& glo
     cmd->add_option("--tolerance", opt->tolerance_dots,
                     "auto: largest paraxial error on the pattern plane, in print dots (default 0.25)")
         ->check(CLI::PositiveNumber);
-    cmd->add_option("--printer", opt->printer, "Printer profile (tone mapping); default the Epson's at the design's dpi");
-    cmd->add_option("--brightness", opt->brightness, "Tone mapping: transmittance = brightness * value / white")
-        ->check(CLI::PositiveNumber);
-    cmd->add_option("--sheets", opt->sheets, "Sheets back to back (1 or 2); default the profile's");
+    add_print_options(*cmd, opt->print);
     cmd->add_option("--rays", opt->rays, "Rays per side of each lenslet's grid (default 8)")->check(CLI::Range(1, 256));
     cmd->add_flag("--json", opt->json, "Machine-readable summary");
     cmd->callback([opt, &global] {
@@ -134,8 +127,7 @@ void add_simulate_tolerance_command(CLI::App& simulate, const GlobalOptions& glo
         const auto start = std::chrono::steady_clock::now();
         const optics::Design design = optics::load_design(opt->design);
         const optics::DisplaySimulator simulator(design);
-        const print::PrinterProfile printer = printer_for(design, opt->printer);
-        const print::PrintedTransparency pattern(design, printer, opt->pattern, opt->brightness, opt->sheets);
+        const print::PrintedTransparency pattern = printed_pattern(design, opt->pattern, opt->print);
 
         optics::ToleranceOptions options = optics::default_tolerance_ranges(simulator.optics());
         if (opt->shift_mm) options.max_shift_mm = *opt->shift_mm;

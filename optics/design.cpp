@@ -375,4 +375,18 @@ Design parse_design(std::string_view toml_text, const std::string& name) {
     return build_design(root);
 }
 
+Design with_lenslet_count(Design design, int count_x, int count_y) {
+    RFD_CHECK(count_x > 0 && count_y > 0);
+    for (Plane& plane : design.planes) {
+        if (!plane.part) continue;
+        if (auto* array = std::get_if<LensletArrayPart>(&*plane.part)) {
+            const Lattice& l = array->lattice;
+            array->lattice = l.kind() == LatticeKind::Hexagonal
+                                 ? Lattice::hexagonal(l.pitch_x(), count_x, count_y)
+                                 : Lattice::rectangular(l.pitch_x(), l.pitch_y(), count_x, count_y);
+        }
+    }
+    return design;
+}
+
 }  // namespace rfd::optics

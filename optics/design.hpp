@@ -102,6 +102,11 @@ struct Design {
 Design load_design(const std::filesystem::path& path);
 Design parse_design(std::string_view toml_text, const std::string& name);
 
+/// The design with every lenslet array (they share one lattice) resized to count_x by
+/// count_y lenslets, same pitch, lenslets, planes and printer: a smaller copy of a preset
+/// for tests and benchmarks, or a wider one around a lenslet.
+Design with_lenslet_count(Design design, int count_x, int count_y);
+
 /// Effective focal length of a plano-convex lens in air: R / (n - 1).
 double focal_length(const PlanoConvex& lens);
 

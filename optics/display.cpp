@@ -76,39 +76,6 @@ bool trace_paraxial_ray(const SequentialSystem& system, ParaxialRay& ray, std::v
     return false;
 }
 
-// Directions sampling one light: its own for a point source, a square grid over the disc
-// of an area source (equal weights).
-std::vector<Eigen::Vector3d> light_samples(const DisplayLight& light, int per_side) {
-    if (light.angular_radius_rad <= 0.0 || per_side <= 1) return {light.direction.normalized()};
-    const Eigen::Vector3d d = light.direction.normalized();
-    const Eigen::Vector3d u = d.unitOrthogonal();
-    const Eigen::Vector3d v = d.cross(u);
-    const double reach = std::tan(light.angular_radius_rad);
-    std::vector<Eigen::Vector3d> samples;
-    for (int iy = 0; iy < per_side; ++iy)
-        for (int ix = 0; ix < per_side; ++ix) {
-            const double fx = (ix + 0.5) / per_side * 2.0 - 1.0, fy = (iy + 0.5) / per_side * 2.0 - 1.0;
-            if (fx * fx + fy * fy > 1.0) continue;
-            samples.push_back((d + reach * (fx * u + fy * v)).normalized());
-        }
-    return samples;
-}
-
-// The design with every lenslet array widened to kReferenceCells x kReferenceCells: the
-// lenslets around the centre one that its rays can cross into, all present.
-Design reference_design(Design design) {
-    for (Plane& plane : design.planes) {
-        if (!plane.part) continue;
-        if (auto* array = std::get_if<LensletArrayPart>(&*plane.part)) {
-            const Lattice& l = array->lattice;
-            array->lattice = l.kind() == LatticeKind::Hexagonal
-                                 ? Lattice::hexagonal(l.pitch_x(), kReferenceCells, kReferenceCells)
-                                 : Lattice::rectangular(l.pitch_x(), l.pitch_y(), kReferenceCells, kReferenceCells);
-        }
-    }
-    return design;
-}
-
 // One traced ray as every lenslet of the display repeats it: what it carries and, for a
 // ray that crossed into neighbouring lenslets, where those lie relative to its own.
 struct LensletRay {
@@ -149,7 +116,7 @@ void RasterTransparency::sample(std::span<const Eigen::Vector2d> points, std::sp
 }
 
 DisplaySimulator::DisplaySimulator(const Design& design)
-    : optics_(design), reference_(std::make_shared<const DesignOptics>(reference_design(design))) {
+    : optics_(design), reference_(std::make_shared<const DesignOptics>(with_lenslet_count(design, kReferenceCells, kReferenceCells))) {
     if (design.kind != DesignKind::I && design.kind != DesignKind::II)
         throw InputError(SourceLocation{design.file, 0, 0, "design.kind"},
                          "the display simulator handles Designs I and II (a diffuser shows the picture); Design " +
@@ -205,7 +172,7 @@ DiffuserImage DisplaySimulator::simulate(const Transparency& pattern, const std:
     const double dot_angle = optics_.dot_mm().minCoeff() / std::abs(optics_.paraxial_b());
     for (const DisplayLight& light : lights) {
         const int needed = static_cast<int>(std::ceil(2.0 * light.angular_radius_rad / dot_angle));
-        directions.push_back(light_samples(light, std::clamp(needed, 1, options.area_samples_per_side)));
+        directions.push_back(disc_directions(light, std::clamp(needed, 1, options.area_samples_per_side)));
         direction_count += directions.back().size();
     }
     const double half_w = 0.5 * lattice.pitch_x();
@@ -499,17 +466,36 @@ PictureContrast picture_contrast(const Image& per_lenslet, const DiffuserScatter
     return out;
 }
 
-Image DisplaySimulator::per_lenslet(const DiffuserImage& image) const {
-    const Lattice& lattice = optics_.lattice();
+std::vector<Eigen::Vector3d> disc_directions(const DisplayLight& light, int per_side) {
+    if (light.angular_radius_rad <= 0.0 || per_side <= 1) return {light.direction.normalized()};
+    const Eigen::Vector3d d = light.direction.normalized();
+    const Eigen::Vector3d u = d.unitOrthogonal();
+    const Eigen::Vector3d v = d.cross(u);
+    const double reach = std::tan(light.angular_radius_rad);
+    std::vector<Eigen::Vector3d> samples;
+    for (int iy = 0; iy < per_side; ++iy)
+        for (int ix = 0; ix < per_side; ++ix) {
+            const double fx = (ix + 0.5) / per_side * 2.0 - 1.0, fy = (iy + 0.5) / per_side * 2.0 - 1.0;
+            if (fx * fx + fy * fy > 1.0) continue;
+            samples.push_back((d + reach * (fx * u + fy * v)).normalized());
+        }
+    return samples;
+}
+
+Image per_lenslet(const Lattice& lattice, const DiffuserImage& image, double core_fraction) {
+    RFD_CHECK(core_fraction > 0.0 && core_fraction <= 1.0);
     const int count_x = lattice.count_x(), count_y = lattice.count_y();
     const int channels = image.image.channels();
-    std::vector<double> sums(static_cast<std::size_t>(count_x) * static_cast<std::size_t>(count_y) *
-                             static_cast<std::size_t>(channels), 0.0);
-    std::vector<std::size_t> counts(static_cast<std::size_t>(count_x) * static_cast<std::size_t>(count_y), 0);
+    const std::size_t lenslets = static_cast<std::size_t>(count_x) * static_cast<std::size_t>(count_y);
+    std::vector<double> sums(lenslets * static_cast<std::size_t>(channels), 0.0);
+    std::vector<std::size_t> counts(lenslets, 0);
     for (int y = 0; y < image.image.height(); ++y)
         for (int x = 0; x < image.image.width(); ++x) {
-            const CellIndex cell = lattice.cell_at(image.pixel_centre(x, y));
+            const Eigen::Vector2d p = image.pixel_centre(x, y);
+            const CellIndex cell = lattice.cell_at(p);
             if (!lattice.contains(cell)) continue;
+            const Eigen::Vector2d centre = lattice.center(cell);
+            if (core_fraction < 1.0 && !lattice.cell_contains(cell, centre + (p - centre) / core_fraction)) continue;
             const std::size_t l = lattice.linear_index(cell);
             ++counts[l];
             for (int c = 0; c < channels; ++c)
@@ -527,5 +513,7 @@ Image DisplaySimulator::per_lenslet(const DiffuserImage& image) const {
         }
     return out;
 }
+
+Image DisplaySimulator::per_lenslet(const DiffuserImage& image) const { return optics::per_lenslet(optics_.lattice(), image); }
 
 }  // namespace rfd::optics

@@ -139,6 +139,18 @@ struct PictureContrast {
 PictureContrast picture_contrast(const Image& per_lenslet, const DiffuserScatter& diffuser,
                                  std::span<const double> front_ratios);
 
+/// The mean of `image` over each lenslet's cell, or over its core (the cell shrunk by
+/// `core_fraction` about its centre, where a Design II macro-pixel's neighbours do not
+/// reach): the picture at the display's own resolution, count_x by count_y, row 0 at the
+/// top (cell row count_y - 1). For hexagonal lattices odd rows are shifted by half a pixel
+/// on screen; here each lenslet simply takes its column. A lenslet whose region holds no
+/// pixel centre reads 0.
+Image per_lenslet(const Lattice& lattice, const DiffuserImage& image, double core_fraction = 1.0);
+
+/// The directions sampling a light: its own for a point source, a square grid of
+/// per_side x per_side over the disc of an area source (those inside it, equal weights).
+std::vector<Eigen::Vector3d> disc_directions(const DisplayLight& light, int per_side);
+
 class DisplaySimulator {
 public:
     /// Designs I and II only; InputError otherwise.
@@ -153,9 +165,7 @@ public:
                            const SimulationOptions& options) const;
 
     /// The mean of `image` over each lenslet's cell: the picture at the display's own
-    /// resolution (one value per lenslet), count_x by count_y, row 0 at the top (cell row
-    /// count_y - 1). For hexagonal lattices odd rows are shifted by half a pixel on screen;
-    /// here each lenslet simply takes its column.
+    /// resolution (one value per lenslet), see optics::per_lenslet.
     Image per_lenslet(const DiffuserImage& image) const;
 
 private:

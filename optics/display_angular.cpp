@@ -65,24 +65,6 @@ void follow(const SequentialSystem& system, Model model, Tracked& state, double 
     state.arrived = false;
 }
 
-// Directions sampling one light: its own for a point source, a square grid over the disc
-// of an area source (equal weights), as display.cpp samples them.
-std::vector<Eigen::Vector3d> light_samples(const DisplayLight& light, int per_side) {
-    if (light.angular_radius_rad <= 0.0 || per_side <= 1) return {light.direction.normalized()};
-    const Eigen::Vector3d d = light.direction.normalized();
-    const Eigen::Vector3d u = d.unitOrthogonal();
-    const Eigen::Vector3d v = d.cross(u);
-    const double reach = std::tan(light.angular_radius_rad);
-    std::vector<Eigen::Vector3d> samples;
-    for (int iy = 0; iy < per_side; ++iy)
-        for (int ix = 0; ix < per_side; ++ix) {
-            const double fx = (ix + 0.5) / per_side * 2.0 - 1.0, fy = (iy + 0.5) / per_side * 2.0 - 1.0;
-            if (fx * fx + fy * fy > 1.0) continue;
-            samples.push_back((d + reach * (fx * u + fy * v)).normalized());
-        }
-    return samples;
-}
-
 Eigen::Vector2d position(const Tracked& state, Model model) {
     return model == Model::Paraxial ? Eigen::Vector2d(state.paraxial.x, state.paraxial.y)
                                     : Eigen::Vector2d(state.exact.origin.head<2>());
@@ -230,7 +212,7 @@ AngularDisplayOutput AngularDisplaySimulator::simulate(const Transparency& patte
 
     std::vector<std::pair<Eigen::Vector3d, std::pair<std::array<double, 3>, double>>> directions;
     for (const DisplayLight& light : lights) {
-        const auto samples = light_samples(light, options.area_samples_per_side);
+        const auto samples = disc_directions(light, options.area_samples_per_side);
         for (const auto& d : samples) directions.push_back({d, {light.colour, 1.0 / static_cast<double>(samples.size())}});
     }
     Progress progress("simulating the display", directions.size());

@@ -26,21 +26,6 @@ double psnr_of(double peak, double mse) {
     return 10.0 * std::log10(peak * peak / mse);
 }
 
-double number_attribute(const PatternFileInfo& info, const std::string& key, const std::string& file, double fallback) {
-    const auto it = info.attributes.find(key);
-    if (it == info.attributes.end()) return fallback;
-    std::size_t used = 0;
-    double value = std::nan("");
-    try {
-        value = std::stod(it->second, &used);
-    } catch (const std::exception&) {
-        used = 0;
-    }
-    if (used != it->second.size() || !std::isfinite(value))
-        throw InputError(SourceLocation{file, 0, 0, "rfd:" + key}, "expected a number, got '" + it->second + "'");
-    return value;
-}
-
 std::string text_attribute(const PatternFileInfo& info, const std::string& key, const std::string& fallback) {
     const auto it = info.attributes.find(key);
     return it == info.attributes.end() ? fallback : it->second;
@@ -64,11 +49,7 @@ EncodeOptions encode_options_of(const PatternFileInfo& info, const std::string& 
     if (model == "paraxial") options.model = optics::Model::Paraxial;
     else if (model == "exact") options.model = optics::Model::Exact;
     else throw InputError(SourceLocation{file, 0, 0, "rfd:model"}, "expected 'paraxial' or 'exact', got '" + model + "'");
-    options.mapping.tilt_deg = number_attribute(info, "tilt_deg", file, 0.0);
-    options.mapping.turn_deg = number_attribute(info, "turn_deg", file, 0.0);
-    options.mapping.angle_scale = number_attribute(info, "angle_scale", file, 1.0);
-    if (!(options.mapping.angle_scale > 0.0))
-        throw InputError(SourceLocation{file, 0, 0, "rfd:angle_scale"}, "expected a positive number");
+    options.mapping = mapping_of(info, file);
     const std::string interpolation = text_attribute(info, "interpolation", "delaunay");
     bool known = false;
     for (auto method : {relight::Interpolation::delaunay, relight::Interpolation::solid_angle, relight::Interpolation::nearest})
@@ -111,35 +92,7 @@ MacroPixelCore macro_pixel_core(const optics::DesignOptics& optics) {
 }
 
 Image per_lenslet_core(const optics::Lattice& lattice, const optics::DiffuserImage& image, double fraction) {
-    RFD_CHECK(fraction > 0.0 && fraction <= 1.0);
-    const int count_x = lattice.count_x(), count_y = lattice.count_y();
-    const int channels = image.image.channels();
-    const std::size_t lenslets = static_cast<std::size_t>(count_x) * static_cast<std::size_t>(count_y);
-    std::vector<double> sums(lenslets * static_cast<std::size_t>(channels), 0.0);
-    std::vector<std::size_t> counts(lenslets, 0);
-    for (int y = 0; y < image.image.height(); ++y)
-        for (int x = 0; x < image.image.width(); ++x) {
-            const Eigen::Vector2d p = image.pixel_centre(x, y);
-            const optics::CellIndex cell = lattice.cell_at(p);
-            if (!lattice.contains(cell)) continue;
-            const Eigen::Vector2d centre = lattice.center(cell);
-            if (fraction < 1.0 && !lattice.cell_contains(cell, centre + (p - centre) / fraction)) continue;
-            const std::size_t l = lattice.linear_index(cell);
-            ++counts[l];
-            for (int c = 0; c < channels; ++c)
-                sums[l * static_cast<std::size_t>(channels) + static_cast<std::size_t>(c)] += image.image.at(x, y, c);
-        }
-    Image out(count_x, count_y, channels);
-    for (int j = 0; j < count_y; ++j)
-        for (int i = 0; i < count_x; ++i) {
-            const std::size_t l = lattice.linear_index({i, j});
-            for (int c = 0; c < channels; ++c)
-                out.at(i, count_y - 1 - j, c) =
-                    counts[l] ? static_cast<float>(sums[l * static_cast<std::size_t>(channels) + static_cast<std::size_t>(c)] /
-                                                   static_cast<double>(counts[l]))
-                              : 0.0f;
-        }
-    return out;
+    return optics::per_lenslet(lattice, image, fraction);
 }
 
 ImageComparison compare_images(const Image& prediction, const Image& reference) {

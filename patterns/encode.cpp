@@ -818,4 +818,14 @@ DecodeComparison decode_and_compare(const Encoder& encoder, const std::vector<fl
     return result;
 }
 
+AngularMapping mapping_of(const PatternFileInfo& info, const std::string& file) {
+    AngularMapping mapping;
+    mapping.tilt_deg = number_attribute(info, "tilt_deg", file, 0.0);
+    mapping.turn_deg = number_attribute(info, "turn_deg", file, 0.0);
+    mapping.angle_scale = number_attribute(info, "angle_scale", file, 1.0);
+    if (!(mapping.angle_scale > 0.0))
+        throw InputError(SourceLocation{file, 0, 0, "rfd:angle_scale"}, "expected a positive number");
+    return mapping;
+}
+
 }  // namespace rfd::patterns

@@ -67,6 +67,10 @@ struct AngularMapping {
     Eigen::Vector3d display_direction(const Eigen::Vector3d& field) const;
 };
 
+/// The mapping a pattern was encoded with, from its rfd:tilt_deg, turn_deg and angle_scale
+/// attributes (0, 0, 1 when absent). InputError naming `file` and the attribute otherwise.
+AngularMapping mapping_of(const PatternFileInfo& info, const std::string& file);
+
 enum class ImageFit { cover, contain, stretch };
 
 /// Names as the CLI spells them and the pattern's rfd: attributes record them.

@@ -15,6 +15,7 @@
 #include <OpenImageIO/imageio.h>
 
 #include "core/error.hpp"
+#include "core/number.hpp"
 #include "core/files.hpp"
 #include "core/half.hpp"
 #include "core/image.hpp"
@@ -331,6 +332,16 @@ void write_preview(const std::filesystem::path& pattern, const std::filesystem::
                                                        std::max(count[p], 1.0) / white);
         }
     write_image(preview, image);
+}
+
+double number_attribute(const PatternFileInfo& info, const std::string& key, const std::string& file,
+                        double fallback) {
+    const auto it = info.attributes.find(key);
+    if (it == info.attributes.end()) return fallback;
+    const std::optional<double> value = finite_number(it->second);
+    if (!value)
+        throw InputError(SourceLocation{file, 0, 0, "rfd:" + key}, "expected a number, got '" + it->second + "'");
+    return *value;
 }
 
 }  // namespace rfd::patterns

@@ -98,6 +98,11 @@ struct PatternFileInfo {
 };
 PatternFileInfo read_pattern_info(const std::filesystem::path& path);
 
+/// The number in rfd: attribute `key`, or `fallback` when the file has none. InputError
+/// naming `file` and the attribute when it is not one finite number.
+double number_attribute(const PatternFileInfo& info, const std::string& key, const std::string& file,
+                        double fallback);
+
 /// Reads an image file a strip of rows at a time, for files too large to load: linear
 /// floats, interleaved, integer formats decoded from sRGB as read_image does, alpha dropped.
 /// Throws IoError naming the file when it cannot be opened or read, InputError for a

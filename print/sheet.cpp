@@ -13,6 +13,7 @@
 #include <cairo.h>
 
 #include "core/error.hpp"
+#include "core/number.hpp"
 #include "core/files.hpp"
 #include "core/image_io.hpp"
 #include "core/parallel.hpp"
@@ -279,14 +280,8 @@ double attribute_number(const patterns::PatternFileInfo& info, const std::string
                         const std::filesystem::path& file, double fallback, bool allow_zero) {
     const auto it = info.attributes.find(key);
     if (it == info.attributes.end()) return fallback;
-    std::size_t used = 0;
-    double value = std::nan("");
-    try {
-        value = std::stod(it->second, &used);
-    } catch (const std::exception&) {
-        used = 0;
-    }
-    if (used != it->second.size() || !std::isfinite(value) || value < 0.0 || (!allow_zero && value == 0.0))
+    const double value = finite_number(it->second).value_or(-1.0);
+    if (value < 0.0 || (!allow_zero && value == 0.0))
         throw InputError(SourceLocation{file.string(), 0, 0, "rfd:" + key},
                          "expected a " + std::string(allow_zero ? "non-negative" : "positive") +
                              " number, got '" + it->second + "'");

@@ -7,9 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <numeric>
-#include <sstream>
 
 #include <Eigen/Dense>
 #include <gmock/gmock.h>
@@ -37,14 +35,7 @@ optics::Design design2() { return optics::load_design(kDesigns / "design2.toml")
 // Design I with fewer lenslets (same lenslets, pitch, planes and printer): the preset's
 // 63 x 73 lenslets make a 150 mm pattern, too large for a unit test.
 optics::Design small_design1(int count_x, int count_y) {
-    std::ifstream in(kDesigns / "design1.toml");
-    std::stringstream text;
-    text << in.rdbuf();
-    std::string design = text.str();
-    const std::string preset = "count = [63, 73]";
-    design.replace(design.find(preset), preset.size(),
-                   "count = [" + std::to_string(count_x) + ", " + std::to_string(count_y) + "]");
-    return optics::parse_design(design, "design1.toml");
+    return optics::with_lenslet_count(optics::load_design(kDesigns / "design1.toml"), count_x, count_y);
 }
 
 // A field encoded and "printed" in memory: the encoder, and its pattern through the tone

@@ -4,8 +4,6 @@
 // the wrap-over angle and not before, lights add up, and light is conserved.
 
 #include <cmath>
-#include <fstream>
-#include <sstream>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -23,17 +21,7 @@ using rfd::testing::error_of;
 
 const std::filesystem::path kDesigns = std::filesystem::path(RFD_SOURCE_DIR) / "designs";
 
-Design design_with_count(const std::string& name, const std::string& preset, int count_x, int count_y) {
-    std::ifstream in(kDesigns / name);
-    std::stringstream text;
-    text << in.rdbuf();
-    std::string design = text.str();
-    design.replace(design.find(preset), preset.size(),
-                   "count = [" + std::to_string(count_x) + ", " + std::to_string(count_y) + "]");
-    return parse_design(design, name);
-}
-
-Design small_design1() { return design_with_count("design1.toml", "count = [63, 73]", 5, 5); }
+Design small_design1() { return with_lenslet_count(load_design(kDesigns / "design1.toml"), 5, 5); }
 Design design2() { return load_design(kDesigns / "design2.toml"); }
 
 // A one-channel transparency at the design's print resolution, centred like a pattern:

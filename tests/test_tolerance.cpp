@@ -6,8 +6,6 @@
 // lenslet passes). Small arrays keep it fast.
 
 #include <cmath>
-#include <fstream>
-#include <sstream>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -26,17 +24,7 @@ using rfd::testing::error_of;
 
 const std::filesystem::path kDesigns = std::filesystem::path(RFD_SOURCE_DIR) / "designs";
 
-Design design_with_count(const std::string& name, const std::string& preset, int count_x, int count_y) {
-    std::ifstream in(kDesigns / name);
-    std::stringstream text;
-    text << in.rdbuf();
-    std::string design = text.str();
-    design.replace(design.find(preset), preset.size(),
-                   "count = [" + std::to_string(count_x) + ", " + std::to_string(count_y) + "]");
-    return parse_design(design, name);
-}
-
-Design small_design1(int count) { return design_with_count("design1.toml", "count = [63, 73]", count, count); }
+Design small_design1(int count) { return with_lenslet_count(load_design(kDesigns / "design1.toml"), count, count); }
 
 // Transmittance as a function of the offset from the centre of the lenslet cell a point
 // lies under (0 outside the array): an analytic pattern that repeats with the lattice.

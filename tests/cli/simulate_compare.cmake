@@ -4,13 +4,7 @@
 # errors a user meets: a field that is not the pattern's, a disc light, no direction at all.
 file(REMOVE_RECURSE ${OUT})
 file(MAKE_DIRECTORY ${OUT})
-function(run expected_code)
-  execute_process(COMMAND ${RFD} --quiet ${ARGN} RESULT_VARIABLE code OUTPUT_VARIABLE stdout ERROR_VARIABLE stderr)
-  if(NOT code EQUAL expected_code)
-    message(FATAL_ERROR "rfd ${ARGN}: exit ${code}, expected ${expected_code}\n${stdout}\n${stderr}")
-  endif()
-  set(last_output "${stdout}${stderr}" PARENT_SCOPE)
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/run_rfd.cmake)
 
 run(0 pattern field diamonds --resolution 24x20 --spread 14 --out ${OUT}/diamonds)
 run(0 pattern encode ${DESIGN} ${OUT}/diamonds --out ${OUT}/diamonds.exr)

@@ -4,13 +4,7 @@
 # nothing written.
 file(REMOVE_RECURSE ${OUT})
 file(MAKE_DIRECTORY ${OUT})
-function(run expected_code)
-  execute_process(COMMAND ${RFD} --quiet ${ARGN} RESULT_VARIABLE code OUTPUT_VARIABLE stdout ERROR_VARIABLE stderr)
-  if(NOT code EQUAL expected_code)
-    message(FATAL_ERROR "rfd ${ARGN}: exit ${code}, expected ${expected_code}\n${stdout}\n${stderr}")
-  endif()
-  set(last_output "${stdout}${stderr}" PARENT_SCOPE)
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/run_rfd.cmake)
 
 run(0 pattern field bars --resolution 12x10 --spread 8 --out ${OUT}/bars)
 run(0 pattern encode ${DESIGN} ${OUT}/bars --out ${OUT}/bars.exr)
