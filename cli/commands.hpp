@@ -46,4 +46,7 @@ void simulate_observer_variant(const CLI::App& simulate, const ObserverVariantOp
 /// `simulate compare`: predicted output against the software relighting of the same field.
 void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& global);
 
+/// `holder`: the lens holder as OpenSCAD, its STLs and their checks; `holder coupon`.
+void add_holder_commands(CLI::App& app, const GlobalOptions& global);
+
 }  // namespace rfd::cli

@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
     rfd::cli::add_pattern_commands(app, global);
     rfd::cli::add_print_commands(app, global);
     rfd::cli::add_simulate_commands(app, global);
+    rfd::cli::add_holder_commands(app, global);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& error) {

@@ -47,3 +47,11 @@ if(NOT RFD_GNUPLOT)
                   "(scripts/install-deps.sh installs it)")
   set(RFD_GNUPLOT "")
 endif()
+
+# OpenSCAD builds the lens holders' STLs (holders/openscad.cpp); without it rfd still
+# writes the .scad and says the STL needs openscad.
+find_program(RFD_OPENSCAD openscad)
+if(NOT RFD_OPENSCAD)
+  message(STATUS "openscad not found: rfd holder writes .scad files but cannot build STLs")
+  set(RFD_OPENSCAD "")
+endif()

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <fstream>
 
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/connected_components.h>
 #include <CGAL/Polygon_mesh_processing/measure.h>
@@ -14,6 +17,8 @@
 #include <CGAL/Surface_mesh.h>
 
 #include "core/error.hpp"
+
+#include <Eigen/Geometry>
 
 namespace rfd::holders {
 namespace {
@@ -67,6 +72,74 @@ MeshCheck check_stl(const std::filesystem::path& stl) {
     check.min_mm = {box.xmin(), box.ymin(), box.zmin()};
     check.max_mm = {box.xmax(), box.ymax(), box.zmax()};
     return check;
+}
+
+namespace {
+
+using Triangle = Kernel::Triangle_3;
+using Primitive = CGAL::AABB_triangle_primitive<Kernel, std::vector<Triangle>::const_iterator>;
+using AabbTree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
+
+Point to_point(const Eigen::Vector3d& p) { return {p.x(), p.y(), p.z()}; }
+
+}  // namespace
+
+struct MeshProbe::Tree {
+    std::vector<Triangle> triangles;
+    AabbTree tree;
+};
+
+MeshProbe::MeshProbe(const std::filesystem::path& stl) : tree_(std::make_unique<Tree>()) {
+    std::vector<Point> points;
+    std::vector<std::array<std::size_t, 3>> faces;
+    std::ifstream in(stl, std::ios::binary);
+    if (!in || !CGAL::IO::read_STL(in, points, faces, CGAL::parameters::verbose(false)) || faces.empty())
+        throw IoError(stl.string() + ": cannot read a triangle mesh (STL) from it");
+    for (const auto& f : faces) {
+        Triangle t(points[f[0]], points[f[1]], points[f[2]]);
+        if (!t.is_degenerate()) tree_->triangles.push_back(t);
+    }
+    tree_->tree.insert(tree_->triangles.cbegin(), tree_->triangles.cend());
+    tree_->tree.build();
+    tree_->tree.accelerate_distance_queries();
+    // Build the distance search structure now, not lazily on the first query: queries
+    // then only read the tree and may run in parallel.
+    if (!tree_->triangles.empty()) (void)tree_->tree.squared_distance(tree_->triangles.front().vertex(0));
+}
+
+MeshProbe::~MeshProbe() = default;
+MeshProbe::MeshProbe(MeshProbe&&) noexcept = default;
+MeshProbe& MeshProbe::operator=(MeshProbe&&) noexcept = default;
+
+std::optional<double> MeshProbe::first_hit_z(double x, double y, double z_from, int direction) const {
+    const double far = 1e5 * direction;
+    const Kernel::Segment_3 segment(Point(x, y, z_from), Point(x, y, z_from + far));
+    std::vector<Primitive::Id> hit;
+    tree_->tree.all_intersected_primitives(segment, std::back_inserter(hit));
+    std::optional<double> best;
+    for (const auto& id : hit) {
+        // Where the vertical line meets the triangle's plane (a, b, c: its corners).
+        const Triangle& t = *id;
+        const Eigen::Vector3d a(t[0].x(), t[0].y(), t[0].z()), b(t[1].x(), t[1].y(), t[1].z()),
+            c(t[2].x(), t[2].y(), t[2].z());
+        const Eigen::Vector3d n = (b - a).cross(c - a);
+        double z;
+        if (std::abs(n.z()) > 1e-12 * n.norm()) {
+            z = a.z() - (n.x() * (x - a.x()) + n.y() * (y - a.y())) / n.z();
+        } else {
+            z = direction > 0 ? std::min({a.z(), b.z(), c.z()}) : std::max({a.z(), b.z(), c.z()});  // edge-on
+        }
+        if (!best || (direction > 0 ? z < *best : z > *best)) best = z;
+    }
+    return best;
+}
+
+bool MeshProbe::hits(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const {
+    return tree_->tree.do_intersect(Kernel::Segment_3(to_point(a), to_point(b)));
+}
+
+double MeshProbe::distance(const Eigen::Vector3d& p) const {
+    return std::sqrt(CGAL::to_double(tree_->tree.squared_distance(to_point(p))));
 }
 
 }  // namespace rfd::holders

@@ -11,8 +11,12 @@
 #include <array>
 #include <cstddef>
 #include <filesystem>
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
+
+#include <Eigen/Core>
 
 namespace rfd::holders {
 
@@ -34,5 +38,32 @@ struct MeshCheck {
 /// Reads an STL (ASCII or binary) and checks it. IoError when it cannot be read or holds
 /// no triangles.
 MeshCheck check_stl(const std::filesystem::path& stl);
+
+}  // namespace rfd::holders
+
+namespace rfd::holders {
+
+/// Geometric queries on a printed part's mesh, for the seat and beam-clearance checks:
+/// an AABB tree (CGAL) over the STL's triangles. Millimetres, the STL's frame.
+class MeshProbe {
+public:
+    /// Reads the STL; IoError when it cannot be read or holds no triangles.
+    explicit MeshProbe(const std::filesystem::path& stl);
+    ~MeshProbe();
+    MeshProbe(MeshProbe&&) noexcept;
+    MeshProbe& operator=(MeshProbe&&) noexcept;
+
+    /// z where the line x, y (parallel to the z axis), followed from z_from toward
+    /// z_from + direction * infinity (direction +1 or -1), first meets the mesh.
+    std::optional<double> first_hit_z(double x, double y, double z_from, int direction) const;
+    /// Whether the segment from a to b touches the mesh.
+    bool hits(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const;
+    /// Distance from p to the nearest point of the mesh.
+    double distance(const Eigen::Vector3d& p) const;
+
+private:
+    struct Tree;
+    std::unique_ptr<Tree> tree_;
+};
 
 }  // namespace rfd::holders
