@@ -153,4 +153,17 @@ echo "== predicted against relit" >&2
   --light 45,70 --chart-accuracy --models paraxial,exact --accuracy-rays 2,4,8 --reference-rays 16 \
   --out "$predicted/compare_design1" | tee "$predicted/compare_design1.txt"
 
+# The lens holders (issue 6): parametric OpenSCAD for the default design (Design I, the
+# bottle display) and for Design II (the housing of figure 8.9), each built to STLs with
+# openscad and checked (solid, volume, seats at their planes, no ray of the field of view
+# touching the holder); and the fit-test coupon that calibrates the clearance. About 30 s.
+echo "== lens holders" >&2
+holders="$out/holders"
+mkdir -p "$holders"
+for n in 1 2; do
+  "$rfd" holder designs/design$n.toml --printer-profile holders/profiles/fdm_0.4mm.toml \
+    --out "$holders/design${n}_holder.scad" --stl "$holders/design${n}_holder.stl" | tee "$holders/design${n}_holder.txt"
+done
+"$rfd" holder coupon --out "$holders/coupon.scad" --stl "$holders/coupon.stl" | tee "$holders/coupon.txt"
+
 echo "demo written to $out" >&2
