@@ -9,6 +9,7 @@
 
 #include <sys/wait.h>
 
+#include "core/command.hpp"
 #include "core/error.hpp"
 #include "core/files.hpp"
 #include "core/units.hpp"
@@ -27,12 +28,6 @@ std::string quoted(const std::string& text) {
         out += c;
     }
     return out + "\"";
-}
-
-std::string shell_quoted(const std::string& text) {
-    std::string out = "'";
-    for (char c : text) out += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-    return out + "'";
 }
 
 // Runs gnuplot on `plot_commands` for an SVG and a PNG, each rendered to a temporary file
@@ -57,21 +52,14 @@ void render_with_gnuplot(const std::function<void(std::ostream&)>& plot_commands
         plot_commands(commands);
         const fs::path commands_file = fs::path(target).concat(".gp.tmp");
         write_text_file(commands_file, commands.str());
-        const std::string command = "cd " + shell_quoted(fs::absolute(target).parent_path().string()) +
-                                    " && " + shell_quoted(gnuplot->string()) + " " +
-                                    shell_quoted(commands_file.filename().string()) + " 2>&1";
-        FILE* pipe = popen(command.c_str(), "r");
-        std::string output;
-        if (pipe) {
-            char buffer[512];
-            while (fgets(buffer, sizeof buffer, pipe)) output += buffer;
-        }
-        const int status = pipe ? pclose(pipe) : -1;
+        const CommandResult run = run_command("cd " + shell_quoted(fs::absolute(target).parent_path().string()) +
+                                              " && " + shell_quoted(gnuplot->string()) + " " +
+                                              shell_quoted(commands_file.filename().string()));
         std::error_code ec;
         fs::remove(commands_file, ec);
-        if (status != 0 || !fs::exists(temporary)) {
+        if (run.exit_code != 0 || !fs::exists(temporary)) {
             fs::remove(temporary, ec);
-            throw ToolError(SourceLocation{target.string()}, "gnuplot failed: " + output);
+            throw ToolError(SourceLocation{target.string()}, "gnuplot failed: " + run.output);
         }
         fs::rename(temporary, target, ec);
         if (ec) throw IoError(SourceLocation{target.string()}, "cannot move the chart into place");
@@ -82,11 +70,11 @@ void render_with_gnuplot(const std::function<void(std::ostream&)>& plot_commands
 
 std::optional<std::filesystem::path> find_gnuplot() {
 #ifdef RFD_GNUPLOT_PATH
-    if (std::filesystem::exists(RFD_GNUPLOT_PATH)) return std::filesystem::path(RFD_GNUPLOT_PATH);
+    const std::string configured = RFD_GNUPLOT_PATH;
+#else
+    const std::string configured;
 #endif
-    for (const char* candidate : {"/usr/bin/gnuplot", "/usr/local/bin/gnuplot"})
-        if (std::filesystem::exists(candidate)) return std::filesystem::path(candidate);
-    return std::nullopt;
+    return find_program(configured, {"/usr/bin/gnuplot", "/usr/local/bin/gnuplot"});
 }
 
 void write_line_chart(const LineChart& chart, const std::filesystem::path& stem) {

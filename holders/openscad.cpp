@@ -1,30 +1,20 @@
 #include "holders/openscad.hpp"
 
 #include <chrono>
-#include <cstdio>
-#include <sys/wait.h>
 
+#include "core/command.hpp"
 #include "core/error.hpp"
 #include "core/files.hpp"
 
 namespace rfd::holders {
-namespace {
-
-std::string shell_quoted(const std::string& text) {
-    std::string out = "'";
-    for (const char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return out + "'";
-}
-
-}  // namespace
 
 std::optional<std::filesystem::path> find_openscad() {
 #ifdef RFD_OPENSCAD_PATH
-    if (std::filesystem::exists(RFD_OPENSCAD_PATH)) return std::filesystem::path(RFD_OPENSCAD_PATH);
+    const std::string configured = RFD_OPENSCAD_PATH;
+#else
+    const std::string configured;
 #endif
-    for (const char* candidate : {"/usr/bin/openscad", "/usr/local/bin/openscad"})
-        if (std::filesystem::exists(candidate)) return std::filesystem::path(candidate);
-    return std::nullopt;
+    return find_program(configured, {"/usr/bin/openscad", "/usr/local/bin/openscad"});
 }
 
 double build_stl(const std::filesystem::path& scad, const std::string& part, const std::filesystem::path& stl,
@@ -38,20 +28,14 @@ double build_stl(const std::filesystem::path& scad, const std::string& part, con
     const fs::path temporary = temporary_sibling(stl);
     TemporaryFile guard(temporary);
     const long limit = std::max(1L, static_cast<long>(time_limit_s + 0.5));
-    const std::string command = "timeout --kill-after=5 " + std::to_string(limit) + " " +
-                                shell_quoted(openscad->string()) + " --hardwarnings -D " +
-                                shell_quoted("part=\"" + part + "\"") + " -o " + shell_quoted(temporary.string()) +
-                                " " + shell_quoted(scad.string()) + " 2>&1";
     const auto start = std::chrono::steady_clock::now();
-    FILE* pipe = popen(command.c_str(), "r");
-    std::string output;
-    if (pipe) {
-        char buffer[512];
-        while (fgets(buffer, sizeof buffer, pipe)) output += buffer;
-    }
-    const int status = pipe ? pclose(pipe) : -1;
+    const CommandResult run = run_command("timeout --kill-after=5 " + std::to_string(limit) + " " +
+                                          shell_quoted(openscad->string()) + " --hardwarnings -D " +
+                                          shell_quoted("part=\"" + part + "\"") + " -o " +
+                                          shell_quoted(temporary.string()) + " " + shell_quoted(scad.string()));
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    const int code = status >= 0 && WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    const int code = run.exit_code;
+    const std::string& output = run.output;
     if (code == 124 || code == 137)
         throw ToolError(SourceLocation{stl.string()}, "openscad took longer than " + std::to_string(limit) +
                                                           " s building part \"" + part + "\" of " + scad.string() +

@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <sys/wait.h>
 
+#include "core/command.hpp"
 #include "core/error.hpp"
 #include "core/files.hpp"
 #include "core/image_io.hpp"
@@ -17,13 +18,6 @@ std::string number(double v) {
     char buffer[32];
     std::snprintf(buffer, sizeof buffer, "%.9g", v);
     return buffer;
-}
-
-// Single-quoted for the shell: the only character to escape is the quote itself.
-std::string shell_quoted(const std::string& text) {
-    std::string quoted = "'";
-    for (const char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return quoted + "'";
 }
 
 void replace_all(std::string& text, const std::string& key, const std::string& value) {
