@@ -108,9 +108,9 @@ void add_coupon_command(CLI::App& holder_cmd, const GlobalOptions& global) {
                     coupon.clearances.back());
         if (opt->stl.empty()) return;
         if (!global.quiet) std::fprintf(stderr, "building %s with openscad...\n", opt->stl.c_str());
-        const double seconds = holders::build_stl(opt->out, "coupon", opt->stl);
+        const holders::StlBuild build = holders::build_stl(opt->out, "coupon", opt->stl);
         const holders::MeshCheck mesh = holders::check_stl(opt->stl);
-        std::printf("wrote %s in %.1f s: volume %.1f mm^3 (closed form %.1f)\n", opt->stl.c_str(), seconds,
+        std::printf("wrote %s in %.1f s: volume %.1f mm^3 (closed form %.1f)\n", opt->stl.c_str(), build.seconds,
                     mesh.volume_mm3, coupon.volume);
         auto problems = mesh.problems();
         if (std::abs(mesh.volume_mm3 / coupon.volume - 1) > 0.005) problems.push_back("volume off the closed form");
@@ -159,9 +159,12 @@ void add_holder_commands(CLI::App& app, const GlobalOptions& global) {
         for (const auto& part : holder.parts) {
             const fs::path stl = part_stl(opt->stl, part.name);
             if (!global.quiet) std::fprintf(stderr, "building %s with openscad...\n", stl.string().c_str());
-            const double seconds = holders::build_stl(opt->out, part.name, stl, opt->time_limit);
-            builds.push_back({{"part", part.name}, {"stl", stl.string()}, {"seconds", seconds}, {"copies", part.copies}});
-            if (!opt->json) std::printf("built %s in %.1f s\n", stl.string().c_str(), seconds);
+            const holders::StlBuild build = holders::build_stl(opt->out, part.name, stl, opt->time_limit);
+            builds.push_back({{"part", part.name}, {"stl", stl.string()}, {"seconds", build.seconds},
+                              {"slivers_removed", build.slivers}, {"copies", part.copies}});
+            if (!opt->json)
+                std::printf("built %s in %.1f s (%zu sliver triangles of the tessellation removed)\n",
+                            stl.string().c_str(), build.seconds, build.slivers);
             stls.emplace_back(part, stl);
         }
         const holders::HolderCheck check = holders::check_holder(holder, design, stls);

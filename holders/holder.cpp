@@ -266,7 +266,8 @@ std::string section_body(const Section& s) {
     }
     case Section::Kind::Circle: {
         const std::string n = std::to_string(s.facets);
-        const std::string shape = "circle(d = " + s.width.text + " / cos(180 / " + n + "), $fn = " + n + ")";
+        const Expr circumscribed = s.width / cos_deg(Expr("180 / " + n, 180.0 / s.facets, Expr::Product));
+        const std::string shape = "circle(d = " + circumscribed.text + ", $fn = " + n + ")";
         const bool frustum = s.width1.text != s.width.text;
         return extrude(s, shape, frustum ? ", scale = " + (s.width1 / s.width).text : "");
     }

@@ -11,6 +11,7 @@
 #include <CGAL/Polygon_mesh_processing/measure.h>
 #include <CGAL/Polygon_mesh_processing/orientation.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Polygon_mesh_processing/repair_degeneracies.h>
 #include <CGAL/Polygon_mesh_processing/repair_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/IO/STL.h>
@@ -41,14 +42,49 @@ std::vector<std::string> MeshCheck::problems() const {
     return out;
 }
 
-MeshCheck check_stl(const std::filesystem::path& stl) {
-    std::vector<Point> points;
-    std::vector<std::array<std::size_t, 3>> triangles;
+namespace {
+
+// Triangles as vectors, not arrays: then repair_polygon_soup also drops triangles whose
+// corners coincide once the STL's repeated vertices are merged.
+using Soup = std::vector<std::vector<std::size_t>>;
+
+void read_soup(const std::filesystem::path& stl, std::vector<Point>& points, Soup& triangles) {
     std::ifstream in(stl, std::ios::binary);
     if (!in || !CGAL::IO::read_STL(in, points, triangles, CGAL::parameters::verbose(false)) || triangles.empty())
         throw IoError(stl.string() + ": cannot read a triangle mesh (STL) from it");
-    // STL repeats each vertex per triangle: merge them, then build a surface mesh.
+    // STL repeats each vertex per triangle: merge them.
     PMP::repair_polygon_soup(points, triangles);
+}
+
+}  // namespace
+
+std::size_t remove_slivers(const std::filesystem::path& stl, double sliver_mm) {
+    std::vector<Point> points;
+    Soup triangles;
+    read_soup(stl, points, triangles);
+    if (!PMP::is_polygon_soup_a_polygon_mesh(triangles)) PMP::orient_polygon_soup(points, triangles);
+    Mesh mesh;
+    PMP::polygon_soup_to_polygon_mesh(points, triangles, mesh);
+    const std::size_t before = mesh.number_of_faces();
+    PMP::remove_degenerate_faces(mesh);
+    // A needle: longest edge over 100 times its shortest. Caps (one angle near 180 degrees)
+    // are left alone: they are mended by flipping an edge, which moves the surface where the
+    // two triangles do not lie in one plane (it took 0.5 % off the coupon's volume).
+    const double no_caps = -1.0;  // the cosine no angle falls below
+    PMP::experimental::remove_almost_degenerate_faces(mesh, no_caps, 100.0, sliver_mm);
+    mesh.collect_garbage();
+    const std::size_t removed = before - mesh.number_of_faces();
+    std::ofstream out(stl, std::ios::binary | std::ios::trunc);
+    CGAL::IO::set_binary_mode(out);
+    if (!out || !CGAL::IO::write_STL(out, mesh) || !out.flush())
+        throw IoError(stl.string() + ": cannot write the STL");
+    return removed;
+}
+
+MeshCheck check_stl(const std::filesystem::path& stl) {
+    std::vector<Point> points;
+    Soup triangles;
+    read_soup(stl, points, triangles);
     MeshCheck check;
     // Faces that disagree on orientation, or edges shared by more than two faces, make no
     // surface mesh as they stand: orient the soup (duplicating non-manifold vertices) and say so.

@@ -39,6 +39,15 @@ struct MeshCheck {
 /// no triangles.
 MeshCheck check_stl(const std::filesystem::path& stl);
 
+/// Removes the slivers of OpenSCAD's tessellation from an STL and rewrites it as binary STL
+/// (float coordinates). OpenSCAD triangulates each flat face of its exact result and writes
+/// six significant digits: on a part over 100 mm wide, the long thin triangles fanned over
+/// a face with holes can fold over their neighbours by a micrometre, and triangles on a
+/// straight edge have no area. Zero-area triangles go, and needles whose shortest edge is
+/// below `sliver_mm` are collapsed (moving a vertex by less than that). Returns how many
+/// triangles were removed. IoError when the file cannot be read or written.
+std::size_t remove_slivers(const std::filesystem::path& stl, double sliver_mm = 0.01);
+
 }  // namespace rfd::holders
 
 namespace rfd::holders {

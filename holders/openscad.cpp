@@ -5,6 +5,7 @@
 #include "core/command.hpp"
 #include "core/error.hpp"
 #include "core/files.hpp"
+#include "holders/mesh_check.hpp"
 
 namespace rfd::holders {
 
@@ -17,8 +18,8 @@ std::optional<std::filesystem::path> find_openscad() {
     return find_program(configured, {"/usr/bin/openscad", "/usr/local/bin/openscad"});
 }
 
-double build_stl(const std::filesystem::path& scad, const std::string& part, const std::filesystem::path& stl,
-                 double time_limit_s) {
+StlBuild build_stl(const std::filesystem::path& scad, const std::string& part, const std::filesystem::path& stl,
+                   double time_limit_s) {
     namespace fs = std::filesystem;
     const auto openscad = find_openscad();
     if (!openscad)
@@ -44,9 +45,10 @@ double build_stl(const std::filesystem::path& scad, const std::string& part, con
         !fs::exists(temporary) || fs::file_size(temporary) == 0)
         throw ToolError(SourceLocation{stl.string()}, "openscad failed on part \"" + part + "\" of " + scad.string() +
                                                           " (exit " + std::to_string(code) + "):\n" + output);
+    const std::size_t slivers = remove_slivers(temporary);
     move_into_place(temporary, stl);
     guard.release();
-    return seconds;
+    return {seconds, slivers};
 }
 
 }  // namespace rfd::holders
