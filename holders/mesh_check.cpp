@@ -127,10 +127,8 @@ struct MeshProbe::Tree {
 
 MeshProbe::MeshProbe(const std::filesystem::path& stl) : tree_(std::make_unique<Tree>()) {
     std::vector<Point> points;
-    std::vector<std::array<std::size_t, 3>> faces;
-    std::ifstream in(stl, std::ios::binary);
-    if (!in || !CGAL::IO::read_STL(in, points, faces, CGAL::parameters::verbose(false)) || faces.empty())
-        throw IoError(stl.string() + ": cannot read a triangle mesh (STL) from it");
+    Soup faces;
+    read_soup(stl, points, faces);
     for (const auto& f : faces) {
         Triangle t(points[f[0]], points[f[1]], points[f[2]]);
         if (!t.is_degenerate()) tree_->triangles.push_back(t);
