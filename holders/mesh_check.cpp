@@ -62,7 +62,9 @@ std::size_t remove_slivers(const std::filesystem::path& stl, double sliver_mm) {
     std::vector<Point> points;
     Soup triangles;
     read_soup(stl, points, triangles);
-    if (!PMP::is_polygon_soup_a_polygon_mesh(triangles)) PMP::orient_polygon_soup(points, triangles);
+    // A mesh that is not one surface as it stands is left as it is, for check_stl to report:
+    // mending it here would hide it.
+    if (!PMP::is_polygon_soup_a_polygon_mesh(triangles)) return 0;
     Mesh mesh;
     PMP::polygon_soup_to_polygon_mesh(points, triangles, mesh);
     const std::size_t before = mesh.number_of_faces();

@@ -45,7 +45,8 @@ MeshCheck check_stl(const std::filesystem::path& stl);
 /// a face with holes can fold over their neighbours by a micrometre, and triangles on a
 /// straight edge have no area. Zero-area triangles go, and needles whose shortest edge is
 /// below `sliver_mm` are collapsed (moving a vertex by less than that). Returns how many
-/// triangles were removed. IoError when the file cannot be read or written.
+/// triangles were removed. A mesh that is not one consistently oriented surface is left
+/// untouched (0), for check_stl to report. IoError when the file cannot be read or written.
 std::size_t remove_slivers(const std::filesystem::path& stl, double sliver_mm = 0.01);
 
 }  // namespace rfd::holders

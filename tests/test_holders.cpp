@@ -4,6 +4,7 @@
 // seats at their planes, no ray of the field of view touching the holder); checks that
 // fail when the holder is wrong; broken designs rejected before OpenSCAD runs.
 
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <numbers>
@@ -318,6 +319,25 @@ TEST(HolderOpenScad, RemovesTheSliversOfWidePartsKeepingTheirShape) {
     const double hole = 10.0 / 6 * (area(0) + 4 * area(5) + area(10));
     // To the STL's rounding (six digits, 0.001 mm here); moving faces would show far more.
     EXPECT_NEAR(mesh.volume_mm3 / (240 * 30 * 10 - holes * hole / 2), 1.0, 1e-5);
+}
+
+// The clean-up must not mend what the checks are there to report.
+TEST(HolderMesh, SliverRemovalLeavesABrokenMeshForTheChecks) {
+    const testing::TempDir dir;
+    // A tetrahedron with one face turned inside out.
+    const std::array<std::array<const char*, 3>, 4> faces{{{"0 0 0", "0 1 0", "1 0 0"},
+                                                           {"0 0 0", "1 0 0", "0 0 1"},
+                                                           {"0 0 0", "0 0 1", "0 1 0"},
+                                                           {"1 0 0", "0 0 1", "0 1 0"}}};
+    std::string text = "solid t\n";
+    for (const auto& f : faces)
+        text += std::string("facet normal 0 0 0\nouter loop\nvertex ") + f[0] + "\nvertex " + f[1] + "\nvertex " +
+                f[2] + "\nendloop\nendfacet\n";
+    text += "endsolid t\n";
+    std::ofstream(dir / "t.stl") << text;
+    EXPECT_EQ(remove_slivers(dir / "t.stl"), 0u);
+    EXPECT_EQ(read_text((dir / "t.stl").string()), text);
+    EXPECT_FALSE(check_stl(dir / "t.stl").manifold);
 }
 
 }  // namespace
