@@ -45,6 +45,20 @@ Rgb glossy_brdf(const Eigen::Vector3d& n, const Eigen::Vector3d& v, const Eigen:
     return diffuse_term + fresnel * (distribution * masking / (4.0 * nl * nv));
 }
 
+Rgb phong_fresnel_brdf(const Eigen::Vector3d& n, const Eigen::Vector3d& v, const Eigen::Vector3d& l,
+                       const Rgb& albedo, double exponent, double ior) {
+    const double nl = n.dot(l);
+    if (nl <= 0.0 || n.dot(v) <= 0.0) return Rgb::Zero();
+    const Eigen::Vector3d r = 2.0 * nl * n - l;
+    const double rv = r.dot(v);
+    double lobe = 0.0;
+    if (rv > 0.0) {
+        const Eigen::Vector3d h = (v + l).normalized();
+        lobe = fresnel_dielectric(v.dot(h), 1.0, ior) * (exponent + 2.0) / (2.0 * kPi) * std::pow(rv, exponent);
+    }
+    return albedo / kPi + lobe;
+}
+
 double fresnel_dielectric(double cos_incidence, double n1, double n2) {
     const double ci = std::clamp(cos_incidence, 0.0, 1.0);
     const double eta = n1 / n2;

@@ -15,6 +15,14 @@
 //     and the microfacet lobe never adds energy (masking only removes it), so the
 //     directional albedo stays below 1 for Rd, Rs <= 1 (tests/test_stage.cpp integrates it).
 //
+// phong: the thesis's synthetic snooker ball (7.5): a Lambertian term plus the normalised
+//     modified Phong lobe weighted by the Fresnel reflectance of a dielectric of index ior,
+//     f = albedo / pi + F(v.h) (e + 2) / (2 pi) max(0, r.v)^e,   r = l mirrored about n.
+//     Both terms are reciprocal (r.v is symmetric in v and l, and so is v.h); at ior 1.5 the
+//     lobe reflects 4 % facing the camera and everything at grazing angles, as a black
+//     snooker ball does. A low exponent e spreads the lobe, a high one sharpens it toward a
+//     mirror.
+//
 // Example: Rgb f = glossy_brdf(n, v, l, {0.5, 0.1, 0.1}, {0.04, 0.04, 0.04}, 0.2);
 
 #include <Eigen/Core>
@@ -29,6 +37,10 @@ Rgb lambert_brdf(const Eigen::Vector3d& n, const Eigen::Vector3d& l, const Rgb& 
 /// The glossy model above; `alpha` is the GGX roughness (0 < alpha <= 1, the slope spread).
 Rgb glossy_brdf(const Eigen::Vector3d& n, const Eigen::Vector3d& v, const Eigen::Vector3d& l,
                 const Rgb& diffuse, const Rgb& specular, double alpha);
+
+/// The Phong plus Fresnel model above: `exponent` e > 0, `ior` the dielectric's index (> 1).
+Rgb phong_fresnel_brdf(const Eigen::Vector3d& n, const Eigen::Vector3d& v, const Eigen::Vector3d& l,
+                       const Rgb& albedo, double exponent, double ior);
 
 /// Fresnel reflectance of unpolarised light at a dielectric interface, from the medium of
 /// index n1 into n2, for the cosine of the incidence angle (> 0). 1 under total internal

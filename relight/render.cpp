@@ -57,17 +57,8 @@ std::size_t add_disk(Eigen::MatrixX3d& k, const SphericalInterpolator& interp, c
     const double step = 0.25 * mean_spacing(interp.size());
     const auto count = static_cast<std::size_t>(
         std::clamp(std::ceil(solid_angle / (step * step)), 16.0, 4096.0));
-    const auto [u, v] = frame_around(d);
-    const double golden_angle = kPi * (3.0 - std::sqrt(5.0));
     const Eigen::Vector3d share = light.irradiance / static_cast<double>(count);
-    for (std::size_t s = 0; s < count; ++s) {
-        // Equal solid angle per point: cos(alpha) uniform over [cos r, 1].
-        const double cos_alpha = 1.0 - (static_cast<double>(s) + 0.5) / static_cast<double>(count) *
-                                           (1.0 - std::cos(light.radius));
-        const double sin_alpha = std::sqrt(std::max(0.0, 1.0 - cos_alpha * cos_alpha));
-        const double beta = golden_angle * static_cast<double>(s);
-        const Eigen::Vector3d p =
-            cos_alpha * d + sin_alpha * (std::cos(beta) * u + std::sin(beta) * v);
+    for (const Eigen::Vector3d& p : cap_points(d, light.radius, count)) {
         if (p.z() < 0.0) continue;
         add_weights(k, interp.weights(p, method), share);
     }
@@ -120,6 +111,22 @@ std::size_t add_environment(Eigen::MatrixX3d& k, const SphericalInterpolator& in
 
 }  // namespace
 
+std::vector<Eigen::Vector3d> cap_points(const Eigen::Vector3d& centre, double radius, std::size_t count) {
+    const auto [u, v] = frame_around(centre);
+    const double golden_angle = kPi * (3.0 - std::sqrt(5.0));
+    std::vector<Eigen::Vector3d> points;
+    points.reserve(count);
+    for (std::size_t s = 0; s < count; ++s) {
+        // Equal solid angle per point: cos(alpha) uniform over [cos r, 1].
+        const double cos_alpha = 1.0 - (static_cast<double>(s) + 0.5) / static_cast<double>(count) *
+                                           (1.0 - std::cos(radius));
+        const double sin_alpha = std::sqrt(std::max(0.0, 1.0 - cos_alpha * cos_alpha));
+        const double beta = golden_angle * static_cast<double>(s);
+        points.push_back(cos_alpha * centre + sin_alpha * (std::cos(beta) * u + std::sin(beta) * v));
+    }
+    return points;
+}
+
 void check_environment_map(const Image& radiance) {
     if (radiance.empty() || (radiance.channels() != 1 && radiance.channels() != 3))
         throw InputError("environment map: expected a latitude-longitude image with 1 or 3 channels, got " +
@@ -153,14 +160,21 @@ LightCoefficients light_coefficients(const SphericalInterpolator& interpolator, 
 
 Image relight(const ReflectanceField& field, const LightCoefficients& coefficients) {
     RFD_CHECK(static_cast<std::size_t>(coefficients.k.rows()) == field.size());
-    RFD_CHECK(!field.images.empty());
-    const int field_channels = field.channels();
+    return relight(field.images, coefficients);
+}
+
+Image relight(const std::vector<Image>& images, const LightCoefficients& coefficients) {
+    RFD_CHECK(static_cast<std::size_t>(coefficients.k.rows()) == images.size());
+    RFD_CHECK(!images.empty());
+    const Image& shape = images.front();
+    for (const Image& image : images) RFD_CHECK(image.same_shape(shape));
+    const int field_channels = shape.channels();
     const bool colour_light = !coefficients.grey;
     if (colour_light && field_channels != 1 && field_channels != 3)
         throw InputError("coloured light needs a field with 1 or 3 channels; this one has " +
                          std::to_string(field_channels));
     const int channels = colour_light ? 3 : field_channels;
-    Image out(field.width(), field.height(), channels);
+    Image out(shape.width(), shape.height(), channels);
 
     // Per output channel, the images with a non-zero coefficient, in image order.
     struct Term {
@@ -171,9 +185,9 @@ Image relight(const ReflectanceField& field, const LightCoefficients& coefficien
     for (int c = 0; c < channels; ++c) {
         const int light_channel = colour_light ? c : (field_channels == 3 ? c : 0);
         const int field_channel = field_channels == 1 ? 0 : c;
-        for (std::size_t i = 0; i < field.size(); ++i) {
+        for (std::size_t i = 0; i < images.size(); ++i) {
             const double k = coefficients.k(static_cast<Eigen::Index>(i), light_channel);
-            if (k != 0.0) terms[static_cast<std::size_t>(c)].push_back({field.images[i].plane(field_channel).data(),
+            if (k != 0.0) terms[static_cast<std::size_t>(c)].push_back({images[i].plane(field_channel).data(),
                                                                         static_cast<float>(k)});
         }
     }

@@ -44,6 +44,10 @@ struct DiskLight {
     Eigen::Vector3d irradiance = Eigen::Vector3d::Ones();  ///< per channel
 };
 
+/// `count` directions covering the cap of angular radius `radius` around unit `centre`, one
+/// per equal share of its solid angle (a golden-angle spiral): the quadrature of DiskLight.
+std::vector<Eigen::Vector3d> cap_points(const Eigen::Vector3d& centre, double radius, std::size_t count);
+
 /// A latitude-longitude environment map of radiance (per steradian, linear; 1 or 3
 /// channels). Pixel (u, v) of a W x H map covers theta in [v, v + 1] * pi / H (row 0 at the
 /// zenith, the horizon in the middle) and phi in [-pi + u * 2pi / W, -pi + (u + 1) * 2pi / W]
@@ -76,6 +80,9 @@ LightCoefficients light_coefficients(const SphericalInterpolator& interpolator, 
 /// blocks, each pixel summed in image order (deterministic). `field` must have as many
 /// images as `coefficients` rows.
 Image relight(const ReflectanceField& field, const LightCoefficients& coefficients);
+
+/// The same for bare images (all of one shape), as implicit relighting combines them.
+Image relight(const std::vector<Image>& images, const LightCoefficients& coefficients);
 
 /// light_coefficients() of the field's own interpolator, then relight().
 Image render(const ReflectanceField& field, const std::vector<Light>& lights,

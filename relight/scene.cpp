@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 
 #include <Eigen/Geometry>
@@ -95,7 +96,7 @@ Albedo read_albedo(ConfigTable& table, const std::filesystem::path& base_dir,
 }
 
 Material read_material(ConfigTable& table, const std::filesystem::path& base_dir) {
-    const std::string type = table.choice("type", {"diffuse", "glossy", "mirror", "glass"});
+    const std::string type = table.choice("type", {"diffuse", "glossy", "phong", "mirror", "glass"});
     if (type == "diffuse") return DiffuseMaterial{read_albedo(table, base_dir, Rgb::Constant(0.8))};
     if (type == "glossy") {
         GlossyMaterial glossy;
@@ -103,6 +104,13 @@ Material read_material(ConfigTable& table, const std::filesystem::path& base_dir
         glossy.specular = optional_colour(table, "specular", glossy.specular);
         glossy.roughness = table.number("roughness", 1e-3, 1.0);
         return glossy;
+    }
+    if (type == "phong") {
+        PhongMaterial phong;
+        phong.albedo = read_albedo(table, base_dir, Rgb::Constant(0.02));
+        phong.exponent = table.number("exponent", 1e-3, 1e6);
+        if (table.has("ior")) phong.ior = table.number("ior", 1.0 + 1e-6, 4.0);
+        return phong;
     }
     if (type == "mirror") return MirrorMaterial{optional_colour(table, "reflectance", Rgb::Constant(0.9))};
     GlassMaterial glass;
@@ -210,9 +218,7 @@ SceneObject read_object(ConfigTable& table, const std::map<std::string, std::siz
 
     const bool has_uv = std::holds_alternative<MeshShape>(object.shape) &&
                         !std::get<MeshShape>(object.shape).uvs.empty();
-    const Albedo* albedo = nullptr;
-    if (const auto* d = std::get_if<DiffuseMaterial>(&m)) albedo = &d->albedo;
-    if (const auto* g = std::get_if<GlossyMaterial>(&m)) albedo = &g->albedo;
+    const Albedo* albedo = albedo_of(m);
     if (albedo && std::holds_alternative<ImageTexture>(*albedo) && !has_uv)
         table.fail("material", "material '" + material +
                                    "' has an image texture, which only cards and planes can carry");
@@ -240,6 +246,38 @@ Eigen::Vector3d Camera::ray_direction(double px, double py) const {
     return (forward() + sx * right() + sy * image_up()).normalized();
 }
 
+Eigen::Vector2d Camera::project(const Eigen::Vector3d& world) const {
+    const Eigen::Vector3d d = world - position;
+    const double depth = d.dot(forward());
+    if (!(depth > 0.0)) return Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
+    const double half_height = std::tan(0.5 * vertical_fov);
+    const double half_width = half_height * static_cast<double>(width) / static_cast<double>(height);
+    const double sx = d.dot(right()) / depth, sy = d.dot(image_up()) / depth;
+    return {0.5 * width * (1.0 + sx / half_width), 0.5 * height * (1.0 - sy / half_height)};
+}
+
+Eigen::Vector4d Camera::sphere_box(const Eigen::Vector3d& centre, double radius) const {
+    // The silhouette is the circle of tangent points: seen from the camera at distance d, it
+    // lies (d^2 - r^2) / d from the camera along the axis, with radius r sqrt(d^2 - r^2) / d.
+    const Eigen::Vector3d axis = centre - position;
+    const double d = axis.norm();
+    if (!(d > radius)) return Eigen::Vector4d::Constant(std::numeric_limits<double>::quiet_NaN());
+    const Eigen::Vector3d a = axis / d;
+    const Eigen::Vector3d circle_centre = position + a * ((d * d - radius * radius) / d);
+    const double circle_radius = radius * std::sqrt(d * d - radius * radius) / d;
+    const Eigen::Vector3d helper = std::abs(a.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    const Eigen::Vector3d u = a.cross(helper).normalized(), v = a.cross(u);
+    Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    constexpr int kSteps = 720;  // the ellipse's extremes to within 1e-5 of its size
+    for (int i = 0; i < kSteps; ++i) {
+        const double t = 2.0 * kPi * i / kSteps;
+        const Eigen::Vector2d p = project(circle_centre + circle_radius * (std::cos(t) * u + std::sin(t) * v));
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+    }
+    return {lo.x(), lo.y(), hi.x() - lo.x(), hi.y() - lo.y()};
+}
+
 Rgb albedo_at(const Albedo& albedo, const Eigen::Vector3d& p, const Eigen::Vector3d& n,
               const Eigen::Vector2d& uv) {
     if (const auto* constant = std::get_if<Rgb>(&albedo)) return *constant;
@@ -262,6 +300,22 @@ Rgb albedo_at(const Albedo& albedo, const Eigen::Vector3d& p, const Eigen::Vecto
                  fy * ((1 - fx) * image.at(x0, y1, channel) + fx * image.at(x1, y1, channel));
     }
     return out;
+}
+
+const Albedo* albedo_of(const Material& material) {
+    if (const auto* d = std::get_if<DiffuseMaterial>(&material)) return &d->albedo;
+    if (const auto* g = std::get_if<GlossyMaterial>(&material)) return &g->albedo;
+    if (const auto* p = std::get_if<PhongMaterial>(&material)) return &p->albedo;
+    return nullptr;
+}
+
+Rgb surface_brdf(const Material& material, const Eigen::Vector3d& n, const Eigen::Vector3d& v,
+                 const Eigen::Vector3d& l, const Rgb& albedo) {
+    if (const auto* g = std::get_if<GlossyMaterial>(&material))
+        return glossy_brdf(n, v, l, albedo, g->specular, g->roughness);
+    if (const auto* p = std::get_if<PhongMaterial>(&material))
+        return phong_fresnel_brdf(n, v, l, albedo, p->exponent, p->ior);
+    return lambert_brdf(n, l, albedo);
 }
 
 int default_shadow_samples(const LightKernel& kernel) {

@@ -47,6 +47,12 @@ struct Camera {
     Eigen::Matrix3d field_frame() const;
     /// Unit world direction of the ray from `position` through image point (px, py).
     Eigen::Vector3d ray_direction(double px, double py) const;
+    /// Image point (px, py) of a world point in front of the camera: the inverse of
+    /// ray_direction(). Points behind the camera project to NaN.
+    Eigen::Vector2d project(const Eigen::Vector3d& world) const;
+    /// Bounding box (x, y, width, height in continuous image coordinates) of a sphere's
+    /// image: the projection of its silhouette circle, an ellipse off the optical axis.
+    Eigen::Vector4d sphere_box(const Eigen::Vector3d& centre, double radius) const;
 };
 
 /// A solid checkerboard in world millimetres: cube (i, j, k) of edge `square` has colour
@@ -78,6 +84,12 @@ struct GlossyMaterial {
     Rgb specular = Rgb::Constant(0.04);  ///< Fresnel reflectance at normal incidence
     double roughness = 0.2;              ///< GGX alpha, (0, 1]
 };
+/// The Phong plus Fresnel model of relight/brdf.hpp: the thesis's synthetic snooker ball.
+struct PhongMaterial {
+    Albedo albedo = Rgb::Constant(0.02);
+    double exponent = 50.0;  ///< Phong exponent, > 0
+    double ior = 1.5;        ///< index of refraction of the dielectric, > 1
+};
 /// A perfect mirror, reflectance per channel.
 struct MirrorMaterial {
     Rgb reflectance = Rgb::Constant(0.9);
@@ -88,7 +100,15 @@ struct GlassMaterial {
     double ior = 1.5;                   ///< index of refraction (outside: air, 1)
     Rgb absorption = Rgb::Zero();       ///< absorption coefficient per mm
 };
-using Material = std::variant<DiffuseMaterial, GlossyMaterial, MirrorMaterial, GlassMaterial>;
+using Material = std::variant<DiffuseMaterial, GlossyMaterial, PhongMaterial, MirrorMaterial, GlassMaterial>;
+
+/// The albedo of a diffuse, glossy or Phong material; nullptr for mirror and glass.
+const Albedo* albedo_of(const Material& material);
+
+/// f_r of an opaque, non-mirror material (diffuse, glossy, Phong) with the albedo looked up
+/// at the point: unit vectors n (shading normal), v (toward the viewer), l (toward the light).
+Rgb surface_brdf(const Material& material, const Eigen::Vector3d& n, const Eigen::Vector3d& v,
+                 const Eigen::Vector3d& l, const Rgb& albedo);
 
 struct SphereShape {
     Eigen::Vector3d centre = Eigen::Vector3d::Zero();  ///< mm

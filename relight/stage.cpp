@@ -184,10 +184,7 @@ public:
             point.geometric = geometric.cast<float>();
             point.view = view.cast<float>();
             point.weight = path.weight.cast<float>();
-            const Albedo& albedo = std::holds_alternative<DiffuseMaterial>(material)
-                                       ? std::get<DiffuseMaterial>(material).albedo
-                                       : std::get<GlossyMaterial>(material).albedo;
-            point.albedo = albedo_at(albedo, p, hit->normal, hit->uv).cast<float>();
+            point.albedo = albedo_at(*albedo_of(material), p, hit->normal, hit->uv).cast<float>();
             point.material = static_cast<std::uint32_t>(scene_.objects[hit->object].material);
             point.sample = sample;
             row.points.push_back(point);
@@ -382,10 +379,7 @@ Image LightStage::render(const Eigen::Vector3d& direction, const LightKernel& ke
                         }
                         const double cosine = n.dot(w);
                         if (cosine <= 0.0 || ng.dot(w) <= 0.0) continue;
-                        const Rgb f = std::holds_alternative<DiffuseMaterial>(material)
-                                          ? lambert_brdf(n, w, albedo)
-                                          : glossy_brdf(n, v, w, albedo, std::get<GlossyMaterial>(material).specular,
-                                                        std::get<GlossyMaterial>(material).roughness);
+                        const Rgb f = surface_brdf(material, n, v, w, albedo);
                         if (f.maxCoeff() <= 0.0) continue;
                         reflected += f * cosine * transmittance(origin, w);
                     }
