@@ -62,23 +62,10 @@ std::size_t count_negative(const Eigen::VectorXd& values) {
 // A light as weighted directions: (unit direction toward the light, irradiance per channel).
 using LightSamples = std::vector<std::pair<Eigen::Vector3d, Eigen::Array3d>>;
 
-void check_colour(const Eigen::Vector3d& colour, const char* what) {
-    if (!colour.allFinite() || (colour.array() < 0.0).any())
-        throw InputError(std::string(what) + ": the colour must be finite and non-negative");
-}
-
-Eigen::Vector3d unit_direction(const Eigen::Vector3d& d, const char* what) {
-    const Eigen::Vector3d unit = d.normalized();
-    if (!unit.allFinite() || d.norm() == 0.0)
-        throw InputError(std::string(what) + ": the direction must be a non-zero vector");
-    return unit;
-}
-
 // The environment map, averaged down to at most kMapWidth x kMapWidth / 2 pixels (the probe's
 // Phong lobe is several degrees wide), one sample per pixel weighted by its solid angle.
 void add_environment_samples(const Image& radiance, LightSamples& samples) {
     constexpr int kMapWidth = 64;
-    check_environment_map(radiance);
     const int width = radiance.width(), height = radiance.height();
     const int out_width = std::min(width, kMapWidth), out_height = std::max(1, std::min(height, kMapWidth / 2));
     for (int v = 0; v < out_height; ++v) {
@@ -105,20 +92,15 @@ LightSamples light_samples(const std::vector<Light>& lights) {
     constexpr std::size_t kDiskPoints = 1024;
     LightSamples samples;
     for (const Light& light : lights) {
+        check_light(light);
         std::visit(
             [&](const auto& l) {
                 using T = std::decay_t<decltype(l)>;
                 if constexpr (std::is_same_v<T, DirectionalLight>) {
-                    check_colour(l.irradiance, "directional light");
-                    samples.emplace_back(unit_direction(l.direction, "directional light"), l.irradiance.array());
+                    samples.emplace_back(l.direction.normalized(), l.irradiance.array());
                 } else if constexpr (std::is_same_v<T, DiskLight>) {
-                    check_colour(l.irradiance, "disk light");
-                    if (!(l.radius > 0.0 && l.radius <= 0.5 * kPi))
-                        throw InputError("disk light: the angular radius must be within (0, 90] degrees, got " +
-                                         std::to_string(radians_to_degrees(l.radius)));
                     const Eigen::Array3d share = l.irradiance.array() / static_cast<double>(kDiskPoints);
-                    for (const Eigen::Vector3d& p : cap_points(unit_direction(l.direction, "disk light"), l.radius,
-                                                               kDiskPoints))
+                    for (const Eigen::Vector3d& p : cap_points(l.direction.normalized(), l.radius, kDiskPoints))
                         samples.emplace_back(p, share);
                 } else {
                     add_environment_samples(l.radiance, samples);
@@ -296,14 +278,9 @@ ImplicitModel train_implicit(const std::vector<Image>& probes) {
 }
 
 LightCoefficients ImplicitFit::coefficients() const {
-    LightCoefficients out;
-    out.k.resize(l.rows(), 3);
-    for (int c = 0; c < 3; ++c) out.k.col(c) = l.col(l.cols() == 1 ? 0 : c);
-    for (Eigen::Index i = 0; i < out.k.rows(); ++i) {
-        if ((out.k.row(i).array() != 0.0).any()) ++out.nonzero;
-        out.grey = out.grey && out.k(i, 0) == out.k(i, 1) && out.k(i, 1) == out.k(i, 2);
-    }
-    return out;
+    Eigen::MatrixX3d k(l.rows(), 3);
+    for (int c = 0; c < 3; ++c) k.col(c) = l.col(l.cols() == 1 ? 0 : c);
+    return coefficients_from(std::move(k));
 }
 
 ImplicitFit implicit_fit(const ImplicitModel& model, const Image& probe, const ImplicitOptions& options) {

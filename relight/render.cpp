@@ -23,6 +23,11 @@ void check_irradiance(const Eigen::Vector3d& irradiance, const char* what) {
         throw InputError(std::string(what) + ": the colour must be finite and non-negative");
 }
 
+void check_direction(const Eigen::Vector3d& direction, const char* what) {
+    if (!direction.allFinite() || direction.norm() == 0.0)
+        throw InputError(std::string(what) + ": the direction must be a non-zero vector");
+}
+
 void add_weights(Eigen::MatrixX3d& k, const InterpolationWeights& w, const Eigen::Vector3d& scale) {
     for (std::size_t j = 0; j < w.count; ++j)
         k.row(static_cast<Eigen::Index>(w.index[j])) += w.weight[j] * scale.transpose();
@@ -37,9 +42,8 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> frame_around(const Eigen::Vector3d& 
 
 std::size_t add_directional(Eigen::MatrixX3d& k, const SphericalInterpolator& interp, const DirectionalLight& light,
                             Interpolation method) {
-    check_irradiance(light.irradiance, "directional light");
+    check_light(light);
     const Eigen::Vector3d d = light.direction.normalized();
-    if (!d.allFinite()) throw InputError("directional light: the direction must be a non-zero vector");
     if (d.z() < 0.0) return 0;  // below the horizon: dropped
     add_weights(k, interp.weights(d, method), light.irradiance);
     return 1;
@@ -47,12 +51,8 @@ std::size_t add_directional(Eigen::MatrixX3d& k, const SphericalInterpolator& in
 
 std::size_t add_disk(Eigen::MatrixX3d& k, const SphericalInterpolator& interp, const DiskLight& light,
                      Interpolation method) {
-    check_irradiance(light.irradiance, "disk light");
-    if (!(light.radius > 0.0 && light.radius <= 0.5 * kPi))
-        throw InputError("disk light: the angular radius must be within (0, 90] degrees, got " +
-                         std::to_string(radians_to_degrees(light.radius)));
+    check_light(light);
     const Eigen::Vector3d d = light.direction.normalized();
-    if (!d.allFinite()) throw InputError("disk light: the direction must be a non-zero vector");
     const double solid_angle = 2.0 * kPi * (1.0 - std::cos(light.radius));
     const double step = 0.25 * mean_spacing(interp.size());
     const auto count = static_cast<std::size_t>(
@@ -127,6 +127,26 @@ std::vector<Eigen::Vector3d> cap_points(const Eigen::Vector3d& centre, double ra
     return points;
 }
 
+void check_light(const Light& light) {
+    std::visit(
+        [](const auto& l) {
+            using T = std::decay_t<decltype(l)>;
+            if constexpr (std::is_same_v<T, DirectionalLight>) {
+                check_irradiance(l.irradiance, "directional light");
+                check_direction(l.direction, "directional light");
+            } else if constexpr (std::is_same_v<T, DiskLight>) {
+                check_irradiance(l.irradiance, "disk light");
+                if (!(l.radius > 0.0 && l.radius <= 0.5 * kPi))
+                    throw InputError("disk light: the angular radius must be within (0, 90] degrees, got " +
+                                     std::to_string(radians_to_degrees(l.radius)));
+                check_direction(l.direction, "disk light");
+            } else {
+                check_environment_map(l.radiance);
+            }
+        },
+        light);
+}
+
 void check_environment_map(const Image& radiance) {
     if (radiance.empty() || (radiance.channels() != 1 && radiance.channels() != 3))
         throw InputError("environment map: expected a latitude-longitude image with 1 or 3 channels, got " +
@@ -151,6 +171,15 @@ LightCoefficients light_coefficients(const SphericalInterpolator& interpolator, 
             },
             light);
     }
+    const std::size_t evaluations = out.weight_evaluations;
+    out = coefficients_from(std::move(out.k));
+    out.weight_evaluations = evaluations;
+    return out;
+}
+
+LightCoefficients coefficients_from(Eigen::MatrixX3d k) {
+    LightCoefficients out;
+    out.k = std::move(k);
     for (Eigen::Index i = 0; i < out.k.rows(); ++i) {
         if ((out.k.row(i).array() != 0.0).any()) ++out.nonzero;
         out.grey = out.grey && out.k(i, 0) == out.k(i, 1) && out.k(i, 1) == out.k(i, 2);

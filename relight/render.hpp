@@ -63,6 +63,11 @@ void check_environment_map(const Image& radiance);
 
 using Light = std::variant<DirectionalLight, DiskLight, EnvironmentMap>;
 
+/// Throws InputError for a light nothing can be lit with: a colour that is negative or not
+/// finite, a zero or non-finite direction, a disk radius outside (0, 90] degrees, an
+/// environment map check_environment_map() rejects.
+void check_light(const Light& light);
+
 /// k_i per direction and channel (n x 3), and what was computed.
 struct LightCoefficients {
     Eigen::MatrixX3d k;                ///< row i: coefficient of image i for R, G, B
@@ -70,6 +75,9 @@ struct LightCoefficients {
     std::size_t weight_evaluations = 0;  ///< directions at which the weights were computed
     bool grey = true;                  ///< all three channels equal for every image
 };
+
+/// Coefficients `k` with their counts filled in (nonzero, grey; no weight evaluations).
+LightCoefficients coefficients_from(Eigen::MatrixX3d k);
 
 /// Sum of the lights' k_i. Throws InputError for an environment map without 1 or 3
 /// channels or with a negative sample, a disk radius outside (0, pi/2], non-finite values.

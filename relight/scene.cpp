@@ -265,8 +265,8 @@ Eigen::Vector4d Camera::sphere_box(const Eigen::Vector3d& centre, double radius)
     const Eigen::Vector3d a = axis / d;
     const Eigen::Vector3d circle_centre = position + a * ((d * d - radius * radius) / d);
     const double circle_radius = radius * std::sqrt(d * d - radius * radius) / d;
-    const Eigen::Vector3d helper = std::abs(a.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
-    const Eigen::Vector3d u = a.cross(helper).normalized(), v = a.cross(u);
+    Eigen::Vector3d u, v;
+    orthonormal_basis(a, u, v);
     Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
     constexpr int kSteps = 720;  // the ellipse's extremes to within 1e-5 of its size
     for (int i = 0; i < kSteps; ++i) {
