@@ -114,7 +114,8 @@ ImplicitFit implicit_fit(const ImplicitModel& model, const Image& probe, const I
 /// `material` (diffuse, glossy or Phong, constant albedo). Directions in the field frame of
 /// core/sphere.hpp (z toward the camera); unlike a field, the probe sees light from the
 /// whole sphere. Disks are integrated with 1024 equal-solid-angle points, environment maps
-/// per pixel. 3 channels, 0 outside the disc. Throws InputError for a mirror or glass
+/// averaged to at most 64 x 32 blocks, one direction each (within 2.5 % for a Lambertian
+/// probe in a uniform map: the terminator cuts through blocks). 3 channels, 0 outside the disc. Throws InputError for a mirror or glass
 /// material or a textured albedo.
 Image render_probe(const std::vector<Light>& lights, const Material& material, int size = kProbeSize);
 

@@ -318,6 +318,24 @@ TEST(ImplicitProbe, CameraProjectionInvertsRayDirectionAndBoxesASphere) {
     EXPECT_NEAR(box[0] + 0.5 * box[2], 160.0, 1e-6);
 }
 
+// Under a uniform environment of radiance L a Lambertian sphere reads albedo * L at every
+// normal (the cosine-weighted hemisphere integrates to pi); a small disk acts as the
+// directional light at its centre.
+TEST(ImplicitProbe, SyntheticProbeUnderAnEnvironmentAndADiskMatchesClosedForms) {
+    const DiffuseMaterial chalk{Rgb::Constant(0.8)};
+    const Image uniform = render_probe({EnvironmentMap{Image(96, 48, 3, 0.5f)}}, chalk, 16);
+    for (const int i : probe_mask(16)) EXPECT_NEAR(uniform.plane(1)[std::size_t(i)], 0.4, 0.01) << i;  // 64 x 32 blocks: 2.5 %
+    const Eigen::Vector3d d = direction_from_angles(0.5, 1.2);
+    const Image disk = render_probe({DiskLight{d, degrees_to_radians(2.0), Eigen::Vector3d::Ones()}}, chalk, 16);
+    const Image point = render_probe({DirectionalLight{d, Eigen::Vector3d::Ones()}}, chalk, 16);
+    for (const int i : probe_mask(16))
+        EXPECT_NEAR(disk.plane(0)[std::size_t(i)], point.plane(0)[std::size_t(i)], 0.003) << i;
+    EXPECT_THROW(render_probe({DiskLight{d, 0.0, Eigen::Vector3d::Ones()}}, chalk, 16), InputError);
+    EXPECT_THROW(render_probe({DirectionalLight{Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()}}, chalk, 16),
+                 InputError);
+    EXPECT_THROW(render_probe({DirectionalLight{d, Eigen::Vector3d::Ones()}}, MirrorMaterial{}, 16), InputError);
+}
+
 // The synthetic probe (orthographic, analytic) against the virtual light stage's ray-traced
 // Phong sphere seen from far away (nearly orthographic), cropped by its projected box.
 TEST(ImplicitProbe, SyntheticProbeMatchesTheLightStage) {
