@@ -24,6 +24,7 @@ namespace {
 
 constexpr const char* kModelFile = "implicit.json";
 constexpr const char* kModelFormat = "rfd implicit relighting model";
+constexpr const char* kProbeFormat = "rfd implicit relighting probe";
 constexpr int kModelVersion = 1;
 
 void check_finite(const Image& image, const std::string& what) {
@@ -46,8 +47,27 @@ Eigen::VectorXd map_coefficients(const ImplicitModel::Channel& pca, const Eigen:
     const double nd = static_cast<double>(n);
     Eigen::VectorXd t = pca.u.transpose() * (s - pca.mean);
     for (Eigen::Index i = 0; i < t.size(); ++i) t[i] *= pca.w[i] / (pca.w[i] * pca.w[i] + nd * eta);
+    // A 1 = 0 makes V's columns orthogonal to 1, so l~ sums to 0 and l to 1.
     const Eigen::VectorXd l_tilde = pca.v * t;
     return l_tilde.array() + (1.0 - l_tilde.sum()) / nd;
+}
+
+// The change of light that adds `lift` (>= 0) to the fitted probe, for the second pass.
+// Fitting the lift with eq. 7.12 itself would add a whole mean light (its coefficients sum to
+// 1, and the mean lies outside the centred span U): the scene would come out twice as
+// bright. Instead the lift is explained by the training probes themselves, S dl = A dl_c +
+// alpha mean, with dl = dl_c + alpha / n: a ridge solve on the centred span for the part
+// U can give (prior centred on no change), and the amount alpha of the mean light for the
+// part it cannot, by least squares on what U leaves over.
+Eigen::VectorXd map_lift(const ImplicitModel::Channel& pca, const Eigen::VectorXd& lift, double eta,
+                         std::size_t n) {
+    const double nd = static_cast<double>(n);
+    const Eigen::VectorXd mean_outside = pca.mean - pca.u * (pca.u.transpose() * pca.mean);
+    const double outside = mean_outside.squaredNorm();
+    const double alpha = outside > 0.0 ? std::max(0.0, mean_outside.dot(lift) / outside) : 0.0;
+    Eigen::VectorXd t = pca.u.transpose() * (lift - alpha * pca.mean);
+    for (Eigen::Index i = 0; i < t.size(); ++i) t[i] *= pca.w[i] / (pca.w[i] * pca.w[i] + nd * eta);
+    return (pca.v * t).array() + alpha / nd;
 }
 
 // sum_i l_i S_i = A l + mean sum_i l_i, with A = U W V^T.
@@ -131,6 +151,46 @@ T field_of(const nlohmann::json& j, const char* key, const std::filesystem::path
     } catch (const nlohmann::json::exception&) {
         throw InputError(SourceLocation{file.string(), 0, 0, key}, "has the wrong type");
     }
+}
+
+// The probe's box and material, as implicit.json and probe.json both store them.
+void put_probe(nlohmann::json& j, const ProbeDescription& probe) {
+    j["probe_box"] = {probe.box.x, probe.box.y, probe.box.width, probe.box.height};
+    if (probe.material) {
+        const PhongMaterial& m = *probe.material;
+        const Rgb* albedo = std::get_if<Rgb>(&m.albedo);
+        if (!albedo) throw InputError("the probe's material must have a constant albedo, not a texture");
+        j["probe_material"] = {{"type", "phong"},
+                               {"albedo", {(*albedo)[0], (*albedo)[1], (*albedo)[2]}},
+                               {"exponent", m.exponent},
+                               {"ior", m.ior}};
+    }
+}
+
+ProbeDescription get_probe(const nlohmann::json& j, const std::filesystem::path& file) {
+    const auto where = [&](const char* key) { return SourceLocation{file.string(), 0, 0, key}; };
+    ProbeDescription probe;
+    const auto box = field_of<std::vector<double>>(j, "probe_box", file);
+    if (box.size() != 4 || !(box[2] > 0.0 && box[3] > 0.0) ||
+        std::any_of(box.begin(), box.end(), [](double x) { return !std::isfinite(x); }))
+        throw InputError(where("probe_box"), "expected [x, y, width, height] with positive width and height");
+    probe.box = {box[0], box[1], box[2], box[3]};
+    if (j.contains("probe_material")) {
+        const auto& m = j.at("probe_material");
+        if (field_of<std::string>(m, "type", file) != "phong")
+            throw InputError(where("probe_material"), "type: expected \"phong\"");
+        PhongMaterial phong;
+        const auto albedo = field_of<std::vector<double>>(m, "albedo", file);
+        if (albedo.size() != 3 || std::any_of(albedo.begin(), albedo.end(), [](double x) { return !(x >= 0.0 && x <= 1.0); }))
+            throw InputError(where("probe_material"), "albedo: expected 3 values within [0, 1]");
+        phong.albedo = Rgb(albedo[0], albedo[1], albedo[2]);
+        phong.exponent = field_of<double>(m, "exponent", file);
+        phong.ior = field_of<double>(m, "ior", file);
+        if (!(phong.exponent > 0.0 && phong.ior > 1.0 && std::isfinite(phong.exponent) && std::isfinite(phong.ior)))
+            throw InputError(where("probe_material"), "expected a positive exponent and an ior above 1");
+        probe.material = phong;
+    }
+    return probe;
 }
 
 // A matrix stored as an image: columns across, rows down, one channel per colour channel.
@@ -306,7 +366,7 @@ ImplicitFit implicit_fit(const ImplicitModel& model, const Image& probe, const I
         fit.negative_first += count_negative(fitted);
         if (options.second_pass && (fitted.array() < 0.0).any()) {
             const Eigen::VectorXd lift = (-fitted).cwiseMax(0.0);
-            l += map_coefficients(pca, lift, options.eta * options.second_pass_eta_scale, model.count);
+            l += map_lift(pca, lift, options.eta * options.second_pass_eta_scale, model.count);
             fitted = fitted_probe(pca, l);
         }
         fit.negative_final += count_negative(fitted);
@@ -393,20 +453,12 @@ void write_implicit_model(const std::filesystem::path& folder, const ImplicitMod
     nlohmann::json j = {{"format", kModelFormat},
                         {"version", kModelVersion},
                         {"probe_size", model.size},
-                        {"probe_box", {files.box.x, files.box.y, files.box.width, files.box.height}},
                         {"channels", model.channels},
                         {"training_images", images},
                         {"rank", rank},
                         {"singular_values", singular},
                         {"noise_variance", model.noise_variance}};
-    if (files.probe_material) {
-        const PhongMaterial& m = *files.probe_material;
-        const Rgb& albedo = std::get<Rgb>(m.albedo);
-        j["probe_material"] = {{"type", "phong"},
-                               {"albedo", {albedo[0], albedo[1], albedo[2]}},
-                               {"exponent", m.exponent},
-                               {"ior", m.ior}};
-    }
+    put_probe(j, {files.box, files.probe_material});
     write_text_file(folder / kModelFile, j.dump(2) + "\n");
 }
 
@@ -424,10 +476,9 @@ ImplicitModelFiles read_implicit_model(const std::filesystem::path& folder) {
     if (model.size < 4 || model.size > 4096) throw InputError(where("probe_size"), "expected 4..4096");
     model.channels = field_of<int>(j, "channels", file);
     if (model.channels != 1 && model.channels != 3) throw InputError(where("channels"), "expected 1 or 3");
-    const auto box = field_of<std::vector<double>>(j, "probe_box", file);
-    if (box.size() != 4 || !(box[2] > 0.0 && box[3] > 0.0))
-        throw InputError(where("probe_box"), "expected [x, y, width, height] with positive width and height");
-    files.box = {box[0], box[1], box[2], box[3]};
+    const ProbeDescription probe = get_probe(j, file);
+    files.box = probe.box;
+    files.probe_material = probe.material;
     for (const auto& name : field_of<std::vector<std::string>>(j, "training_images", file))
         files.images.push_back((folder / name).lexically_normal());
     model.count = files.images.size();
@@ -438,19 +489,6 @@ ImplicitModelFiles read_implicit_model(const std::filesystem::path& folder) {
     if (singular.size() != static_cast<std::size_t>(model.channels))
         throw InputError(where("singular_values"), "expected one list per channel");
     model.noise_variance = field_of<double>(j, "noise_variance", file);
-    if (j.contains("probe_material")) {
-        const auto& m = j.at("probe_material");
-        PhongMaterial phong;
-        const auto albedo = field_of<std::vector<double>>(m, "albedo", file);
-        if (albedo.size() != 3) throw InputError(where("probe_material"), "albedo: expected 3 values");
-        phong.albedo = Rgb(albedo[0], albedo[1], albedo[2]);
-        phong.exponent = field_of<double>(m, "exponent", file);
-        phong.ior = field_of<double>(m, "ior", file);
-        if (!(phong.exponent > 0.0 && phong.ior > 1.0))
-            throw InputError(where("probe_material"), "expected a positive exponent and an ior above 1");
-        files.probe_material = phong;
-    }
-
     model.mask = probe_mask(model.size);
     const auto pixels = static_cast<int>(model.mask.size());
     const Image mean = read_model_image(folder / "probe_mean.exr", model.size, model.size, model.channels);
@@ -470,6 +508,19 @@ ImplicitModelFiles read_implicit_model(const std::filesystem::path& folder) {
         model.pca.push_back(std::move(pca));
     }
     return files;
+}
+
+void write_probe_description(const std::filesystem::path& file, const ProbeDescription& probe) {
+    nlohmann::json j = {{"format", kProbeFormat}};
+    put_probe(j, probe);
+    write_text_file(file, j.dump(2) + "\n");
+}
+
+ProbeDescription read_probe_description(const std::filesystem::path& file) {
+    const nlohmann::json j = read_json(file);
+    if (field_of<std::string>(j, "format", file) != kProbeFormat)
+        throw InputError(SourceLocation{file.string(), 0, 0, "format"}, std::string("expected \"") + kProbeFormat + "\"");
+    return get_probe(j, file);
 }
 
 }  // namespace rfd::relight

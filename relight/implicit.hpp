@@ -22,7 +22,9 @@
 // the pseudo-inverse, which reproduces the probe's noise with extreme coefficients; larger
 // values give a smoother, more conservative light (figure 7.3).
 // Second pass (7.4): where the fitted probe goes negative, the negated negative part is
-// fitted again with a smaller eta and the coefficients added.
+// fitted again with a smaller eta and the coefficients added. It is fitted as a change of
+// light: the centred ridge solve plus as much of the mean light as the centred span cannot
+// give, so the coefficients sum to 1 plus that (small) amount, not to 2.
 //
 // Colour: the PCA and the coefficients are per channel, so a coloured light on the probe
 // colours the scene.
@@ -118,6 +120,18 @@ ImplicitFit implicit_fit(const ImplicitModel& model, const Image& probe, const I
 /// probe in a uniform map: the terminator cuts through blocks). 3 channels, 0 outside the disc. Throws InputError for a mirror or glass
 /// material or a textured albedo.
 Image render_probe(const std::vector<Light>& lights, const Material& material, int size = kProbeSize);
+
+/// Where a set of photographs shows the probe, and the probe's material when it is known
+/// (a virtual light stage set; constant albedo). On disk: probe.json beside the training
+/// images, {"format": "rfd implicit relighting probe", "probe_box": [x, y, width, height],
+/// "probe_material": {"type": "phong", "albedo": [r, g, b], "exponent": e, "ior": n}}.
+struct ProbeDescription {
+    ProbeBox box;
+    std::optional<PhongMaterial> material;
+};
+void write_probe_description(const std::filesystem::path& file, const ProbeDescription& probe);
+/// Throws InputError naming the file and field for anything malformed, IoError when unreadable.
+ProbeDescription read_probe_description(const std::filesystem::path& file);
 
 /// A model on disk: a folder with implicit.json (the probe box and size, the training
 /// images, the singular values, the noise estimate) and the matrices as float EXR images:
