@@ -1,5 +1,6 @@
 #include "core/image.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -25,10 +26,31 @@ double mean_squared_error(const Image& a, const Image& b) {
     return sum / static_cast<double>(sa.size());
 }
 
-double psnr(const Image& a, const Image& b, double peak) {
-    const double mse = mean_squared_error(a, b);
+double psnr_from_mse(double mse, double peak) {
     if (mse == 0.0) return std::numeric_limits<double>::infinity();
     return 10.0 * std::log10(peak * peak / mse);
+}
+
+double psnr(const Image& a, const Image& b, double peak) { return psnr_from_mse(mean_squared_error(a, b), peak); }
+
+Image join_side_by_side(const std::vector<const Image*>& panels, int gap, float gap_value) {
+    RFD_CHECK(!panels.empty() && gap >= 0);
+    int width = gap * static_cast<int>(panels.size() - 1), height = 0;
+    const int channels = panels.front()->channels();
+    for (const Image* panel : panels) {
+        RFD_CHECK(panel->channels() == channels);
+        width += panel->width();
+        height = std::max(height, panel->height());
+    }
+    Image out(width, height, channels, gap_value);
+    int left = 0;
+    for (const Image* panel : panels) {
+        for (int c = 0; c < channels; ++c)
+            for (int y = 0; y < panel->height(); ++y)
+                for (int x = 0; x < panel->width(); ++x) out.at(left + x, y, c) = panel->at(x, y, c);
+        left += panel->width() + gap;
+    }
+    return out;
 }
 
 float srgb_to_linear(float encoded) {

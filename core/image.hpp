@@ -63,6 +63,12 @@ private:
 double mean_squared_error(const Image& a, const Image& b);
 /// Peak signal-to-noise ratio in dB for a given peak value (infinite for identical images).
 double psnr(const Image& a, const Image& b, double peak = 1.0);
+/// The same from a mean squared error: 10 log10(peak^2 / mse), infinite for mse = 0.
+double psnr_from_mse(double mse, double peak);
+
+/// The panels in a row, top-aligned, `gap` pixels of `gap_value` between them (and below
+/// the shorter ones). All panels must have the same channel count.
+Image join_side_by_side(const std::vector<const Image*>& panels, int gap, float gap_value);
 
 /// sRGB transfer functions (IEC 61966-2-1), on values in [0, 1].
 float srgb_to_linear(float encoded);

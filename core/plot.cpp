@@ -116,6 +116,7 @@ void write_line_chart(const LineChart& chart, const std::filesystem::path& stem)
         out << "set ylabel " << quoted(chart.y_label) << "\n";
         if (!chart.y2_label.empty())
             out << "set y2label " << quoted(chart.y2_label) << "\nset y2tics\nset ytics nomirror\n";
+        if (chart.log_x) out << "set logscale x\nset format x '10^{%L}'\n";
         if (chart.log_y) out << "set logscale y\n";
         int arrow = 1;
         for (const auto& [x, label] : chart.vertical_markers) {

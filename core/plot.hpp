@@ -24,6 +24,7 @@ struct LineChart {
     std::string x_label, y_label, y2_label;
     std::vector<PlotSeries> series;
     std::vector<std::pair<double, std::string>> vertical_markers;  ///< x position, label
+    bool log_x = false;  ///< logarithmic x axis (non-positive x values are not drawn)
     bool log_y = false;
     std::string key_position = "top left";  ///< gnuplot's words: "top right", "bottom left"...
 };
