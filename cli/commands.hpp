@@ -21,6 +21,10 @@ void add_adaptive_command(CLI::App& capture, const GlobalOptions& global);
 void add_study_command(CLI::App& capture, const GlobalOptions& global);
 /// The `relight` group: render, eval.
 void add_relight_commands(CLI::App& app, const GlobalOptions& global);
+/// `relight implicit`: train, predict, sweep (thesis chapter 7).
+void add_implicit_commands(CLI::App& relight);
+/// `capture implicit`: training and held-out sets for implicit relighting on the virtual stage.
+void add_capture_implicit_command(CLI::App& capture);
 /// `capture hdr` (exposure brackets) and `capture calibrate` (mirror-sphere light directions).
 void add_capture_tool_commands(CLI::App& capture, const GlobalOptions& global);
 

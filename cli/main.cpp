@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
     rfd::cli::add_capture_commands(*capture, global);
     rfd::cli::add_adaptive_command(*capture, global);
     rfd::cli::add_study_command(*capture, global);
+    rfd::cli::add_capture_implicit_command(*capture);
     rfd::cli::add_relight_commands(app, global);
     rfd::cli::add_capture_tool_commands(*capture, global);
     rfd::cli::add_pattern_commands(app, global);

@@ -206,6 +206,7 @@ void add_relight_commands(CLI::App& app, const GlobalOptions&) {
                             ->require_subcommand(1);
     add_render(*relight);
     add_eval(*relight);
+    add_implicit_commands(*relight);
 }
 
 }  // namespace rfd::cli
