@@ -207,8 +207,9 @@ void add_predict(CLI::App& implicit) {
     auto* envmap = cmd->add_option("--envmap", opt->envmap, "Designed lighting: a latitude-longitude environment map");
     probe_option->excludes(light)->excludes(envmap);
     cmd->add_option("--eta", opt->eta,
-                    "Regularisation eta = sigma_N^2 in squared pixel units (default: the model's noise estimate; 0: "
-                    "pseudo-inverse)");
+                    "Regularisation eta = sigma_N^2 in squared pixel units (default: the model's noise estimate, the "
+                    "training set's; a noisier photograph wants about its own noise variance or more, which "
+                    "`sweep` measures; 0: pseudo-inverse)");
     cmd->add_flag("--no-second-pass", opt->no_second_pass, "Skip the refit of negative probe pixels");
     cmd->add_option("--out", opt->out, "Predicted scene image")->required();
     cmd->add_option("--probe-out", opt->probe_out, "Write the probe and its fit side by side here");
@@ -371,7 +372,7 @@ void add_capture_implicit_command(CLI::App& capture) {
         std::string scene, out, probe, resolution;
         int samples = 0;
         std::size_t lights = 272, held_out = 16;
-        double noise = 1e-4, test_noise = 1e-2;
+        double noise = 1e-4, test_noise = 3e-3;
         std::uint64_t seed = 1;
         bool json = false;
     };
@@ -390,8 +391,8 @@ void add_capture_implicit_command(CLI::App& capture) {
                     "an HDR capture)")
         ->check(CLI::Range(0.0, 1e3));
     cmd->add_option("--test-noise", opt->test_noise,
-                    "Camera noise of the test photographs (default 1e-2, one LDR exposure in which the black ball is "
-                    "dim; the truth has none)")
+                    "Camera noise of the test photographs (default 3e-3, one 8-bit exposure: about 2 levels "
+                    "where the card's white is 0.35; the truth has none)")
         ->check(CLI::Range(0.0, 1e3));
     cmd->add_option("--seed", opt->seed, "Seed of the light pattern and the noise (default 1)");
     cmd->add_option("--resolution", opt->resolution, "Image size WxH (default: the scene's)");
@@ -493,7 +494,7 @@ void add_sweep(CLI::App& implicit) {
                     "scene under the same lights, clean), as `rfd capture implicit` writes test/")
         ->required();
     cmd->add_option("--etas", opt->etas,
-                    "Comma-separated etas (default: 0, then half decades from 1e-8 to 1e2 times the mean square of "
+                    "Comma-separated etas (default: 0, then half decades from 1e-6 to 1e2 times the mean square of "
                     "the model's mean probe)");
     cmd->add_option("--examples", opt->examples, "Comparison images for the first N test lights (default 3)")
         ->check(CLI::Range(0, 1000));

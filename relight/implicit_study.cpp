@@ -123,7 +123,7 @@ std::vector<double> default_eta_grid(const ImplicitModel& model) {
     }
     const double scale = count > 0 && square > 0.0 ? square / static_cast<double>(count) : 1.0;
     std::vector<double> etas{0.0};
-    for (int k = -16; k <= 4; ++k) etas.push_back(scale * std::pow(10.0, 0.5 * k));
+    for (int k = -12; k <= 4; ++k) etas.push_back(scale * std::pow(10.0, 0.5 * k));
     return etas;
 }
 

@@ -79,7 +79,7 @@ EtaStudy study_eta(const ImplicitModel& model, const std::vector<Image>& trainin
                    const std::vector<Image>& test_probes, const std::vector<Image>& references,
                    const std::vector<double>& etas, bool second_pass = true);
 
-/// The default etas of a study: 0 (the pseudo-inverse), then half decades from 1e-8 to 1e2
+/// The default etas of a study: 0 (the pseudo-inverse), then half decades from 1e-6 to 1e2
 /// times the mean square of the model's mean probe (eta is in squared pixel units, so the
 /// grid follows the probe's brightness).
 std::vector<double> default_eta_grid(const ImplicitModel& model);
