@@ -57,6 +57,14 @@ bool is_image_file(const fs::path& path) {
            ext == ".tiff";
 }
 
+// The images of a field folder (or .lp) in light-file order.
+std::vector<fs::path> field_images(const fs::path& field) {
+    const fs::path lp = relight::light_file_of(field);
+    std::vector<fs::path> files;
+    for (const auto& entry : relight::read_light_file(lp)) files.push_back(lp.parent_path() / entry.file);
+    return files;
+}
+
 // The training images: a field (.lp, or a folder holding one; its directions are ignored)
 // or a folder of images in name order.
 std::vector<fs::path> training_images(const fs::path& training) {
@@ -71,8 +79,7 @@ std::vector<fs::path> training_images(const fs::path& training) {
     }
     std::vector<fs::path> images;
     if (!lp_files.empty()) {
-        const fs::path lp = relight::light_file_of(training);
-        for (const auto& entry : relight::read_light_file(lp)) images.push_back(lp.parent_path() / entry.file);
+        images = field_images(training);
     } else {
         for (const auto& entry : fs::directory_iterator(training))
             if (entry.is_regular_file() && is_image_file(entry.path())) images.push_back(entry.path());
@@ -415,18 +422,20 @@ void add_capture_implicit_command(CLI::App& capture) {
 
         const fs::path out(opt->out);
         const relight::LightStage stage(std::move(scene));
+        // probe.json before the light files: a field that can be read has its probe described.
         const auto training = relight::implicit_training_lights(opt->lights, opt->seed);
-        render_set(stage, training, out / "training", opt->noise, opt->seed, "training lights");
+        ensure_directory(out / "training");
         relight::write_probe_description(out / "training" / kProbeFile, description);
-        double per_light = 0.0;
+        render_set(stage, training, out / "training", opt->noise, opt->seed, "training lights");
         if (opt->held_out > 0) {
             const auto test = relight::held_out_lights(opt->held_out, opt->seed + 1);
+            ensure_directory(out / "test" / "photos");
+            relight::write_probe_description(out / "test" / "photos" / kProbeFile, description);
             render_set(stage, test, out / "test" / "truth", 0.0, 0, "held-out lights, truth");
             render_set(stage, test, out / "test" / "photos", opt->test_noise, ~opt->seed, "held-out lights, photos");
-            relight::write_probe_description(out / "test" / "photos" / kProbeFile, description);
         }
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        per_light = seconds / static_cast<double>(opt->lights + 2 * opt->held_out);
+        const double per_light = seconds / static_cast<double>(opt->lights + 2 * opt->held_out);
         if (opt->json) {
             nlohmann::json summary = {{"scene", opt->scene},
                                       {"out", opt->out},
@@ -455,14 +464,6 @@ void add_capture_implicit_command(CLI::App& capture) {
 namespace {
 
 // ---- rfd relight implicit sweep ----------------------------------------------------------
-
-// The images of a field folder (or .lp) in light-file order.
-std::vector<fs::path> field_images(const fs::path& field) {
-    const fs::path lp = relight::light_file_of(field);
-    std::vector<fs::path> files;
-    for (const auto& entry : relight::read_light_file(lp)) files.push_back(lp.parent_path() / entry.file);
-    return files;
-}
 
 // The sample below which `fraction` of the image's samples lie: an exposure for viewing that
 // a few highlight pixels do not decide.
