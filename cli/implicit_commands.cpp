@@ -51,8 +51,7 @@ relight::ProbeBox parse_probe_box(const std::string& text) {
 }
 
 bool is_image_file(const fs::path& path) {
-    std::string ext = path.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    const std::string ext = lower_extension(path);
     return ext == ".exr" || ext == ".hdr" || ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".tif" ||
            ext == ".tiff";
 }
