@@ -13,18 +13,19 @@ pkg_check_modules(Cairo REQUIRED IMPORTED_TARGET cairo)
 find_package(CGAL 5 REQUIRED CONFIG)
 # Embree 3: the CPU ray tracing kernels of the virtual light stage (relight/ray_scene).
 find_package(embree 3 REQUIRED CONFIG)
-# OpenCV 4: HDR assembly (photo: Robertson calibration and merge) and the connected
-# components of light-calibration highlights (imgproc), in relight/. Link `rfd_opencv`.
+# OpenCV 4: HDR assembly (photo: Robertson calibration and merge), the connected
+# components of light-calibration highlights (imgproc), and for upsampling the highlight
+# inpainting (photo) and optical flow (video), in relight/. Link `rfd_opencv`.
 # Debian 12 ships OpenCVConfig.cmake only in libopencv-dev, a metapackage pulling every module
 # (76 packages: VTK, Qt, ...); the per-module -dev packages rfd installs hold headers and
-# libraries only, so without the config the three modules are found by hand.
-find_package(OpenCV 4 QUIET COMPONENTS core imgproc photo)
+# libraries only, so without the config the four modules are found by hand.
+find_package(OpenCV 4 QUIET COMPONENTS core imgproc photo video)
 add_library(rfd_opencv INTERFACE)
 if(OpenCV_FOUND)
-  target_link_libraries(rfd_opencv INTERFACE opencv_core opencv_imgproc opencv_photo)
+  target_link_libraries(rfd_opencv INTERFACE opencv_core opencv_imgproc opencv_photo opencv_video)
 else()
   find_path(RFD_OPENCV_INCLUDE_DIR opencv2/photo.hpp PATH_SUFFIXES opencv4 REQUIRED)
-  foreach(module photo imgproc core)  # link order: users first
+  foreach(module video photo imgproc core)  # link order: users first
     find_library(RFD_OPENCV_${module} opencv_${module} REQUIRED)
     target_link_libraries(rfd_opencv INTERFACE ${RFD_OPENCV_${module}})
   endforeach()

@@ -14,6 +14,9 @@ packages=(
   libopencv-photo-dev
   # OpenCV's imgproc: connected components of mirror-sphere highlights (relight/calibration).
   libopencv-imgproc-dev
+  # OpenCV's video module: Farneback optical flow carrying highlights between light
+  # directions when upsampling a field (relight/upsample, thesis 6.3.1).
+  libopencv-video-dev
   # Embree 3: ray intersection for the virtual light stage (relight/ray_scene.cpp).
   libembree-dev
   libtomlplusplus-dev libcli11-dev nlohmann-json3-dev

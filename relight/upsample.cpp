@@ -1,0 +1,611 @@
+#include "relight/upsample.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <map>
+#include <string>
+#include <utility>
+
+#include <Eigen/Dense>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/photo.hpp>
+#include <opencv2/video/tracking.hpp>
+
+#include "core/error.hpp"
+#include "core/parallel.hpp"
+#include "core/progress.hpp"
+#include "core/sphere.hpp"
+#include "relight/interpolation.hpp"
+
+namespace rfd::relight {
+namespace {
+
+// A cv::Mat viewing one channel of an image in place (planar storage makes it contiguous).
+cv::Mat plane_mat(Image& image, int channel) {
+    return {image.height(), image.width(), CV_32F, image.plane(channel).data()};
+}
+cv::Mat plane_mat(const Image& image, int channel) {
+    return {image.height(), image.width(), CV_32F, const_cast<float*>(image.plane(channel).data())};
+}
+
+bool all_zero(const Image& image) {
+    const auto samples = image.samples();
+    return std::all_of(samples.begin(), samples.end(), [](float v) { return v == 0.0f; });
+}
+
+// The `count` directions of `candidates` closest to `d`, nearest first (ties: lower index).
+std::vector<std::size_t> nearest_directions(const Eigen::Vector3d& d, const std::vector<Eigen::Vector3d>& candidates,
+                                            std::size_t count) {
+    std::vector<std::pair<double, std::size_t>> order(candidates.size());
+    for (std::size_t i = 0; i < candidates.size(); ++i) order[i] = {-d.dot(candidates[i]), i};
+    count = std::min(count, order.size());
+    std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(count), order.end());
+    std::vector<std::size_t> nearest(count);
+    for (std::size_t i = 0; i < count; ++i) nearest[i] = order[i].second;
+    return nearest;
+}
+
+// The clamped highlight luminance the flow matches on: HDR highlights span decades, so
+// everything above the median highlight level `clamp` is one plateau (6.3.1).
+cv::Mat flow_input(const Image& luminance, float clamp) {
+    cv::Mat out(luminance.height(), luminance.width(), CV_8U);
+    const auto values = luminance.plane(0);
+    for (std::size_t p = 0; p < values.size(); ++p) {
+        const float v = std::clamp(values[p] / clamp, 0.0f, 1.0f);
+        out.data[p] = static_cast<std::uint8_t>(std::lround(255.0f * v));
+    }
+    return out;
+}
+
+// Dense flow from `from` to `to` (8-bit, one channel): from(x) ~ to(x + flow(x)). A wide
+// window and smoothing, so that the field carries a match into the mostly flat surroundings
+// (the smooth fields of Brox et al. in the thesis).
+cv::Mat dense_flow(const cv::Mat& from, const cv::Mat& to) {
+    // Pyramid levels down to about 16 pixels: coarser ones only add noise to the flow.
+    int levels = 1;
+    for (int side = std::min(from.rows, from.cols); side >= 32 && levels < 5; side /= 2) ++levels;
+    cv::Mat flow;
+    cv::calcOpticalFlowFarneback(from, to, flow, 0.5, levels, 21, 3, 7, 1.5, 0);
+    return flow;
+}
+
+// The sampling maps x - 0.5 flow(x) of cv::remap: what lies at x half-way along the flow.
+std::pair<cv::Mat, cv::Mat> halfway_maps(const cv::Mat& flow) {
+    cv::Mat map_x(flow.rows, flow.cols, CV_32F), map_y(flow.rows, flow.cols, CV_32F);
+    for (int y = 0; y < flow.rows; ++y)
+        for (int x = 0; x < flow.cols; ++x) {
+            const cv::Point2f f = flow.at<cv::Point2f>(y, x);
+            map_x.at<float>(y, x) = static_cast<float>(x) - 0.5f * f.x;
+            map_y.at<float>(y, x) = static_cast<float>(y) - 0.5f * f.y;
+        }
+    return {map_x, map_y};
+}
+
+// `image` carried half-way along the flow.
+Image warp_halfway(const Image& image, const cv::Mat& flow) {
+    const auto [map_x, map_y] = halfway_maps(flow);
+    Image out(image.width(), image.height(), image.channels());
+    for (int c = 0; c < image.channels(); ++c) {
+        cv::Mat dst = plane_mat(out, c);
+        cv::remap(plane_mat(image, c), dst, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT, 0.0);
+    }
+    return out;
+}
+
+// Scales `warped` to the total of `original`, channel by channel.
+void conserve_energy(Image& warped, const Image& original) {
+    for (int c = 0; c < warped.channels(); ++c) {
+        double before = 0.0, after = 0.0;
+        for (float v : original.plane(c)) before += v;
+        for (float v : warped.plane(c)) after += v;
+        if (after > 0.0 && before > 0.0)
+            for (float& v : warped.plane(c)) v = static_cast<float>(v * (before / after));
+    }
+}
+
+// Signed distance to the lit/shadow boundary: > 0 inside lit regions, < 0 in shadow. A
+// uniform map has no boundary; its distance is the image diagonal, farther than any edge.
+cv::Mat signed_distance(const ShadowMap& map, int width, int height) {
+    const double diagonal = std::hypot(width, height);
+    const auto lit = static_cast<std::size_t>(std::count(map.begin(), map.end(), std::uint8_t{1}));
+    if (lit == map.size() || lit == 0)
+        return {height, width, CV_32F, cv::Scalar(lit == 0 ? -diagonal : diagonal)};
+    const cv::Mat lit_mat(height, width, CV_8U, const_cast<std::uint8_t*>(map.data()));
+    cv::Mat shadow_mat = 1 - lit_mat;
+    cv::Mat inside, outside;
+    cv::distanceTransform(lit_mat, inside, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+    cv::distanceTransform(shadow_mat, outside, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+    return inside - outside;
+}
+
+void check_options(const ReflectanceField& field, int levels, const UpsampleOptions& options) {
+    if (field.size() < 4)
+        throw InputError("upsampling needs at least 4 images, the field has " + std::to_string(field.size()));
+    if (levels < 0 || levels > 4)
+        throw InputError("upsampling levels must be 0 to 4 (each multiplies the directions by about 4), got " +
+                         std::to_string(levels));
+    if (!(options.f_highlight > 1.0) || !std::isfinite(options.f_highlight))
+        throw InputError("f_highlight must be > 1 (the thesis uses 2 or 4), got " + std::to_string(options.f_highlight));
+    if (!(options.f_lit > 0.0 && options.f_lit <= 1.0))
+        throw InputError("f_lit must be in (0, 1] (the thesis uses 0.66 to 0.9), got " + std::to_string(options.f_lit));
+    if (!(options.percentile >= 0.0 && options.percentile <= 1.0))
+        throw InputError("the percentile must be in [0, 1], got " + std::to_string(options.percentile));
+    if (options.highlight_dilation < 1 || options.highlight_dilation % 2 == 0)
+        throw InputError("the highlight dilation must be an odd box size >= 1, got " +
+                         std::to_string(options.highlight_dilation));
+    if (options.blur_neighbours < 1 || options.fit_neighbours < 1)
+        throw InputError("neighbour counts for blurring and fitting must be >= 1");
+}
+
+// One direction of the upsampled set with the features carried from level to level.
+struct Node {
+    Eigen::Vector3d direction;
+    Image highlights;  // H, empty when there are none
+    ShadowMap shadow;  // S
+    double kernel_radius = 0.0;
+};
+
+// The edges of the Delaunay triangulation of `directions`, each once, (low, high), sorted.
+std::vector<std::array<std::size_t, 2>> delaunay_edges(const std::vector<Eigen::Vector3d>& directions) {
+    std::vector<std::array<std::size_t, 2>> edges;
+    for (const Triangle& t : delaunay_triangles(directions))
+        for (std::size_t j = 0; j < 3; ++j) {
+            const std::size_t a = t[j], b = t[(j + 1) % 3];
+            edges.push_back({std::min(a, b), std::max(a, b)});
+        }
+    std::sort(edges.begin(), edges.end());
+    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+    return edges;
+}
+
+// S-bar: the mean of the shadow maps of `neighbours`.
+std::vector<float> blurred_shadow(const std::vector<Node>& nodes, const std::vector<std::size_t>& neighbours) {
+    std::vector<float> sum(nodes.front().shadow.size(), 0.0f);
+    for (std::size_t m : neighbours) {
+        const ShadowMap& s = nodes[m].shadow;
+        for (std::size_t p = 0; p < sum.size(); ++p) sum[p] += static_cast<float>(s[p]);
+    }
+    // Divided, not scaled by a reciprocal: all lit must give exactly 1 (the cases of 6.4.1).
+    const auto count = static_cast<float>(neighbours.size());
+    for (float& v : sum) v /= count;
+    return sum;
+}
+
+// The synthesis of 6.4.1 for one new direction.
+class Synthesis {
+public:
+    Synthesis(const ReflectanceField& field, const std::vector<Image>& diffuse,
+              const std::vector<std::vector<float>>& input_blurred, const std::vector<const ShadowMap*>& input_shadow,
+              double spacing)
+        : field_(field), diffuse_(diffuse), input_blurred_(input_blurred), input_shadow_(input_shadow),
+          spacing_(spacing) {}
+
+    struct Counts {
+        std::size_t extrapolated = 0;
+        std::size_t fallback = 0;
+    };
+
+    // The diffuse reconstruction R_reco at `direction` (without highlights).
+    Image reconstruct(const Eigen::Vector3d& direction, const InterpolationWeights& weights,
+                      const std::vector<std::size_t>& fit_set, const std::vector<float>& blurred_k,
+                      Counts& counts) const {
+        const int channels = field_.channels();
+        const std::size_t pixels = field_.images.front().pixel_count();
+        Image out(field_.width(), field_.height(), channels);
+
+        // Fit samples: offsets from the target (the fit's constant term is the value there)
+        // and closeness weights.
+        std::vector<Eigen::Vector4d> basis(fit_set.size());
+        std::vector<double> closeness(fit_set.size());
+        for (std::size_t s = 0; s < fit_set.size(); ++s) {
+            const Eigen::Vector3d offset = field_.directions[fit_set[s]] - direction;
+            basis[s] = Eigen::Vector4d(1.0, offset.x(), offset.y(), offset.z());
+            closeness[s] = 1.0 / (angle_between(field_.directions[fit_set[s]], direction) + spacing_);
+        }
+
+        std::vector<double> lit(static_cast<std::size_t>(channels)), shadowed(lit.size()), blend(lit.size());
+        for (std::size_t p = 0; p < pixels; ++p) {
+            const float sk = blurred_k[p];
+            bool all_lit = true, all_shadowed = true;
+            for (std::size_t j = 0; j < weights.count; ++j) {
+                if (weights.weight[j] == 0.0) continue;
+                const float s = input_blurred_[weights.index[j]][p];
+                all_lit = all_lit && s == 1.0f;
+                all_shadowed = all_shadowed && s == 0.0f;
+            }
+            for (int c = 0; c < channels; ++c) {
+                double v = 0.0;
+                for (std::size_t j = 0; j < weights.count; ++j)
+                    v += weights.weight[j] * diffuse_[weights.index[j]].plane(c)[p];
+                blend[static_cast<std::size_t>(c)] = v;
+            }
+            bool extrapolated = false, fell_back = false;
+            if (sk > 0.0f) {
+                if (all_lit) lit = blend;
+                else {
+                    extrapolated = true;
+                    fell_back = !fit(p, fit_set, basis, closeness, true, blend, lit) || fell_back;
+                }
+            }
+            if (sk < 1.0f) {
+                if (all_shadowed) shadowed = blend;
+                else {
+                    extrapolated = true;
+                    fell_back = !fit(p, fit_set, basis, closeness, false, blend, shadowed) || fell_back;
+                }
+            }
+            for (int c = 0; c < channels; ++c) {
+                const auto ci = static_cast<std::size_t>(c);
+                const double v = (sk > 0.0f ? sk * lit[ci] : 0.0) + (sk < 1.0f ? (1.0f - sk) * shadowed[ci] : 0.0);
+                out.plane(c)[p] = static_cast<float>(v);
+            }
+            counts.extrapolated += extrapolated ? 1 : 0;
+            counts.fallback += fell_back ? 1 : 0;
+        }
+        return out;
+    }
+
+private:
+    // Least-squares fit of (1, x, y, z) to the fit set's samples labelled lit (or shadowed)
+    // at pixel p, weighted by closeness and by how reliable the label is (S-bar), evaluated
+    // at the target. Fewer than 4 samples: their weighted mean; none: the barycentric blend
+    // (returns false). The result is kept in [0, twice the largest sample] so that a poorly
+    // conditioned fit cannot run off, while extrapolation past the samples stays possible.
+    bool fit(std::size_t p, const std::vector<std::size_t>& fit_set, const std::vector<Eigen::Vector4d>& basis,
+             const std::vector<double>& closeness, bool want_lit, const std::vector<double>& blend,
+             std::vector<double>& out) const {
+        const int channels = field_.channels();
+        const std::uint8_t wanted = want_lit ? 1 : 0;
+        Eigen::Matrix4d normal = Eigen::Matrix4d::Zero();
+        std::vector<Eigen::Vector4d> rhs(static_cast<std::size_t>(channels), Eigen::Vector4d::Zero());
+        std::vector<double> high(rhs.size(), 0.0);
+        double weight_sum = 0.0;
+        std::size_t used = 0;
+        for (std::size_t s = 0; s < fit_set.size(); ++s) {
+            const std::size_t m = fit_set[s];
+            if ((*input_shadow_[m])[p] != wanted) continue;
+            const double lit = input_blurred_[m][p];
+            const double w = closeness[s] * std::max(want_lit ? lit : 1.0 - lit, 0.1);
+            normal += w * basis[s] * basis[s].transpose();
+            for (int c = 0; c < channels; ++c) {
+                const auto ci = static_cast<std::size_t>(c);
+                const double v = diffuse_[m].plane(c)[p];
+                rhs[ci] += w * v * basis[s];
+                high[ci] = std::max(high[ci], v);
+            }
+            weight_sum += w;
+            ++used;
+        }
+        if (used == 0) {
+            out = blend;
+            return false;
+        }
+        if (used < 4) {
+            for (std::size_t ci = 0; ci < out.size(); ++ci) out[ci] = rhs[ci][0] / weight_sum;
+            return true;
+        }
+        // A light ridge on the slopes keeps samples bunched on one side from tilting the plane.
+        const double ridge = 1e-3 * normal(0, 0) * spacing_ * spacing_;
+        for (int i = 1; i < 4; ++i) normal(i, i) += ridge;
+        const Eigen::LDLT<Eigen::Matrix4d> solver(normal);
+        for (std::size_t ci = 0; ci < out.size(); ++ci) {
+            const double value = solver.solve(rhs[ci])[0];
+            out[ci] = std::isfinite(value) ? std::clamp(value, 0.0, 2.0 * high[ci]) : rhs[ci][0] / weight_sum;
+        }
+        return true;
+    }
+
+    const ReflectanceField& field_;
+    const std::vector<Image>& diffuse_;
+    const std::vector<std::vector<float>>& input_blurred_;
+    const std::vector<const ShadowMap*>& input_shadow_;
+    double spacing_;
+};
+
+}  // namespace
+
+Image luminance(const Image& image) {
+    Image out(image.width(), image.height(), 1);
+    auto dst = out.plane(0);
+    const float scale = 1.0f / static_cast<float>(std::max(image.channels(), 1));
+    for (int c = 0; c < image.channels(); ++c) {
+        const auto src = image.plane(c);
+        for (std::size_t p = 0; p < dst.size(); ++p) dst[p] += src[p];
+    }
+    for (float& v : dst) v *= scale;
+    return out;
+}
+
+Image percentile_image(const std::vector<Image>& luminances, double quantile) {
+    if (luminances.empty()) throw InputError("the percentile image needs at least one image");
+    if (!(quantile >= 0.0 && quantile <= 1.0)) throw InputError("the percentile must be in [0, 1]");
+    const std::size_t n = luminances.size();
+    const std::size_t rank = std::min(n - 1, static_cast<std::size_t>(std::floor(quantile * static_cast<double>(n))));
+    Image out(luminances.front().width(), luminances.front().height(), 1);
+    const std::size_t pixels = out.pixel_count();
+    parallel_for_chunks(pixels, 4096, [&](std::size_t begin, std::size_t end) {
+        std::vector<float> values(n);
+        for (std::size_t p = begin; p < end; ++p) {
+            for (std::size_t i = 0; i < n; ++i) values[i] = luminances[i].plane(0)[p];
+            std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(rank), values.end());
+            out.plane(0)[p] = values[rank];
+        }
+    });
+    return out;
+}
+
+std::vector<std::uint8_t> highlight_mask(const Image& luminance, const Image& percentile, double f_highlight,
+                                         int dilation, float floor) {
+    const auto l = luminance.plane(0);
+    const auto level = percentile.plane(0);
+    std::vector<std::uint8_t> mask(l.size());
+    for (std::size_t p = 0; p < l.size(); ++p)
+        mask[p] = l[p] > floor && static_cast<double>(l[p]) >= f_highlight * static_cast<double>(level[p]) ? 1 : 0;
+    if (dilation > 1) {
+        cv::Mat m(luminance.height(), luminance.width(), CV_8U, mask.data());
+        cv::dilate(m, m, cv::Mat::ones(dilation, dilation, CV_8U));
+    }
+    return mask;
+}
+
+Image remove_highlights(const Image& image, const std::vector<std::uint8_t>& mask) {
+    Image out = image;
+    if (std::none_of(mask.begin(), mask.end(), [](std::uint8_t v) { return v != 0; })) return out;
+    const cv::Mat m(image.height(), image.width(), CV_8U, const_cast<std::uint8_t*>(mask.data()));
+    for (int c = 0; c < image.channels(); ++c) {
+        cv::Mat filled;
+        // Navier-Stokes inpainting (Bertalmio et al. 2001): OpenCV 4.6's Telea method returns
+        // values far off the surroundings for float images (see tests/test_upsample.cpp).
+        cv::inpaint(plane_mat(image, c), m, filled, 3.0, cv::INPAINT_NS);
+        // D <= R: inpainting that overshoots the image would give negative highlights.
+        auto dst = out.plane(c);
+        for (std::size_t p = 0; p < dst.size(); ++p) dst[p] = std::min(dst[p], filled.ptr<float>()[p]);
+    }
+    return out;
+}
+
+std::vector<ShadowMap> shadow_maps(const std::vector<Image>& prefiltered_luminances, const Image& percentile,
+                                   const std::vector<std::vector<std::size_t>>& neighbours, double f_lit) {
+    const std::size_t n = prefiltered_luminances.size();
+    const std::size_t pixels = percentile.pixel_count();
+    std::vector<ShadowMap> maps(n, ShadowMap(pixels, 0));
+    parallel_for_chunks(pixels, 1024, [&](std::size_t begin, std::size_t end) {
+        std::vector<float> l(n);
+        std::vector<std::size_t> queue;
+        for (std::size_t p = begin; p < end; ++p) {
+            queue.clear();
+            for (std::size_t i = 0; i < n; ++i) {
+                l[i] = prefiltered_luminances[i].plane(0)[p];
+                if (l[i] >= percentile.plane(0)[p]) {
+                    maps[i][p] = 1;
+                    queue.push_back(i);
+                }
+            }
+            // Region growing (6.2.2): the lit set spreads to a neighbour as long as the
+            // neighbour keeps f_lit of the light; a sharper drop is a shadow boundary.
+            for (std::size_t head = 0; head < queue.size(); ++head) {
+                const std::size_t j = queue[head];
+                for (std::size_t i : neighbours[j]) {
+                    if (maps[i][p] != 0 || !(static_cast<double>(l[i]) > f_lit * static_cast<double>(l[j]))) continue;
+                    maps[i][p] = 1;
+                    queue.push_back(i);
+                }
+            }
+        }
+    });
+    return maps;
+}
+
+Image halfway_highlights(const Image& first, const Image& second) {
+    if (first.empty() && second.empty()) return {};
+    // A highlight that appears or vanishes has nothing to match: it fades, as in blending.
+    if (first.empty() || second.empty()) {
+        Image half = first.empty() ? second : first;
+        for (float& v : half.samples()) v *= 0.5f;
+        return half;
+    }
+    const Image& shape = first.empty() ? second : first;
+    const Image zero(shape.width(), shape.height(), shape.channels());
+    const Image& a = first.empty() ? zero : first;
+    const Image& b = second.empty() ? zero : second;
+    if (!a.same_shape(b)) throw InputError("highlight layers of different shapes");
+
+    const Image la = luminance(a), lb = luminance(b);
+    std::vector<float> levels;
+    for (const Image* l : {&la, &lb})
+        for (float v : l->plane(0))
+            if (v > 0.0f) levels.push_back(v);
+    Image out(a.width(), a.height(), a.channels());
+    if (levels.empty()) return out;
+    std::nth_element(levels.begin(), levels.begin() + static_cast<std::ptrdiff_t>(levels.size() / 2), levels.end());
+    const float clamp = levels[levels.size() / 2];
+
+    // Blurred, so that highlights of a few pixels give the flow's polynomials a slope to fit.
+    cv::Mat ga = flow_input(la, clamp), gb = flow_input(lb, clamp);
+    cv::GaussianBlur(ga, ga, cv::Size(0, 0), 3.0);
+    cv::GaussianBlur(gb, gb, cv::Size(0, 0), 3.0);
+    Image wa = warp_halfway(a, dense_flow(ga, gb)), wb = warp_halfway(b, dense_flow(gb, ga));
+    // A backward warp stretches where the flow diverges; a highlight carries its energy.
+    conserve_energy(wa, a);
+    conserve_energy(wb, b);
+    for (std::size_t s = 0; s < out.samples().size(); ++s)
+        out.samples()[s] = 0.5f * (wa.samples()[s] + wb.samples()[s]);
+    return out;
+}
+
+ShadowMap halfway_shadow_map(const ShadowMap& first, const ShadowMap& second, int width, int height) {
+    const cv::Mat phi_a = signed_distance(first, width, height), phi_b = signed_distance(second, width, height);
+    // The two level-set functions are carried half-way along the flow between them before
+    // they are averaged: a shadow that slides keeps its shape instead of shrinking to the
+    // overlap, as the plain mean of two distance functions would. The flow matches the
+    // distances near the boundary only (clamped to +-kBand pixels, 8 grey levels per pixel).
+    constexpr double kBand = 15.0;
+    const auto flow_input_of = [&](const cv::Mat& phi) {
+        cv::Mat grey;
+        cv::Mat clamped = cv::min(cv::max(phi, -kBand), kBand);
+        clamped.convertTo(grey, CV_8U, 127.0 / kBand, 127.5);
+        return grey;
+    };
+    const cv::Mat ga = flow_input_of(phi_a), gb = flow_input_of(phi_b);
+    const auto warp = [](const cv::Mat& phi, const cv::Mat& flow) {
+        const auto [map_x, map_y] = halfway_maps(flow);
+        cv::Mat out;
+        cv::remap(phi, out, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+        return out;
+    };
+    const cv::Mat sum = warp(phi_a, dense_flow(ga, gb)) + warp(phi_b, dense_flow(gb, ga));
+    ShadowMap out(first.size());
+    for (std::size_t p = 0; p < out.size(); ++p) out[p] = sum.ptr<float>()[p] > 0.0f ? 1 : 0;
+    return out;
+}
+
+UpsampledField upsample_field(const ReflectanceField& field, int levels, const UpsampleOptions& options) {
+    check_options(field, levels, options);
+    UpsampledField result;
+    result.statistics.inputs = field.size();
+    if (levels == 0) {
+        result.field = field;
+        return result;
+    }
+    const SphericalInterpolator interpolator(field.directions);
+    const std::size_t n = field.size();
+    const int width = field.width(), height = field.height();
+    const std::size_t pixels = field.images.front().pixel_count();
+
+    // 1. Semantics.
+    std::vector<Image> luminances(n), prefiltered(n);
+    parallel_for_chunks(n, 1, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+            luminances[i] = luminance(field.images[i]);
+            prefiltered[i] = luminances[i];
+            cv::Mat m = plane_mat(prefiltered[i], 0);
+            cv::GaussianBlur(plane_mat(luminances[i], 0), m, cv::Size(3, 3), 0.0, 0.0, cv::BORDER_REPLICATE);
+        }
+    });
+    const Image percentile = percentile_image(prefiltered, options.percentile);
+    float brightest = 0.0f;
+    for (const Image& l : luminances) brightest = std::max(brightest, *std::max_element(l.plane(0).begin(), l.plane(0).end()));
+    // Pixels darker than this in the image itself are never highlights: it keeps pixels that
+    // are black in most images (P = 0) from turning every speck into a highlight.
+    const float floor = 1e-3f * brightest;
+
+    std::vector<Image> diffuse(n);
+    std::vector<Node> nodes(n);
+    std::vector<std::size_t> highlight_pixels(n, 0);
+    {
+        Progress progress("highlight separation", n);
+        parallel_for_chunks(n, 1, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t i = begin; i < end; ++i) {
+                const auto mask = highlight_mask(luminances[i], percentile, options.f_highlight,
+                                                 options.highlight_dilation, floor);
+                highlight_pixels[i] = static_cast<std::size_t>(std::count(mask.begin(), mask.end(), std::uint8_t{1}));
+                diffuse[i] = remove_highlights(field.images[i], mask);
+                Image h = field.images[i];
+                for (std::size_t s = 0; s < h.samples().size(); ++s) h.samples()[s] -= diffuse[i].samples()[s];
+                nodes[i].direction = field.directions[i];
+                nodes[i].kernel_radius = field.kernel_radius(i);
+                if (!all_zero(h)) nodes[i].highlights = std::move(h);
+                progress.advance();
+            }
+        });
+    }
+    {
+        auto maps = shadow_maps(prefiltered, percentile, interpolator.one_rings(), options.f_lit);
+        std::size_t lit = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            lit += static_cast<std::size_t>(std::count(maps[i].begin(), maps[i].end(), std::uint8_t{1}));
+            nodes[i].shadow = std::move(maps[i]);
+        }
+        const double total = static_cast<double>(n * pixels);
+        result.statistics.lit_fraction = static_cast<double>(lit) / total;
+        std::size_t high = 0;
+        for (std::size_t c : highlight_pixels) high += c;
+        result.statistics.highlight_fraction = static_cast<double>(high) / total;
+    }
+    luminances.clear();
+    prefiltered.clear();
+
+    // 2. Feature upsampling, level by level.
+    for (int level = 0; level < levels; ++level) {
+        std::vector<Eigen::Vector3d> directions(nodes.size());
+        for (std::size_t i = 0; i < nodes.size(); ++i) directions[i] = nodes[i].direction;
+        const auto edges = delaunay_edges(directions);
+        std::vector<Node> added(edges.size());
+        Progress progress("subdivision level " + std::to_string(level + 1), edges.size());
+        parallel_for_chunks(edges.size(), 1, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t e = begin; e < end; ++e) {
+                const Node& a = nodes[edges[e][0]];
+                const Node& b = nodes[edges[e][1]];
+                added[e].direction = (a.direction + b.direction).normalized();
+                added[e].kernel_radius = 0.5 * (a.kernel_radius + b.kernel_radius);
+                added[e].highlights = halfway_highlights(a.highlights, b.highlights);
+                if (!added[e].highlights.empty() && all_zero(added[e].highlights)) added[e].highlights = Image();
+                added[e].shadow = halfway_shadow_map(a.shadow, b.shadow, width, height);
+                progress.advance();
+            }
+        });
+        for (Node& node : added) nodes.push_back(std::move(node));
+    }
+
+    // 3. Synthesis.
+    std::vector<Eigen::Vector3d> all_directions(nodes.size());
+    for (std::size_t i = 0; i < nodes.size(); ++i) all_directions[i] = nodes[i].direction;
+    const auto blur = static_cast<std::size_t>(options.blur_neighbours);
+    std::vector<std::vector<float>> input_blurred(n);
+    parallel_for_chunks(n, 1, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i)
+            input_blurred[i] = blurred_shadow(nodes, nearest_directions(all_directions[i], all_directions, blur));
+    });
+    // Closeness weights level off within about half the input spacing.
+    std::vector<double> gaps(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const auto nearest = nearest_directions(field.directions[i], field.directions, 2);
+        gaps[i] = angle_between(field.directions[i], field.directions[nearest.back()]);
+    }
+    std::nth_element(gaps.begin(), gaps.begin() + static_cast<std::ptrdiff_t>(n / 2), gaps.end());
+    const double spacing = std::max(0.5 * gaps[n / 2], 1e-6);
+
+    std::vector<const ShadowMap*> input_shadow(n);
+    for (std::size_t i = 0; i < n; ++i) input_shadow[i] = &nodes[i].shadow;
+    const Synthesis synthesis(field, diffuse, input_blurred, input_shadow, spacing);
+    const std::size_t added = nodes.size() - n;
+    std::vector<Image> synthesized(added);
+    std::vector<Synthesis::Counts> counts(added);
+    {
+        Progress progress("synthesis", added);
+        parallel_for_chunks(added, 1, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t a = begin; a < end; ++a) {
+                const Node& node = nodes[n + a];
+                const auto blurred = blurred_shadow(nodes, nearest_directions(node.direction, all_directions, blur));
+                const auto fit_set = nearest_directions(node.direction, field.directions,
+                                                        static_cast<std::size_t>(options.fit_neighbours));
+                Image image = synthesis.reconstruct(node.direction, interpolator.weights(node.direction), fit_set,
+                                                    blurred, counts[a]);
+                if (!node.highlights.empty())
+                    for (std::size_t s = 0; s < image.samples().size(); ++s)
+                        image.samples()[s] += node.highlights.samples()[s];
+                synthesized[a] = std::move(image);
+                progress.advance();
+            }
+        });
+    }
+
+    result.field = field;
+    const bool radii = !field.kernel_radii.empty();
+    std::size_t extrapolated = 0, fallback = 0;
+    for (std::size_t a = 0; a < added; ++a) {
+        result.field.directions.push_back(nodes[n + a].direction);
+        result.field.images.push_back(std::move(synthesized[a]));
+        if (radii) result.field.kernel_radii.push_back(nodes[n + a].kernel_radius);
+        extrapolated += counts[a].extrapolated;
+        fallback += counts[a].fallback;
+    }
+    result.statistics.synthesized = added;
+    const double synthesized_pixels = static_cast<double>(std::max<std::size_t>(added, 1) * pixels);
+    result.statistics.extrapolated_fraction = static_cast<double>(extrapolated) / synthesized_pixels;
+    result.statistics.fallback_fraction = static_cast<double>(fallback) / synthesized_pixels;
+    return result;
+}
+
+}  // namespace rfd::relight

@@ -1,0 +1,328 @@
+// Feature-guided upsampling (thesis chapter 6): each stage against what it must do on
+// synthetic data with closed-form answers (a percentile, a dilated highlight, shadows found
+// by region growing, a disk moved half-way by level-set blending, a highlight moved half-way
+// by the flow), then whole fields whose new images are checked against the closed form at
+// the new directions: a floating occluder's moving shadow and a dome's moving highlight,
+// where upsampling must beat linear blending, and the failure cases of 6.5.1 (no texture,
+// shadows that do not overlap, dim caustics), where it must stay no worse than blending.
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <numeric>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "core/error.hpp"
+#include "core/sphere.hpp"
+#include "core/units.hpp"
+#include "relight/interpolation.hpp"
+#include "relight/upsample.hpp"
+
+namespace rfd::relight {
+namespace {
+
+constexpr int kSide = 48;
+
+// An image whose every pixel is f(x, y), one channel.
+Image image_of(int width, int height, const std::function<float(int, int)>& f) {
+    Image out(width, height, 1);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) out.at(x, y, 0) = f(x, y);
+    return out;
+}
+
+Image gaussian_blob(double cx, double cy, double sigma, float peak) {
+    return image_of(kSide, kSide, [&](int x, int y) {
+        const double r2 = (x - cx) * (x - cx) + (y - cy) * (y - cy);
+        return static_cast<float>(peak * std::exp(-r2 / (2.0 * sigma * sigma)));
+    });
+}
+
+// Centroid (x) and total of an image.
+std::pair<double, double> centroid_x(const Image& image) {
+    double sum = 0.0, sx = 0.0;
+    for (int y = 0; y < image.height(); ++y)
+        for (int x = 0; x < image.width(); ++x) {
+            sum += image.at(x, y, 0);
+            sx += x * static_cast<double>(image.at(x, y, 0));
+        }
+    return {sx / sum, sum};
+}
+
+ShadowMap disk_shadow(double cx, double cy, double radius) {
+    ShadowMap map(static_cast<std::size_t>(kSide * kSide), 1);
+    for (int y = 0; y < kSide; ++y)
+        for (int x = 0; x < kSide; ++x)
+            if (std::hypot(x - cx, y - cy) <= radius) map[static_cast<std::size_t>(y * kSide + x)] = 0;
+    return map;
+}
+
+TEST(Upsample, PercentileImageIsTheRankedSamplePerPixel) {
+    std::vector<Image> images;
+    for (int i = 0; i < 10; ++i)
+        images.push_back(image_of(3, 2, [i](int x, int y) { return static_cast<float>(((i * 7 + x * 3 + y) % 10)); }));
+    const Image p = percentile_image(images, 0.85);  // rank floor(8.5) = 8: the second largest
+    for (int y = 0; y < 2; ++y)
+        for (int x = 0; x < 3; ++x) {
+            std::vector<float> values;
+            for (const Image& im : images) values.push_back(im.at(x, y, 0));
+            std::sort(values.begin(), values.end());
+            EXPECT_EQ(p.at(x, y, 0), values[8]);
+        }
+    EXPECT_EQ(percentile_image(images, 1.0).at(0, 0, 0), 9.0f);  // clamped to the largest
+    EXPECT_THROW(percentile_image(images, 1.5), InputError);
+    EXPECT_THROW(percentile_image({}, 0.5), InputError);
+}
+
+TEST(Upsample, HighlightMaskIsDilatedAndIgnoresBlackPixels) {
+    Image level = image_of(kSide, kSide, [](int x, int) { return x < 24 ? 0.2f : 0.0f; });
+    Image l = level;
+    l.at(10, 10, 0) = 0.39f;  // below 2 P
+    l.at(30, 30, 0) = 0.39f;  // P = 0 but above the floor: a feature lit by few directions
+    l.at(40, 5, 0) = 1e-5f;   // P = 0 and below the floor: a black pixel's noise
+    l.at(12, 30, 0) = 0.41f;  // a highlight
+    const auto mask = highlight_mask(l, level, 2.0, 5, 1e-3f);
+    const auto at = [&](int x, int y) { return mask[static_cast<std::size_t>(y * kSide + x)]; };
+    EXPECT_EQ(at(12, 30), 1);
+    EXPECT_EQ(at(30, 30), 1);
+    EXPECT_EQ(at(10, 10), 0);
+    EXPECT_EQ(at(40, 5), 0);
+    // The 5x5 box around each highlight, nothing else.
+    EXPECT_EQ(std::count(mask.begin(), mask.end(), std::uint8_t{1}), 2 * 25);
+    EXPECT_EQ(at(14, 32), 1);
+    EXPECT_EQ(at(15, 30), 0);
+}
+
+TEST(Upsample, RemovedHighlightLeavesTheSmoothBaseAndANonNegativeLayer) {
+    const Image base = image_of(kSide, kSide, [](int x, int y) { return 0.1f + 0.004f * static_cast<float>(x + y); });
+    Image r = base;
+    const Image blob = gaussian_blob(20, 24, 1.5, 3.0f);
+    for (std::size_t s = 0; s < r.samples().size(); ++s) r.samples()[s] += blob.samples()[s];
+    std::vector<Image> flat(8, base);
+    const Image p = percentile_image(flat, 230.0 / 256.0);
+    const auto mask = highlight_mask(r, p, 2.0, 5, 1e-3f);
+    const Image d = remove_highlights(r, mask);
+    double worst = 0.0;
+    for (std::size_t s = 0; s < d.samples().size(); ++s) {
+        EXPECT_LE(d.samples()[s], r.samples()[s]);
+        worst = std::max(worst, std::abs(static_cast<double>(d.samples()[s] - base.samples()[s])));
+    }
+    // The base under the highlight is a plane; inpainting from the ring recovers it closely
+    // (the highlight peaks 30 times higher).
+    EXPECT_LT(worst, 0.02);
+}
+
+TEST(Upsample, ShadowsFoundByRegionGrowingOverDirections) {
+    // One pixel of a diffuse plane under 120 directions; directions with negative x are
+    // blocked by an occluder that leaves 5 % of the light.
+    const auto directions = fibonacci_hemisphere(120);
+    const SphericalInterpolator interp(directions);
+    std::vector<Image> l;
+    for (const auto& d : directions)
+        l.push_back(Image(1, 1, 1, static_cast<float>(d.z() * (d.x() < 0.0 ? 0.05 : 1.0))));
+    const Image p = percentile_image(l, 230.0 / 256.0);
+    const auto maps = shadow_maps(l, p, interp.one_rings(), 0.8);
+    int seeds = 0;
+    for (std::size_t i = 0; i < directions.size(); ++i) {
+        seeds += l[i].at(0, 0, 0) >= p.at(0, 0, 0) ? 1 : 0;
+        const double theta = std::acos(directions[i].z());
+        if (directions[i].x() < 0.0) {
+            EXPECT_EQ(maps[i][0], 0) << "blocked direction " << i;
+        } else if (theta < degrees_to_radians(55.0)) {
+            EXPECT_EQ(maps[i][0], 1) << "open direction " << i;
+        }
+    }
+    EXPECT_LT(seeds, 15);  // growth, not the threshold, found most lit directions
+    // f_lit near 0: growing stops at nothing but zero light, so the blocked side is lit too.
+    const auto loose = shadow_maps(l, p, interp.one_rings(), 1e-3);
+    for (const auto& m : loose) EXPECT_EQ(m[0], 1);
+}
+
+TEST(Upsample, LevelSetBlendingMovesAShadowHalfWay) {
+    const ShadowMap a = disk_shadow(16, 24, 8), b = disk_shadow(28, 24, 8);
+    const ShadowMap k = halfway_shadow_map(a, b, kSide, kSide);
+    // The half-way disk, not the union or the intersection of the two.
+    int wrong = 0;
+    const ShadowMap expected = disk_shadow(22, 24, 8);
+    for (std::size_t p = 0; p < k.size(); ++p) wrong += k[p] != expected[p] ? 1 : 0;
+    const auto area = std::count(expected.begin(), expected.end(), std::uint8_t{0});
+    EXPECT_LT(wrong, area / 10) << "of " << area;
+    // Identical maps are a fixed point; a uniform map leaves the other's shape alone.
+    EXPECT_EQ(halfway_shadow_map(a, a, kSide, kSide), a);
+    const ShadowMap lit(a.size(), 1);
+    const ShadowMap with_lit = halfway_shadow_map(a, lit, kSide, kSide);
+    EXPECT_EQ(std::count(with_lit.begin(), with_lit.end(), std::uint8_t{0}), 0);
+}
+
+TEST(Upsample, ShadowsThatDoNotOverlapGiveAValidSmallerMap) {
+    // 6.5.1: shadows too far apart to overlap cannot be morphed. The mean distance keeps
+    // no more shadow than either input and never invents shadow away from both.
+    const ShadowMap a = disk_shadow(8, 24, 5), b = disk_shadow(40, 24, 5);
+    const ShadowMap k = halfway_shadow_map(a, b, kSide, kSide);
+    const auto shadowed = std::count(k.begin(), k.end(), std::uint8_t{0});
+    EXPECT_LE(shadowed, std::count(a.begin(), a.end(), std::uint8_t{0}));
+    for (std::size_t p = 0; p < k.size(); ++p)
+        if (k[p] == 0) {
+            EXPECT_TRUE(a[p] == 0 || b[p] == 0) << "pixel " << p;
+        }
+}
+
+TEST(Upsample, FlowMovesAHighlightHalfWay) {
+    const Image a = gaussian_blob(18, 24, 2.0, 5.0f), b = gaussian_blob(26, 24, 2.0, 5.0f);
+    const Image k = halfway_highlights(a, b);
+    const auto [cx, total] = centroid_x(k);
+    EXPECT_NEAR(cx, 22.0, 0.5);
+    EXPECT_NEAR(total, centroid_x(a).second, 0.1 * centroid_x(a).second);
+    // One blob at most of the original height where blending has two at half height.
+    const float peak = *std::max_element(k.samples().begin(), k.samples().end());
+    EXPECT_GT(peak, 0.7f * 5.0f);
+    EXPECT_TRUE(halfway_highlights(Image(), Image()).empty());
+    // A highlight that vanishes fades to half: the blend, not a crash.
+    const Image half = halfway_highlights(a, Image());
+    EXPECT_NEAR(centroid_x(half).second, 0.5 * centroid_x(a).second, 0.05 * centroid_x(a).second);
+}
+
+// Whole fields with closed-form images: pixel (x, y) sees the point (x - 23.5, 23.5 - y, 0)
+// of a plane (field frame: y up), viewed from straight above.
+using Shade = std::function<float(int, int, const Eigen::Vector3d&)>;
+
+ReflectanceField render(const std::vector<Eigen::Vector3d>& directions, const Shade& shade) {
+    ReflectanceField field;
+    for (const auto& d : directions) {
+        field.directions.push_back(d);
+        field.images.push_back(image_of(kSide, kSide, [&](int x, int y) { return shade(x, y, d); }));
+    }
+    return field;
+}
+
+// A checkered plane under a sphere floating above it (the sphere itself not drawn).
+float occluder_scene(int x, int y, const Eigen::Vector3d& l) {
+    const Eigen::Vector3d p(x - 23.5, 23.5 - y, 0.0);
+    const Eigen::Vector3d to_centre = Eigen::Vector3d(0.0, 0.0, 10.0) - p;
+    const double along = to_centre.dot(l);
+    const bool shadowed = along > 0.0 && to_centre.squaredNorm() - along * along < 6.0 * 6.0;
+    const float albedo = ((x / 6 + y / 6) % 2 == 0) ? 0.8f : 0.3f;
+    return shadowed ? 0.02f * albedo : albedo * static_cast<float>(std::max(0.0, l.z()));
+}
+
+// A glossy dome of radius 14 in the middle of a plain plane: a sharp moving highlight.
+float dome_scene(int x, int y, const Eigen::Vector3d& l) {
+    const double dx = x - 23.5, dy = 23.5 - y, r = 14.0;
+    // Seen orthographically, a glossy plane would flash all at once; only the dome is glossy.
+    if (dx * dx + dy * dy >= r * r) return static_cast<float>(0.4 * std::max(0.0, l.z()));
+    const Eigen::Vector3d n = Eigen::Vector3d(dx, dy, std::sqrt(r * r - dx * dx - dy * dy)) / r;
+    const Eigen::Vector3d h = (l + Eigen::Vector3d::UnitZ()).normalized();
+    const double diffuse = 0.4 * std::max(0.0, n.dot(l));
+    const double specular = n.dot(l) > 0.0 ? 6.0 * std::pow(std::max(0.0, n.dot(h)), 400.0) : 0.0;
+    return static_cast<float>(diffuse + specular);
+}
+
+struct Errors {
+    double upsampled = 0.0;  // squared error of the new images
+    double blended = 0.0;    // squared error of linear blending from the inputs there
+};
+
+// Upsamples `shade` seen from `count` directions and scores the new images against the
+// closed form at their directions.
+Errors score(const Shade& shade, std::size_t count, int levels, UpsampleOptions options = {}) {
+    const ReflectanceField input = render(fibonacci_hemisphere(count), shade);
+    const UpsampledField up = upsample_field(input, levels, options);
+    EXPECT_EQ(up.field.size(), count + up.statistics.synthesized);
+    EXPECT_GT(up.statistics.synthesized, 2 * count);
+    const SphericalInterpolator interp(input.directions);
+    Errors e;
+    for (std::size_t k = count; k < up.field.size(); ++k) {
+        const Eigen::Vector3d d = up.field.directions[k];
+        const InterpolationWeights w = interp.weights(d);
+        for (int y = 0; y < kSide; ++y)
+            for (int x = 0; x < kSide; ++x) {
+                const double truth = shade(x, y, d);
+                const double synthesized = up.field.images[k].at(x, y, 0);
+                EXPECT_TRUE(std::isfinite(synthesized));
+                double blend = 0.0;
+                for (std::size_t j = 0; j < w.count; ++j) blend += w.weight[j] * input.images[w.index[j]].at(x, y, 0);
+                e.upsampled += (synthesized - truth) * (synthesized - truth);
+                e.blended += (blend - truth) * (blend - truth);
+            }
+    }
+    return e;
+}
+
+TEST(Upsample, FieldKeepsInputsAndAddsEdgeMidpoints) {
+    const ReflectanceField input = render(fibonacci_hemisphere(40), occluder_scene);
+    const UpsampledField up = upsample_field(input, 1, {});
+    ASSERT_GE(up.field.size(), 40u);
+    for (std::size_t i = 0; i < 40; ++i) {
+        EXPECT_EQ(up.field.images[i], input.images[i]);
+        EXPECT_EQ(up.field.directions[i], input.directions[i]);
+    }
+    // Every new direction halves a Delaunay edge of the inputs.
+    EXPECT_LE(up.field.size() - 40, 3 * delaunay_triangles(input.directions).size());
+    for (std::size_t k = 40; k < up.field.size(); ++k) {
+        double best = -2.0;
+        for (std::size_t i = 0; i < 40; ++i)
+            for (std::size_t j = i + 1; j < 40; ++j)
+                best = std::max(best, (input.directions[i] + input.directions[j]).normalized().dot(up.field.directions[k]));
+        EXPECT_NEAR(best, 1.0, 1e-12);
+    }
+    // Deterministic, and level 0 is the identity.
+    EXPECT_EQ(upsample_field(input, 1, {}).field.images, up.field.images);
+    EXPECT_EQ(upsample_field(input, 0, {}).field.images, input.images);
+}
+
+TEST(Upsample, MovingShadowBeatsLinearBlending) {
+    const Errors e = score(occluder_scene, 100, 1);
+    EXPECT_LT(e.upsampled, 0.8 * e.blended) << "upsampled " << e.upsampled << ", blended " << e.blended;
+}
+
+TEST(Upsample, MovingHighlightBeatsLinearBlending) {
+    const Errors e = score(dome_scene, 100, 1);
+    EXPECT_LT(e.upsampled, 0.5 * e.blended) << "upsampled " << e.upsampled << ", blended " << e.blended;
+}
+
+TEST(Upsample, NoTextureIsLinearBlending) {
+    // A plain diffuse plane: no highlight, no shadow, every new pixel a barycentric blend.
+    const Shade plain = [](int, int, const Eigen::Vector3d& l) { return static_cast<float>(0.6 * std::max(0.0, l.z())); };
+    const ReflectanceField input = render(fibonacci_hemisphere(60), plain);
+    const UpsampledField up = upsample_field(input, 1, {});
+    EXPECT_EQ(up.statistics.highlight_fraction, 0.0);
+    EXPECT_EQ(up.statistics.fallback_fraction, 0.0);
+    const Errors e = score(plain, 60, 1);
+    EXPECT_LE(e.upsampled, 1.0001 * e.blended + 1e-9);
+    // A black field: nothing to separate, nothing to extrapolate, black out.
+    const Shade black = [](int, int, const Eigen::Vector3d&) { return 0.0f; };
+    const UpsampledField dark = upsample_field(render(fibonacci_hemisphere(30), black), 1, {});
+    for (const Image& image : dark.field.images)
+        for (float v : image.samples()) EXPECT_EQ(v, 0.0f);
+}
+
+TEST(Upsample, DimCausticStaysNoWorseThanBlending) {
+    // 6.5.1: a caustic too dim to be a highlight is not flowed; it must still blend.
+    const Shade caustic = [](int x, int y, const Eigen::Vector3d& l) {
+        const double cx = 23.5 + 30.0 * l.x(), cy = 23.5 - 30.0 * l.y();
+        const double spot = 0.25 * std::exp(-((x - cx) * (x - cx) + (y - cy) * (y - cy)) / 4.0);
+        return static_cast<float>((0.5 + spot) * std::max(0.0, l.z()));
+    };
+    const Errors e = score(caustic, 100, 1);
+    EXPECT_LE(e.upsampled, 1.1 * e.blended);
+}
+
+TEST(Upsample, BadOptionsAreInputErrors) {
+    const ReflectanceField input = render(fibonacci_hemisphere(12), occluder_scene);
+    UpsampleOptions o;
+    o.f_highlight = 1.0;
+    EXPECT_THROW(upsample_field(input, 1, o), InputError);
+    o = {};
+    o.f_lit = 1.5;
+    EXPECT_THROW(upsample_field(input, 1, o), InputError);
+    o = {};
+    o.highlight_dilation = 4;
+    EXPECT_THROW(upsample_field(input, 1, o), InputError);
+    EXPECT_THROW(upsample_field(input, 5, {}), InputError);
+    EXPECT_THROW(upsample_field(render(fibonacci_hemisphere(3), occluder_scene), 1, {}), InputError);
+}
+
+}  // namespace
+}  // namespace rfd::relight
