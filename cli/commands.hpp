@@ -23,6 +23,8 @@ void add_study_command(CLI::App& capture, const GlobalOptions& global);
 void add_relight_commands(CLI::App& app, const GlobalOptions& global);
 /// `relight implicit`: train, predict, sweep (thesis chapter 7).
 void add_implicit_commands(CLI::App& relight);
+/// `relight upsample`: feature-guided upsampling (thesis chapter 6).
+void add_upsample_command(CLI::App& relight);
 /// `capture implicit`: training and held-out sets for implicit relighting on the virtual stage.
 void add_capture_implicit_command(CLI::App& capture);
 /// `capture hdr` (exposure brackets) and `capture calibrate` (mirror-sphere light directions).

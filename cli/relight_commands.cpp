@@ -207,6 +207,7 @@ void add_relight_commands(CLI::App& app, const GlobalOptions&) {
     add_render(*relight);
     add_eval(*relight);
     add_implicit_commands(*relight);
+    add_upsample_command(*relight);
 }
 
 }  // namespace rfd::cli
