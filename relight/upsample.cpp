@@ -1,9 +1,8 @@
 #include "relight/upsample.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
-#include <deque>
-#include <map>
 #include <string>
 #include <utility>
 
