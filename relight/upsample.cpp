@@ -404,10 +404,8 @@ Image halfway_highlights(const Image& first, const Image& second) {
         for (float& v : half.samples()) v *= 0.5f;
         return half;
     }
-    const Image& shape = first.empty() ? second : first;
-    const Image zero(shape.width(), shape.height(), shape.channels());
-    const Image& a = first.empty() ? zero : first;
-    const Image& b = second.empty() ? zero : second;
+    const Image& a = first;
+    const Image& b = second;
     if (!a.same_shape(b)) throw InputError("highlight layers of different shapes");
 
     const Image la = luminance(a), lb = luminance(b);
