@@ -48,7 +48,9 @@ void add_upsample_command(CLI::App& relight) {
     cmd->add_option("--fit-neighbours", opt->upsample.fit_neighbours,
                     "Nearest inputs offered to the spherical-harmonic extrapolation")
         ->capture_default_str();
-    cmd->add_option("--format", opt->extension, "Image format of the output field (.exr, .hdr, ...)")
+    // Checked before any work: a field is linear radiance, so only the float formats keep it.
+    cmd->add_option("--format", opt->extension, "Image format of the output field: .exr or .hdr (linear float)")
+        ->check(CLI::IsMember({".exr", ".hdr"}))
         ->capture_default_str();
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
     cmd->callback([opt] {

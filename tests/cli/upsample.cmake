@@ -1,6 +1,6 @@
 # `rfd relight upsample` end to end on a small rendered field: one level adds the edge
 # midpoints and keeps the inputs first, two runs write byte-identical fields, the result is
-# a field that `relight eval` reads, and bad thresholds or too few images are input errors
+# a field that `relight eval` reads, and bad thresholds, an 8-bit format or too few images are errors
 # that name the setting and write nothing.
 file(REMOVE_RECURSE ${OUT})
 include(${CMAKE_CURRENT_LIST_DIR}/run_rfd.cmake)
@@ -42,6 +42,11 @@ run(2 relight upsample ${OUT}/sparse --levels 5 --out ${OUT}/bad)
 expect("levels must be 0 to 4")
 if(EXISTS ${OUT}/bad)
   message(FATAL_ERROR "too many levels: ${OUT}/bad was written")
+endif()
+run(105 relight upsample ${OUT}/sparse --format .png --out ${OUT}/bad)
+expect("--format: .png not in \\{.exr,.hdr\\}")
+if(EXISTS ${OUT}/bad)
+  message(FATAL_ERROR "8-bit output format: ${OUT}/bad was written")
 endif()
 run(2 relight upsample ${OUT}/three --out ${OUT}/bad)
 expect("at least 4 images, the field has 3")
