@@ -48,6 +48,10 @@ void add_upsample_command(CLI::App& relight) {
     cmd->add_option("--fit-neighbours", opt->upsample.fit_neighbours,
                     "Nearest inputs offered to the spherical-harmonic extrapolation")
         ->capture_default_str();
+    cmd->add_option("--blob-reach", opt->upsample.blob_reach,
+                    "Pixels a compact highlight may move between neighbouring inputs and still be matched as one "
+                    "(0: optical flow only)")
+        ->capture_default_str();
     // Checked before any work: a field is linear radiance, so only the float formats keep it.
     cmd->add_option("--format", opt->extension, "Image format of the output field: .exr or .hdr (linear float)")
         ->check(CLI::IsMember({".exr", ".hdr"}))

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <utility>
 
@@ -130,6 +131,8 @@ void check_options(const ReflectanceField& field, int levels, const UpsampleOpti
         throw InputError("f_lit must be in (0, 1] (the thesis uses 0.66 to 0.9), got " + std::to_string(options.f_lit));
     if (!(options.percentile >= 0.0 && options.percentile <= 1.0))
         throw InputError("the percentile must be in [0, 1], got " + std::to_string(options.percentile));
+    if (!(options.blob_reach >= 0.0) || !std::isfinite(options.blob_reach))
+        throw InputError("the blob reach must be a distance in pixels >= 0, got " + std::to_string(options.blob_reach));
     if (options.highlight_dilation < 1 || options.highlight_dilation % 2 == 0)
         throw InputError("the highlight dilation must be an odd box size >= 1, got " +
                          std::to_string(options.highlight_dilation));
@@ -396,25 +399,99 @@ std::vector<ShadowMap> shadow_maps(const std::vector<Image>& prefiltered_luminan
     return maps;
 }
 
-Image halfway_highlights(const Image& first, const Image& second) {
-    if (first.empty() && second.empty()) return {};
-    // A highlight that appears or vanishes has nothing to match: it fades, as in blending.
-    if (first.empty() || second.empty()) {
-        Image half = first.empty() ? second : first;
-        for (float& v : half.samples()) v *= 0.5f;
-        return half;
-    }
-    const Image& a = first;
-    const Image& b = second;
-    if (!a.same_shape(b)) throw InputError("highlight layers of different shapes");
+namespace {
 
+// A connected highlight of one layer: its component label, energy-weighted centroid, total
+// luminance and bounding box (inclusive).
+struct Blob {
+    int label = 0;
+    double x = 0.0, y = 0.0, energy = 0.0;
+    int x0 = 0, y0 = 0, x1 = -1, y1 = -1;
+};
+
+std::vector<Blob> blobs_of(const Image& luminance, cv::Mat& labels) {
+    const cv::Mat l = plane_mat(luminance, 0);
+    const int count = cv::connectedComponents(l > 0.0f, labels, 8, CV_32S);
+    std::vector<Blob> blobs(static_cast<std::size_t>(count));
+    for (Blob& b : blobs) {
+        b.x0 = l.cols;
+        b.y0 = l.rows;
+    }
+    for (int y = 0; y < l.rows; ++y)
+        for (int x = 0; x < l.cols; ++x) {
+            const int k = labels.at<int>(y, x);
+            if (k == 0) continue;
+            const double v = l.at<float>(y, x);
+            Blob& b = blobs[static_cast<std::size_t>(k)];
+            b.label = k;
+            b.energy += v;
+            b.x += v * x;
+            b.y += v * y;
+            b.x0 = std::min(b.x0, x);
+            b.y0 = std::min(b.y0, y);
+            b.x1 = std::max(b.x1, x);
+            b.y1 = std::max(b.y1, y);
+        }
+    std::vector<Blob> kept;
+    for (Blob& b : blobs)
+        if (b.energy > 0.0) {
+            b.x /= b.energy;
+            b.y /= b.energy;
+            kept.push_back(b);
+        }
+    return kept;
+}
+
+std::size_t nearest_blob(const Blob& from, const std::vector<Blob>& to) {
+    std::size_t best = to.size();
+    double best_distance = std::numeric_limits<double>::infinity();
+    for (std::size_t j = 0; j < to.size(); ++j) {
+        const double d = std::hypot(to[j].x - from.x, to[j].y - from.y);
+        if (d < best_distance) {
+            best_distance = d;
+            best = j;
+        }
+    }
+    return best;
+}
+
+// Adds weight x the pixels of `blob` in `image`, moved by (dx, dy) and spread bilinearly
+// over the four pixels around where each lands, so that the energy is kept exactly.
+void splat(const Image& image, const cv::Mat& labels, const Blob& blob, double dx, double dy, float weight,
+           Image& out) {
+    const int shift_x = static_cast<int>(std::floor(dx)), shift_y = static_cast<int>(std::floor(dy));
+    const auto fx = static_cast<float>(dx - shift_x), fy = static_cast<float>(dy - shift_y);
+    const std::array<float, 4> share = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
+    for (int y = blob.y0; y <= blob.y1; ++y)
+        for (int x = blob.x0; x <= blob.x1; ++x) {
+            if (labels.at<int>(y, x) != blob.label) continue;
+            for (int q = 0; q < 4; ++q) {
+                const int tx = x + shift_x + q % 2, ty = y + shift_y + q / 2;
+                if (share[static_cast<std::size_t>(q)] == 0.0f || tx < 0 || ty < 0 || tx >= out.width() ||
+                    ty >= out.height())
+                    continue;
+                const float w = weight * share[static_cast<std::size_t>(q)];
+                for (int c = 0; c < image.channels(); ++c) out.at(tx, ty, c) += w * image.at(x, y, c);
+            }
+        }
+}
+
+// Half-way by dense optical flow both ways; either layer may be all zero (it then fades).
+Image halfway_by_flow(const Image& a, const Image& b) {
+    const bool a_empty = all_zero(a), b_empty = all_zero(b);
+    Image out(a.width(), a.height(), a.channels());
+    if (a_empty && b_empty) return out;
+    // A highlight that appears or vanishes has nothing to match: it fades, as in blending.
+    if (a_empty || b_empty) {
+        const Image& only = a_empty ? b : a;
+        for (std::size_t s = 0; s < out.samples().size(); ++s) out.samples()[s] = 0.5f * only.samples()[s];
+        return out;
+    }
     const Image la = luminance(a), lb = luminance(b);
     std::vector<float> levels;
     for (const Image* l : {&la, &lb})
         for (float v : l->plane(0))
             if (v > 0.0f) levels.push_back(v);
-    Image out(a.width(), a.height(), a.channels());
-    if (levels.empty()) return out;
     std::nth_element(levels.begin(), levels.begin() + static_cast<std::ptrdiff_t>(levels.size() / 2), levels.end());
     const float clamp = levels[levels.size() / 2];
 
@@ -428,6 +505,53 @@ Image halfway_highlights(const Image& first, const Image& second) {
     conserve_energy(wb, b);
     for (std::size_t s = 0; s < out.samples().size(); ++s)
         out.samples()[s] = 0.5f * (wa.samples()[s] + wb.samples()[s]);
+    return out;
+}
+
+}  // namespace
+
+Image halfway_highlights(const Image& first, const Image& second, double blob_reach) {
+    if (first.empty() && second.empty()) return {};
+    const Image& shape = first.empty() ? second : first;
+    const Image zero(shape.width(), shape.height(), shape.channels());
+    const Image& a = first.empty() ? zero : first;
+    const Image& b = second.empty() ? zero : second;
+    if (!a.same_shape(b)) throw InputError("highlight layers of different shapes");
+
+    // Compact highlights that are each other's nearest within blob_reach pixels, of similar
+    // energy, are one highlight that moved: each is carried rigidly half-way to the other.
+    // A highlight of a few pixels gives the flow almost nothing to fit (its images barely
+    // overlap), yet its centroid is exact.
+    cv::Mat labels_a, labels_b;
+    const std::vector<Blob> blobs_a = blobs_of(luminance(a), labels_a), blobs_b = blobs_of(luminance(b), labels_b);
+    Image out(a.width(), a.height(), a.channels());
+    std::vector<bool> matched_a(blobs_a.size(), false), matched_b(blobs_b.size(), false);
+    for (std::size_t i = 0; i < blobs_a.size() && blob_reach > 0.0; ++i) {
+        const Blob& p = blobs_a[i];
+        const std::size_t j = nearest_blob(p, blobs_b);
+        if (j == blobs_b.size() || nearest_blob(blobs_b[j], blobs_a) != i) continue;
+        const Blob& q = blobs_b[j];
+        const double ratio = p.energy / q.energy;
+        if (std::hypot(q.x - p.x, q.y - p.y) > blob_reach || ratio < 0.25 || ratio > 4.0) continue;
+        matched_a[i] = matched_b[j] = true;
+        splat(a, labels_a, p, 0.5 * (q.x - p.x), 0.5 * (q.y - p.y), 0.5f, out);
+        splat(b, labels_b, q, 0.5 * (p.x - q.x), 0.5 * (p.y - q.y), 0.5f, out);
+    }
+    // Everything else (large, merging or splitting highlights, caustics) goes to the flow.
+    const auto unmatched = [](const Image& layer, const cv::Mat& labels, const std::vector<Blob>& blobs,
+                              const std::vector<bool>& matched) {
+        Image rest = layer;
+        for (std::size_t k = 0; k < blobs.size(); ++k)
+            if (matched[k])
+                for (int y = blobs[k].y0; y <= blobs[k].y1; ++y)
+                    for (int x = blobs[k].x0; x <= blobs[k].x1; ++x)
+                        if (labels.at<int>(y, x) == blobs[k].label)
+                            for (int c = 0; c < rest.channels(); ++c) rest.at(x, y, c) = 0.0f;
+        return rest;
+    };
+    const Image flowed = halfway_by_flow(unmatched(a, labels_a, blobs_a, matched_a),
+                                         unmatched(b, labels_b, blobs_b, matched_b));
+    for (std::size_t s = 0; s < out.samples().size(); ++s) out.samples()[s] += flowed.samples()[s];
     return out;
 }
 
@@ -536,7 +660,7 @@ UpsampledField upsample_field(const ReflectanceField& field, int levels, const U
                 const Node& b = nodes[edges[e][1]];
                 added[e].direction = (a.direction + b.direction).normalized();
                 added[e].kernel_radius = 0.5 * (a.kernel_radius + b.kernel_radius);
-                added[e].highlights = halfway_highlights(a.highlights, b.highlights);
+                added[e].highlights = halfway_highlights(a.highlights, b.highlights, options.blob_reach);
                 if (!added[e].highlights.empty() && all_zero(added[e].highlights)) added[e].highlights = Image();
                 added[e].shadow = halfway_shadow_map(a.shadow, b.shadow, width, height);
                 progress.advance();
