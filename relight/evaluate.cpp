@@ -34,7 +34,9 @@ double relit_squared_error(const Image& reference, const std::array<const Image*
     return sum;
 }
 
-Evaluation evaluate(const ReflectanceField& sparse, const ReflectanceField& reference, Interpolation method) {
+namespace {
+
+void check_same_view(const ReflectanceField& sparse, const ReflectanceField& reference) {
     if (sparse.images.empty() || reference.images.empty())
         throw InputError("evaluation needs two non-empty fields (sparse: " + std::to_string(sparse.size()) +
                          " images, reference: " + std::to_string(reference.size()) + ")");
@@ -50,6 +52,20 @@ Evaluation evaluate(const ReflectanceField& sparse, const ReflectanceField& refe
                                  std::to_string(i) + " is " + shape_text(field->images[i]) +
                                  ", the sparse field's first image is " + shape_text(shape) +
                                  "; both fields must show the same view at the same size");
+}
+
+// PSNR of a total squared error over `samples` samples against `peak`: +inf for no error.
+double psnr_of(double total_squared_error, double samples, double peak) {
+    const double mse = total_squared_error / samples;
+    if (mse == 0.0) return std::numeric_limits<double>::infinity();
+    return 10.0 * std::log10(peak * peak / mse);
+}
+
+}  // namespace
+
+Evaluation evaluate(const ReflectanceField& sparse, const ReflectanceField& reference, Interpolation method) {
+    check_same_view(sparse, reference);
+    const Image& shape = sparse.images.front();
     RFD_CHECK(reference.directions.size() == reference.images.size());
 
     const SphericalInterpolator interpolator(sparse.directions);
@@ -73,9 +89,28 @@ Evaluation evaluate(const ReflectanceField& sparse, const ReflectanceField& refe
     for (const double e : result.per_direction) result.total_squared_error += e;  // fixed order
     const double peak = *std::max_element(peaks.begin(), peaks.end());
     const double samples = static_cast<double>(reference.size()) * static_cast<double>(shape.samples().size());
-    const double mse = result.total_squared_error / samples;
-    if (mse == 0.0) result.psnr = std::numeric_limits<double>::infinity();
-    else result.psnr = 10.0 * std::log10(peak * peak / mse);
+    result.psnr = psnr_of(result.total_squared_error, samples, peak);
+    result.peak = peak;
+    return result;
+}
+
+LightEvaluation evaluate_under_lights(const ReflectanceField& sparse, const ReflectanceField& reference,
+                                      const std::vector<Light>& lights, Interpolation method) {
+    check_same_view(sparse, reference);
+    if (lights.empty()) throw InputError("evaluation under lights needs at least one light");
+    LightEvaluation result;
+    Evaluation& score = result.score;
+    for (const Light& light : lights) {
+        Image relit = render(sparse, {light}, method), truth = render(reference, {light}, method);
+        score.per_direction.push_back(relit_squared_error(truth, {&relit, &relit, &relit}, {1.0f, 0.0f, 0.0f}));
+        score.total_squared_error += score.per_direction.back();
+        for (const float v : truth.samples()) score.peak = std::max(score.peak, static_cast<double>(v));
+        result.relit.push_back(std::move(relit));
+        result.reference_relit.push_back(std::move(truth));
+    }
+    const double samples =
+        static_cast<double>(lights.size()) * static_cast<double>(sparse.images.front().samples().size());
+    score.psnr = psnr_of(score.total_squared_error, samples, score.peak);
     return result;
 }
 

@@ -17,12 +17,14 @@
 
 #include "relight/field.hpp"
 #include "relight/interpolation.hpp"
+#include "relight/render.hpp"
 
 namespace rfd::relight {
 
 struct Evaluation {
     double total_squared_error = 0.0;   ///< sum over reference directions, pixels, channels
     double psnr = 0.0;                  ///< dB, peak = max reference sample
+    double peak = 0.0;                  ///< that largest reference sample (linear)
     std::vector<double> per_direction;  ///< squared error per reference direction, reference order
 };
 
@@ -30,6 +32,20 @@ struct Evaluation {
 /// SphericalInterpolator throws for the sparse field's directions.
 Evaluation evaluate(const ReflectanceField& sparse, const ReflectanceField& reference,
                     Interpolation method = Interpolation::delaunay);
+
+/// The same score under each of `lights` instead of every reference direction: both fields
+/// relit (render()) and compared, one entry of per_direction per light; peak = the largest
+/// sample of the reference's relit images. For area lights and environment maps, where
+/// interpolation errors average out or not.
+struct LightEvaluation {
+    Evaluation score;
+    std::vector<Image> relit;            ///< the sparse field under each light
+    std::vector<Image> reference_relit;  ///< the reference under each light
+};
+
+/// InputError as evaluate(), and for no lights or a light check_light() rejects.
+LightEvaluation evaluate_under_lights(const ReflectanceField& sparse, const ReflectanceField& reference,
+                                      const std::vector<Light>& lights, Interpolation method = Interpolation::delaunay);
 
 /// Sum of (w0 a + w1 b + w2 c - reference)^2 over every sample (weights of images a, b, c;
 /// pass the same image with weight 0 for unused slots). Fixed order, vectorisable.

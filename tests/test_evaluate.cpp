@@ -7,6 +7,7 @@
 
 #include "core/error.hpp"
 #include "core/sphere.hpp"
+#include "core/units.hpp"
 #include "relight/evaluate.hpp"
 #include "relight/render.hpp"
 #include "tests/support/lambertian_sphere.hpp"
@@ -89,6 +90,36 @@ TEST(Evaluate, DeterministicAndShapeChecked) {
         EXPECT_NE(std::string(error.what()).find("21x21x1"), std::string::npos) << error.what();
     }
     EXPECT_THROW(evaluate(sparse, ReflectanceField{}), InputError);
+}
+
+TEST(Evaluate, UnderLightsAgreesWithTheDirectionScoreAndWithRendering) {
+    const ReflectanceField sparse = lambertian_sphere_field(fibonacci_hemisphere(40), 24);
+    const ReflectanceField reference = lambertian_sphere_field(reference_directions(), 24);
+    const Evaluation per_direction = evaluate(sparse, reference);
+    // A point light from a reference direction relights the reference to its own image there.
+    for (const std::size_t j : {3u, 77u}) {
+        const LightEvaluation e =
+            evaluate_under_lights(sparse, reference, {DirectionalLight{reference.directions[j], Eigen::Vector3d::Ones()}});
+        EXPECT_NEAR(e.score.per_direction.at(0), per_direction.per_direction[j], 1e-6 * per_direction.per_direction[j]);
+    }
+    // A disk: the error of the two renderings, computed here independently.
+    const Light disk = DiskLight{Eigen::Vector3d(0.3, 0.1, 1.0).normalized(), degrees_to_radians(10.0),
+                                 Eigen::Vector3d::Ones()};
+    const LightEvaluation e = evaluate_under_lights(sparse, reference, {disk});
+    const Image a = render(sparse, {disk}), b = render(reference, {disk});
+    double error = 0.0, peak = 0.0;
+    for (std::size_t k = 0; k < a.samples().size(); ++k) {
+        const double diff = static_cast<double>(a.samples()[k]) - b.samples()[k];
+        error += diff * diff;
+        peak = std::max(peak, static_cast<double>(b.samples()[k]));
+    }
+    EXPECT_NEAR(e.score.total_squared_error, error, 1e-9 * error);
+    EXPECT_GT(error, 0.0);
+    EXPECT_NEAR(e.score.psnr, 10.0 * std::log10(peak * peak * static_cast<double>(a.samples().size()) / error), 1e-9);
+    EXPECT_EQ(e.relit.at(0), a);
+    EXPECT_EQ(e.reference_relit.at(0), b);
+    EXPECT_EQ(evaluate_under_lights(reference, reference, {disk}).score.total_squared_error, 0.0);
+    EXPECT_THROW(evaluate_under_lights(sparse, reference, {}), InputError);
 }
 
 }  // namespace
