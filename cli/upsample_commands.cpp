@@ -52,6 +52,12 @@ void add_upsample_command(CLI::App& relight) {
                     "Pixels a compact highlight may move between neighbouring inputs and still be matched as one "
                     "(0: optical flow only)")
         ->capture_default_str();
+    cmd->add_option("--prior-iterations", opt->upsample.priors.iterations,
+                    "Image-based prior iterations on extrapolated and shadow-edge pixels (thesis 6.4.2: 3; 0: off)")
+        ->capture_default_str();
+    cmd->add_option("--prior-proximity", opt->upsample.priors.proximity,
+                    "How strongly the prior prefers windows close by (patch-distance units per pixel)")
+        ->capture_default_str();
     // Checked before any work: a field is linear radiance, so only the float formats keep it.
     cmd->add_option("--format", opt->extension, "Image format of the output field: .exr or .hdr (linear float)")
         ->check(CLI::IsMember({".exr", ".hdr"}))

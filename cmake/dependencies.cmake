@@ -32,6 +32,12 @@ else()
   target_include_directories(rfd_opencv SYSTEM INTERFACE ${RFD_OPENCV_INCLUDE_DIR})
 endif()
 
+# nanoflann (header only, no CMake config in Debian 12): the k-d tree of image windows that
+# upsampling's image-based priors search (relight/image_priors, thesis 6.4.2).
+find_path(RFD_NANOFLANN_INCLUDE_DIR nanoflann.hpp REQUIRED)
+add_library(rfd_nanoflann INTERFACE)
+target_include_directories(rfd_nanoflann SYSTEM INTERFACE ${RFD_NANOFLANN_INCLUDE_DIR})
+
 if(RFD_BUILD_TESTS)
   find_package(GTest REQUIRED)
 endif()

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -16,6 +17,7 @@
 #include "core/parallel.hpp"
 #include "core/progress.hpp"
 #include "core/sphere.hpp"
+#include "relight/image_priors.hpp"
 #include "relight/interpolation.hpp"
 
 namespace rfd::relight {
@@ -131,6 +133,13 @@ void check_options(const ReflectanceField& field, int levels, const UpsampleOpti
         throw InputError("f_lit must be in (0, 1] (the thesis uses 0.66 to 0.9), got " + std::to_string(options.f_lit));
     if (!(options.percentile >= 0.0 && options.percentile <= 1.0))
         throw InputError("the percentile must be in [0, 1], got " + std::to_string(options.percentile));
+    if (options.priors.iterations < 0 || options.priors.iterations > 20)
+        throw InputError("prior iterations must be 0 (off) to 20 (the thesis uses 3), got " +
+                         std::to_string(options.priors.iterations));
+    if (!(options.priors.proximity > 0.0) || !std::isfinite(options.priors.proximity))
+        throw InputError("the prior's proximity weight must be > 0, got " + std::to_string(options.priors.proximity));
+    if (options.priors.candidates < 1)
+        throw InputError("the prior needs at least 1 candidate window, got " + std::to_string(options.priors.candidates));
     if (!(options.blob_reach >= 0.0) || !std::isfinite(options.blob_reach))
         throw InputError("the blob reach must be a distance in pixels >= 0, got " + std::to_string(options.blob_reach));
     if (options.highlight_dilation < 1 || options.highlight_dilation % 2 == 0)
@@ -175,6 +184,24 @@ std::vector<float> blurred_shadow(const std::vector<Node>& nodes, const std::vec
 }
 
 // The synthesis of 6.4.1 for one new direction.
+// The image priors' windows (5 x 5, as in the thesis's figures) and the principal
+// components the k-d tree searches; the basis is fitted to every 8th window of the inputs.
+constexpr int kPriorWindowRadius = 2;
+constexpr int kPriorComponents = 8;
+constexpr int kPriorBasisStride = 8;
+
+// Adds to `mask` the pixels on either side of a lit/shadow boundary of `shadow`.
+void mark_shadow_edges(const ShadowMap& shadow, int width, int height, std::vector<std::uint8_t>& mask) {
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            const auto p = static_cast<std::size_t>(y * width + x);
+            const bool right = x + 1 < width && shadow[p + 1] != shadow[p];
+            const bool below = y + 1 < height && shadow[p + static_cast<std::size_t>(width)] != shadow[p];
+            if (right) mask[p] = mask[p + 1] = 1;
+            if (below) mask[p] = mask[p + static_cast<std::size_t>(width)] = 1;
+        }
+}
+
 class Synthesis {
 public:
     Synthesis(const ReflectanceField& field, const std::vector<Image>& diffuse,
@@ -188,13 +215,15 @@ public:
         std::size_t fallback = 0;
     };
 
-    // The diffuse reconstruction R_reco at `direction` (without highlights).
+    // The diffuse reconstruction R_reco at `direction` (without highlights); `extrapolated`
+    // gets 1 where the value came from the fit rather than the barycentric blend.
     Image reconstruct(const Eigen::Vector3d& direction, const InterpolationWeights& weights,
                       const std::vector<std::size_t>& fit_set, const std::vector<float>& blurred_k,
-                      Counts& counts) const {
+                      Counts& counts, std::vector<std::uint8_t>& extrapolated_mask) const {
         const int channels = field_.channels();
         const std::size_t pixels = field_.images.front().pixel_count();
         Image out(field_.width(), field_.height(), channels);
+        extrapolated_mask.assign(pixels, 0);
 
         // Fit samples: offsets from the target (the fit's constant term is the value there)
         // and closeness weights.
@@ -243,6 +272,7 @@ public:
                 out.plane(c)[p] = static_cast<float>(v);
             }
             counts.extrapolated += extrapolated ? 1 : 0;
+            extrapolated_mask[p] = extrapolated ? 1 : 0;
             counts.fallback += fell_back ? 1 : 0;
         }
         return out;
@@ -690,6 +720,12 @@ UpsampledField upsample_field(const ReflectanceField& field, int levels, const U
     std::vector<const ShadowMap*> input_shadow(n);
     for (std::size_t i = 0; i < n; ++i) input_shadow[i] = &nodes[i].shadow;
     const Synthesis synthesis(field, diffuse, input_blurred, input_shadow, spacing);
+    std::optional<PatchBasis> patch_basis;
+    if (options.priors.iterations > 0) {
+        std::vector<const Image*> all_diffuse;
+        for (const Image& d : diffuse) all_diffuse.push_back(&d);
+        patch_basis = PatchBasis::fit(all_diffuse, kPriorWindowRadius, kPriorComponents, kPriorBasisStride);
+    }
     const std::size_t added = nodes.size() - n;
     std::vector<Image> synthesized(added);
     std::vector<Synthesis::Counts> counts(added);
@@ -701,8 +737,18 @@ UpsampledField upsample_field(const ReflectanceField& field, int levels, const U
                 const auto blurred = blurred_shadow(nodes, nearest_directions(node.direction, all_directions, blur));
                 const auto fit_set = nearest_directions(node.direction, field.directions,
                                                         static_cast<std::size_t>(options.fit_neighbours));
-                Image image = synthesis.reconstruct(node.direction, interpolator.weights(node.direction), fit_set,
-                                                    blurred, counts[a]);
+                const InterpolationWeights weights = interpolator.weights(node.direction);
+                std::vector<std::uint8_t> uncertain;
+                Image image = synthesis.reconstruct(node.direction, weights, fit_set, blurred, counts[a], uncertain);
+                if (options.priors.iterations > 0) {
+                    // 6.4.2: extrapolated pixels and those at a shadow edge are checked
+                    // against the windows of the inputs around this direction.
+                    mark_shadow_edges(node.shadow, width, height, uncertain);
+                    std::vector<const Image*> sources;
+                    for (std::size_t j = 0; j < weights.count; ++j)
+                        if (weights.weight[j] > 0.0) sources.push_back(&diffuse[weights.index[j]]);
+                    image = regularise_with_priors(image, uncertain, sources, *patch_basis, options.priors);
+                }
                 if (!node.highlights.empty())
                     for (std::size_t s = 0; s < image.samples().size(); ++s)
                         image.samples()[s] += node.highlights.samples()[s];

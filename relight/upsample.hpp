@@ -33,14 +33,19 @@
 //    the barycentric blend of D; where all are 0 the shadowed value is; otherwise the value
 //    is extrapolated by a least-squares fit of two spherical-harmonic bands (1, x, y, z) to
 //    the `fit_neighbours` nearest inputs labelled lit (or shadowed) at the pixel, weighted by
-//    closeness and by the label's reliability (S-bar). R_k = S-bar_k * lit +
-//    (1 - S-bar_k) * shadowed + H_k.
+//    closeness and by the label's reliability (S-bar). R_reco = S-bar_k * lit +
+//    (1 - S-bar_k) * shadowed.
+// 4. Image-based priors (6.4.2, relight/image_priors.hpp): the extrapolated pixels of R_reco
+//    and those at an edge of S_k are regularised, `priors.iterations` times (3), against
+//    the 5 x 5 windows of the highlight-free inputs D of the triangle around k, matched up
+//    to an intensity scale. R_k = R_reco + H_k. (Spheres scene, 256 stage lights, one
+//    level: +1.4 dB on the diffuse half of the image, 1.5x the time per image.)
 //
 // Where it fails stays no worse than linear blending: a pixel with no reliable samples of
 // the needed state falls back to the barycentric blend, pixels that are black in every
 // image are never highlights, a highlight-free pair of images skips the flow, and shadow
 // maps that do not overlap blend to whatever their mean distance says (the thesis's
-// grazing-angle limitation, 6.5.1). Image-based priors (6.4.2) are not applied here.
+// grazing-angle limitation, 6.5.1).
 //
 // Example: UpsampledField up = upsample_field(read_field("in"), 1, UpsampleOptions{});
 
@@ -50,6 +55,7 @@
 
 #include "core/image.hpp"
 #include "relight/field.hpp"
+#include "relight/image_priors.hpp"
 
 namespace rfd::relight {
 
@@ -61,6 +67,7 @@ struct UpsampleOptions {
     int blur_neighbours = 1;             ///< directions averaged into S-bar (thesis: 10; see above)
     int fit_neighbours = 16;             ///< inputs offered to the SH extrapolation
     double blob_reach = 12.0;            ///< pixels a compact highlight may move and be matched (0: flow only)
+    PriorOptions priors;                 ///< regularisation of uncertain pixels (iterations 0: off)
 };
 
 /// A binary map per pixel, row-major, 1 = lit.

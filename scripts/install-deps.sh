@@ -17,6 +17,9 @@ packages=(
   # OpenCV's video module: Farneback optical flow carrying highlights between light
   # directions when upsampling a field (relight/upsample, thesis 6.3.1).
   libopencv-video-dev
+  # nanoflann: the k-d tree of intensity-normalised image windows searched by upsampling's
+  # image-based priors (relight/image_priors, thesis 6.4.2).
+  libnanoflann-dev
   # Embree 3: ray intersection for the virtual light stage (relight/ray_scene.cpp).
   libembree-dev
   libtomlplusplus-dev libcli11-dev nlohmann-json3-dev

@@ -1,0 +1,256 @@
+#include "relight/image_priors.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <string>
+
+#include <nanoflann.hpp>
+
+#include "core/error.hpp"
+
+namespace rfd::relight {
+namespace {
+
+// Channel-mean luminance sampled with clamped coordinates, so that windows reaching past
+// the border repeat the edge instead of needing special cases.
+class Luminance {
+public:
+    explicit Luminance(const Image& image) : width_(image.width()), height_(image.height()) {
+        values_.assign(image.pixel_count(), 0.0f);
+        const float scale = 1.0f / static_cast<float>(image.channels());
+        for (int c = 0; c < image.channels(); ++c) {
+            const auto plane = image.plane(c);
+            for (std::size_t p = 0; p < values_.size(); ++p) values_[p] += scale * plane[p];
+        }
+    }
+    float at(int x, int y) const {
+        x = std::clamp(x, 0, width_ - 1);
+        y = std::clamp(y, 0, height_ - 1);
+        return values_[static_cast<std::size_t>(y) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(x)];
+    }
+    void window(int cx, int cy, int radius, float* out) const {
+        for (int v = -radius; v <= radius; ++v)
+            for (int u = -radius; u <= radius; ++u) *out++ = at(cx + u, cy + v);
+    }
+
+private:
+    int width_, height_;
+    std::vector<float> values_;
+};
+
+float sample(const Image& image, int x, int y, int c) {
+    return image.at(std::clamp(x, 0, image.width() - 1), std::clamp(y, 0, image.height() - 1), c);
+}
+
+// The sources' windows as points of the k-d tree: PCA coordinates, then position.
+struct WindowCloud {
+    std::size_t dims = 0;
+    std::vector<float> features;  // point-major
+    struct Origin {
+        std::uint32_t source;
+        int x, y;
+    };
+    std::vector<Origin> origins;
+
+    std::size_t kdtree_get_point_count() const { return origins.size(); }
+    float kdtree_get_pt(std::size_t index, std::size_t dim) const { return features[index * dims + dim]; }
+    template <class Box>
+    bool kdtree_get_bbox(Box&) const {
+        return false;
+    }
+};
+
+using WindowTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, WindowCloud>, WindowCloud,
+                                                       -1, std::uint32_t>;
+
+// Row-major mask grown by a (2 radius + 1)^2 box.
+std::vector<std::uint8_t> dilated(const std::vector<std::uint8_t>& mask, int width, int height, int radius) {
+    std::vector<std::uint8_t> rows(mask.size(), 0), out(mask.size(), 0);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            if (!mask[static_cast<std::size_t>(y * width + x)]) continue;
+            for (int u = std::max(0, x - radius); u <= std::min(width - 1, x + radius); ++u)
+                rows[static_cast<std::size_t>(y * width + u)] = 1;
+        }
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            if (!rows[static_cast<std::size_t>(y * width + x)]) continue;
+            for (int v = std::max(0, y - radius); v <= std::min(height - 1, y + radius); ++v)
+                out[static_cast<std::size_t>(v * width + x)] = 1;
+        }
+    return out;
+}
+
+// A window of the estimate matched to a source window up to the scale `lambda`.
+struct Match {
+    std::uint32_t source = 0;
+    int dx = 0, dy = 0;          // match centre minus query centre
+    float lambda = 0.0f;
+    double distance = 0.0;       // d / |W_E|^2
+    bool found = false;
+};
+
+}  // namespace
+
+PatchBasis PatchBasis::fit(const std::vector<const Image*>& images, int radius, int components, int stride) {
+    if (images.empty()) throw InputError("image priors need at least one source image");
+    if (radius < 1) throw InputError("the prior window radius must be >= 1, got " + std::to_string(radius));
+    const int side = 2 * radius + 1, size = side * side;
+    if (components < 1 || components > size)
+        throw InputError("the prior's principal components must be 1 to " + std::to_string(size) + ", got " +
+                         std::to_string(components));
+    if (stride < 1) throw InputError("the prior's sampling stride must be >= 1");
+    for (const Image* image : images)
+        if (!image->same_shape(*images.front())) throw InputError("image prior sources of different shapes");
+
+    Eigen::MatrixXd scatter = Eigen::MatrixXd::Zero(size, size);
+    std::vector<float> window(static_cast<std::size_t>(size));
+    for (const Image* image : images) {
+        const Luminance luminance(*image);
+        for (int y = 0; y < image->height(); y += stride)
+            for (int x = 0; x < image->width(); x += stride) {
+                luminance.window(x, y, radius, window.data());
+                const Eigen::Map<const Eigen::VectorXf> w(window.data(), size);
+                const double norm = w.norm();
+                if (norm <= 0.0) continue;
+                const Eigen::VectorXd unit = w.cast<double>() / norm;
+                scatter.noalias() += unit * unit.transpose();
+            }
+    }
+    // Uncentred: the mean window (flat) is the leading axis, which is what separates a
+    // bright flat patch from an edge once intensities are normalised away.
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(scatter);
+    PatchBasis basis;
+    basis.radius_ = radius;
+    basis.axes_ = solver.eigenvectors().rightCols(components).rowwise().reverse().cast<float>();
+    return basis;
+}
+
+void PatchBasis::project(const float* window, float* out) const {
+    const Eigen::Map<const Eigen::VectorXf> w(window, axes_.rows());
+    const float norm = w.norm();
+    Eigen::Map<Eigen::VectorXf> coordinates(out, axes_.cols());
+    if (norm <= 0.0f) coordinates.setZero();
+    else coordinates.noalias() = axes_.transpose() * (w / norm);
+}
+
+Image regularise_with_priors(const Image& estimate, const std::vector<std::uint8_t>& uncertain,
+                             const std::vector<const Image*>& sources, const PatchBasis& basis,
+                             const PriorOptions& options) {
+    if (options.iterations < 0) throw InputError("prior iterations must be >= 0");
+    if (!(options.proximity > 0.0) || !std::isfinite(options.proximity))
+        throw InputError("the prior's proximity weight must be > 0");
+    if (options.candidates < 1) throw InputError("the prior needs at least one candidate window");
+    if (sources.empty()) throw InputError("image priors need at least one source image");
+    for (const Image* source : sources)
+        if (!source->same_shape(estimate)) throw InputError("image prior sources must have the estimate's shape");
+    if (uncertain.size() != estimate.pixel_count()) throw InputError("the uncertain mask must cover every pixel");
+    if (options.iterations == 0 || std::none_of(uncertain.begin(), uncertain.end(), [](std::uint8_t u) { return u; }))
+        return estimate;
+
+    const int width = estimate.width(), height = estimate.height(), channels = estimate.channels();
+    const int radius = basis.radius(), side = 2 * radius + 1;
+    const auto components = static_cast<std::size_t>(basis.components());
+    const auto proximity = static_cast<float>(options.proximity);
+    // A window farther than this can never beat a perfect match at the query's position:
+    // unit windows of non-negative values are at most sqrt(2) apart.
+    const int reach = static_cast<int>(std::ceil(std::sqrt(2.0) / options.proximity));
+    const std::vector<std::uint8_t> queries = dilated(uncertain, width, height, radius);
+    const std::vector<std::uint8_t> offered = dilated(uncertain, width, height, radius + reach);
+
+    WindowCloud cloud;
+    cloud.dims = components + 2;
+    std::vector<float> window(static_cast<std::size_t>(side * side));
+    for (std::size_t s = 0; s < sources.size(); ++s) {
+        const Luminance luminance(*sources[s]);
+        for (int y = 0; y < height; ++y)
+            for (int x = 0; x < width; ++x) {
+                if (!offered[static_cast<std::size_t>(y * width + x)]) continue;
+                luminance.window(x, y, radius, window.data());
+                const std::size_t at = cloud.features.size();
+                cloud.features.resize(at + cloud.dims);
+                basis.project(window.data(), &cloud.features[at]);
+                cloud.features[at + components] = proximity * static_cast<float>(x);
+                cloud.features[at + components + 1] = proximity * static_cast<float>(y);
+                cloud.origins.push_back({static_cast<std::uint32_t>(s), x, y});
+            }
+    }
+    const WindowTree tree(static_cast<int>(cloud.dims), cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+
+    const auto candidates = std::min<std::size_t>(static_cast<std::size_t>(options.candidates), cloud.origins.size());
+    std::vector<std::uint32_t> found(candidates);
+    std::vector<float> found_distance(candidates), query(cloud.dims);
+    std::vector<Match> matches(estimate.pixel_count());
+    std::vector<double> distances;
+    Image current = estimate;
+    for (int iteration = 0; iteration < options.iterations; ++iteration) {
+        const Luminance luminance(current);
+        distances.clear();
+        for (int y = 0; y < height; ++y)
+            for (int x = 0; x < width; ++x) {
+                const auto p = static_cast<std::size_t>(y * width + x);
+                matches[p] = Match{};
+                if (!queries[p]) continue;
+                luminance.window(x, y, radius, window.data());
+                basis.project(window.data(), query.data());
+                query[components] = proximity * static_cast<float>(x);
+                query[components + 1] = proximity * static_cast<float>(y);
+                const std::size_t count = tree.knnSearch(query.data(), candidates, found.data(), found_distance.data());
+                // The exact distance up to a scale, over every channel (eq. 6.1).
+                for (std::size_t k = 0; k < count; ++k) {
+                    const WindowCloud::Origin& origin = cloud.origins[found[k]];
+                    const Image& source = *sources[origin.source];
+                    double ee = 0.0, ei = 0.0, ii = 0.0;
+                    for (int c = 0; c < channels; ++c)
+                        for (int v = -radius; v <= radius; ++v)
+                            for (int u = -radius; u <= radius; ++u) {
+                                const double e = sample(current, x + u, y + v, c);
+                                const double i = sample(source, origin.x + u, origin.y + v, c);
+                                ee += e * e;
+                                ei += e * i;
+                                ii += i * i;
+                            }
+                    const double lambda = ii > 0.0 ? ei / ii : 0.0;
+                    const double residual = std::max(0.0, ee - lambda * ei);
+                    const double distance = ee > 0.0 ? residual / ee : 0.0;
+                    if (!matches[p].found || distance < matches[p].distance)
+                        matches[p] = {origin.source, origin.x - x, origin.y - y, static_cast<float>(lambda), distance,
+                                      true};
+                }
+                if (matches[p].found) distances.push_back(matches[p].distance);
+            }
+        if (distances.empty()) break;
+        const auto rank = static_cast<std::ptrdiff_t>(3 * distances.size() / 4);
+        std::nth_element(distances.begin(), distances.begin() + rank, distances.end());
+        const double sigma2 = std::max(distances[static_cast<std::size_t>(rank)], 1e-6);
+
+        Image next = current;
+        std::vector<double> sum(static_cast<std::size_t>(channels));
+        for (int y = 0; y < height; ++y)
+            for (int x = 0; x < width; ++x) {
+                if (!uncertain[static_cast<std::size_t>(y * width + x)]) continue;
+                std::fill(sum.begin(), sum.end(), 0.0);
+                double weight = 0.0;
+                for (int v = -radius; v <= radius; ++v)
+                    for (int u = -radius; u <= radius; ++u) {
+                        const int qx = x + u, qy = y + v;
+                        if (qx < 0 || qy < 0 || qx >= width || qy >= height) continue;
+                        const Match& m = matches[static_cast<std::size_t>(qy * width + qx)];
+                        if (!m.found) continue;
+                        const double s = std::exp(-m.distance / (2.0 * sigma2));
+                        for (int c = 0; c < channels; ++c)
+                            sum[static_cast<std::size_t>(c)] +=
+                                s * m.lambda * sample(*sources[m.source], x + m.dx, y + m.dy, c);
+                        weight += s;
+                    }
+                if (weight <= 0.0) continue;
+                for (int c = 0; c < channels; ++c)
+                    next.at(x, y, c) = static_cast<float>(sum[static_cast<std::size_t>(c)] / weight);
+            }
+        current = std::move(next);
+    }
+    return current;
+}
+
+}  // namespace rfd::relight
