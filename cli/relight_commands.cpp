@@ -116,19 +116,32 @@ void add_render(CLI::App& relight) {
     });
 }
 
+struct EvalOptions {
+    std::string field, reference, out, interpolation = "delaunay";
+    std::vector<std::string> lights;
+    bool json = false;
+};
+
+// The JSON summary both kinds of evaluation share; `entries` is "per_direction" or "per_light".
+nlohmann::json evaluation_summary(const EvalOptions& opt, std::size_t images, std::size_t reference_images,
+                                  const relight::Evaluation& e, const char* entries, nlohmann::json per_entry) {
+    return {{"field", opt.field},
+            {"reference", opt.reference},
+            {"interpolation", opt.interpolation},
+            {"images", images},
+            {"reference_images", reference_images},
+            {"peak", e.peak},
+            {"total_squared_error", e.total_squared_error},
+            {"psnr_db", finite_or_null(e.psnr)},
+            {entries, std::move(per_entry)}};
+}
+
 // relight eval --light: one score per light, pictures of both relit fields side by side.
-template <typename Options>
-void evaluate_under_lights(const Options& opt, const relight::ReflectanceField& sparse,
+void evaluate_under_lights(const EvalOptions& opt, const relight::ReflectanceField& sparse,
                            const relight::ReflectanceField& reference, const std::vector<relight::Light>& lights,
                            relight::Interpolation method) {
     const relight::LightEvaluation evaluation = relight::evaluate_under_lights(sparse, reference, lights, method);
     const relight::Evaluation& e = evaluation.score;
-    const double samples = static_cast<double>(sparse.images.front().samples().size());
-    const double peak = e.peak;
-    const auto psnr_of = [&](double squared_error) {
-        return squared_error == 0.0 ? std::numeric_limits<double>::infinity()
-                                    : 10.0 * std::log10(peak * peak * samples / squared_error);
-    };
     if (!opt.out.empty()) {
         const std::filesystem::path out(opt.out);
         ensure_directory(out);
@@ -136,7 +149,7 @@ void evaluate_under_lights(const Options& opt, const relight::ReflectanceField& 
             csv.precision(10);
             csv << "light,squared_error,psnr_db\n";
             for (std::size_t j = 0; j < lights.size(); ++j)
-                csv << '"' << opt.lights[j] << "\"," << e.per_direction[j] << "," << psnr_of(e.per_direction[j]) << "\n";
+                csv << '"' << opt.lights[j] << "\"," << e.per_direction[j] << "," << e.entry_psnr(j) << "\n";
         });
         for (std::size_t j = 0; j < lights.size(); ++j)
             write_image((out / ("light_" + std::to_string(j) + ".png")).string(),
@@ -147,25 +160,18 @@ void evaluate_under_lights(const Options& opt, const relight::ReflectanceField& 
         for (std::size_t j = 0; j < lights.size(); ++j)
             per_light.push_back({{"light", opt.lights[j]},
                                  {"squared_error", e.per_direction[j]},
-                                 {"psnr_db", finite_or_null(psnr_of(e.per_direction[j]))}});
-        const nlohmann::json summary = {{"field", opt.field},
-                                        {"reference", opt.reference},
-                                        {"interpolation", opt.interpolation},
-                                        {"images", sparse.size()},
-                                        {"reference_images", reference.size()},
-                                        {"peak", peak},
-                                        {"total_squared_error", e.total_squared_error},
-                                        {"psnr_db", finite_or_null(e.psnr)},
-                                        {"per_light", per_light}};
+                                 {"psnr_db", finite_or_null(e.entry_psnr(j))}});
+        const nlohmann::json summary =
+            evaluation_summary(opt, sparse.size(), reference.size(), e, "per_light", std::move(per_light));
         std::printf("%s\n", summary.dump(2).c_str());
         return;
     }
     std::printf("%s (%zu images) against %s (%zu images) under %zu light(s), %s interpolation\n", opt.field.c_str(),
                 sparse.size(), opt.reference.c_str(), reference.size(), lights.size(), opt.interpolation.c_str());
     std::printf("  summed squared error  %.6g\n", e.total_squared_error);
-    std::printf("  PSNR                  %.2f dB (peak %.6g)\n", e.psnr, peak);
+    std::printf("  PSNR                  %.2f dB (peak %.6g)\n", e.psnr, e.peak);
     for (std::size_t j = 0; j < lights.size(); ++j)
-        std::printf("  %-24s %14.6g %9.2f dB\n", opt.lights[j].c_str(), e.per_direction[j], psnr_of(e.per_direction[j]));
+        std::printf("  %-24s %14.6g %9.2f dB\n", opt.lights[j].c_str(), e.per_direction[j], e.entry_psnr(j));
     if (!opt.out.empty())
         std::printf("  wrote %s/errors.csv and light_K.png (field | reference)\n", opt.out.c_str());
 }
@@ -173,12 +179,7 @@ void evaluate_under_lights(const Options& opt, const relight::ReflectanceField& 
 void add_eval(CLI::App& relight) {
     auto* cmd = relight.add_subcommand(
         "eval", "Relight every reference direction from a sparse field and report the error (thesis figure 5.4)");
-    struct Options {
-        std::string field, reference, out, interpolation = "delaunay";
-        std::vector<std::string> lights;
-        bool json = false;
-    };
-    auto opt = std::make_shared<Options>();
+    auto opt = std::make_shared<EvalOptions>();
     cmd->add_option("FIELD", opt->field, "Sparse reflectance field (folder or .lp)")->required();
     cmd->add_option("--reference", opt->reference, "Reference field, same view and image size")->required();
     cmd->add_option("--interpolation", opt->interpolation, "delaunay (default), solid-angle (eq. 4.6 as written) or nearest");
@@ -202,12 +203,6 @@ void add_eval(CLI::App& relight) {
             return;
         }
         const relight::Evaluation e = relight::evaluate(sparse, reference, method);
-        const double peak = e.peak;
-        const double samples_per_image = static_cast<double>(reference.images.front().samples().size());
-        auto psnr_of = [&](double squared_error) {
-            return squared_error == 0.0 ? std::numeric_limits<double>::infinity()
-                                        : 10.0 * std::log10(peak * peak * samples_per_image / squared_error);
-        };
         if (!opt->out.empty()) {
             const std::filesystem::path out(opt->out);
             ensure_directory(out);
@@ -217,7 +212,7 @@ void add_eval(CLI::App& relight) {
                 for (std::size_t j = 0; j < reference.size(); ++j) {
                     const SphericalAngles a = angles_of(reference.directions[j]);
                     csv << j << "," << radians_to_degrees(a.theta) << "," << radians_to_degrees(a.phi) << ","
-                        << e.per_direction[j] << "," << psnr_of(e.per_direction[j]) << "\n";
+                        << e.per_direction[j] << "," << e.entry_psnr(j) << "\n";
                 }
             });
             // A few directions (highlights, shadow edges) often dominate: a log scale shows
@@ -236,29 +231,22 @@ void add_eval(CLI::App& relight) {
                 per_direction.push_back({{"theta_deg", radians_to_degrees(a.theta)},
                                          {"phi_deg", radians_to_degrees(a.phi)},
                                          {"squared_error", e.per_direction[j]},
-                                         {"psnr_db", finite_or_null(psnr_of(e.per_direction[j]))}});
+                                         {"psnr_db", finite_or_null(e.entry_psnr(j))}});
             }
-            const nlohmann::json summary = {{"field", opt->field},
-                                            {"reference", opt->reference},
-                                            {"interpolation", opt->interpolation},
-                                            {"images", sparse.size()},
-                                            {"reference_images", reference.size()},
-                                            {"peak", peak},
-                                            {"total_squared_error", e.total_squared_error},
-                                            {"psnr_db", finite_or_null(e.psnr)},
-                                            {"per_direction", per_direction}};
+            const nlohmann::json summary =
+                evaluation_summary(*opt, sparse.size(), reference.size(), e, "per_direction", std::move(per_direction));
             std::printf("%s\n", summary.dump(2).c_str());
             return;
         }
         std::printf("%s (%zu images) against %s (%zu images), %s interpolation\n", opt->field.c_str(), sparse.size(),
                     opt->reference.c_str(), reference.size(), opt->interpolation.c_str());
         std::printf("  summed squared error  %.6g\n", e.total_squared_error);
-        std::printf("  PSNR                  %.2f dB (peak %.6g)\n", e.psnr, peak);
+        std::printf("  PSNR                  %.2f dB (peak %.6g)\n", e.psnr, e.peak);
         std::printf("  %5s %9s %9s %14s %9s\n", "index", "theta", "phi", "sq. error", "PSNR dB");
         for (std::size_t j = 0; j < reference.size(); ++j) {
             const SphericalAngles a = angles_of(reference.directions[j]);
             std::printf("  %5zu %9.3f %9.3f %14.6g %9.2f\n", j, radians_to_degrees(a.theta),
-                        radians_to_degrees(a.phi), e.per_direction[j], psnr_of(e.per_direction[j]));
+                        radians_to_degrees(a.phi), e.per_direction[j], e.entry_psnr(j));
         }
         if (!opt->out.empty()) std::printf("  wrote %s/errors.csv and %s/error_map.{csv,gp,svg,png}\n",
                                            opt->out.c_str(), opt->out.c_str());

@@ -54,14 +54,17 @@ void check_same_view(const ReflectanceField& sparse, const ReflectanceField& ref
                                  "; both fields must show the same view at the same size");
 }
 
-// PSNR of a total squared error over `samples` samples against `peak`: +inf for no error.
-double psnr_of(double total_squared_error, double samples, double peak) {
-    const double mse = total_squared_error / samples;
+}  // namespace
+
+double psnr(double squared_error, double samples, double peak) {
+    const double mse = squared_error / samples;
     if (mse == 0.0) return std::numeric_limits<double>::infinity();
     return 10.0 * std::log10(peak * peak / mse);
 }
 
-}  // namespace
+double Evaluation::entry_psnr(std::size_t j) const {
+    return relight::psnr(per_direction.at(j), samples_per_entry, peak);
+}
 
 Evaluation evaluate(const ReflectanceField& sparse, const ReflectanceField& reference, Interpolation method) {
     check_same_view(sparse, reference);
@@ -89,8 +92,9 @@ Evaluation evaluate(const ReflectanceField& sparse, const ReflectanceField& refe
     for (const double e : result.per_direction) result.total_squared_error += e;  // fixed order
     const double peak = *std::max_element(peaks.begin(), peaks.end());
     const double samples = static_cast<double>(reference.size()) * static_cast<double>(shape.samples().size());
-    result.psnr = psnr_of(result.total_squared_error, samples, peak);
+    result.psnr = psnr(result.total_squared_error, samples, peak);
     result.peak = peak;
+    result.samples_per_entry = static_cast<double>(shape.samples().size());
     return result;
 }
 
@@ -110,7 +114,8 @@ LightEvaluation evaluate_under_lights(const ReflectanceField& sparse, const Refl
     }
     const double samples =
         static_cast<double>(lights.size()) * static_cast<double>(sparse.images.front().samples().size());
-    score.psnr = psnr_of(score.total_squared_error, samples, score.peak);
+    score.psnr = psnr(score.total_squared_error, samples, score.peak);
+    score.samples_per_entry = static_cast<double>(sparse.images.front().samples().size());
     return result;
 }
 

@@ -59,6 +59,9 @@ TEST(Evaluate, MatchesAnIndependentRelightAndThePsnrFormula) {
     const double samples = static_cast<double>(reference.size() * reference.images[0].samples().size());
     EXPECT_NEAR(e.psnr, 10.0 * std::log10(peak * peak * samples / total), 1e-9);
     EXPECT_GT(e.total_squared_error, 0.0);
+    EXPECT_EQ(e.peak, peak);
+    const double per_image = static_cast<double>(reference.images[0].samples().size());
+    EXPECT_NEAR(e.entry_psnr(5), 10.0 * std::log10(peak * peak * per_image / e.per_direction[5]), 1e-9);
 }
 
 TEST(Evaluate, ErrorFallsAsTheSparseSetDensifies) {
@@ -116,6 +119,7 @@ TEST(Evaluate, UnderLightsAgreesWithTheDirectionScoreAndWithRendering) {
     EXPECT_NEAR(e.score.total_squared_error, error, 1e-9 * error);
     EXPECT_GT(error, 0.0);
     EXPECT_NEAR(e.score.psnr, 10.0 * std::log10(peak * peak * static_cast<double>(a.samples().size()) / error), 1e-9);
+    EXPECT_NEAR(e.score.entry_psnr(0), e.score.psnr, 1e-9);  // one light: the entry is the whole
     EXPECT_EQ(e.relit.at(0), a);
     EXPECT_EQ(e.reference_relit.at(0), b);
     EXPECT_EQ(evaluate_under_lights(reference, reference, {disk}).score.total_squared_error, 0.0);
