@@ -14,6 +14,18 @@ Image::Image(int width, int height, int channels, float fill)
     samples_.assign(pixel_count() * static_cast<std::size_t>(channels), fill);
 }
 
+Image luminance(const Image& image) {
+    Image out(image.width(), image.height(), 1);
+    auto dst = out.plane(0);
+    const float scale = 1.0f / static_cast<float>(std::max(image.channels(), 1));
+    for (int c = 0; c < image.channels(); ++c) {
+        const auto src = image.plane(c);
+        for (std::size_t p = 0; p < dst.size(); ++p) dst[p] += src[p];
+    }
+    for (float& v : dst) v *= scale;
+    return out;
+}
+
 double mean_squared_error(const Image& a, const Image& b) {
     RFD_CHECK(a.same_shape(b));
     if (a.samples().empty()) return 0.0;

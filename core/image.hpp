@@ -59,6 +59,9 @@ private:
     std::vector<float> samples_;
 };
 
+/// Per-pixel luminance (channel mean) of an image, one channel.
+Image luminance(const Image& image);
+
 /// Mean squared error over all samples of two images of the same shape.
 double mean_squared_error(const Image& a, const Image& b);
 /// Peak signal-to-noise ratio in dB for a given peak value (infinite for identical images).

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <string>
 
 #include "core/error.hpp"
@@ -56,14 +55,8 @@ void check_same_view(const ReflectanceField& sparse, const ReflectanceField& ref
 
 }  // namespace
 
-double psnr(double squared_error, double samples, double peak) {
-    const double mse = squared_error / samples;
-    if (mse == 0.0) return std::numeric_limits<double>::infinity();
-    return 10.0 * std::log10(peak * peak / mse);
-}
-
 double Evaluation::entry_psnr(std::size_t j) const {
-    return relight::psnr(per_direction.at(j), samples_per_entry, peak);
+    return psnr_from_mse(per_direction.at(j) / samples_per_entry, peak);
 }
 
 Evaluation evaluate(const ReflectanceField& sparse, const ReflectanceField& reference, Interpolation method) {
@@ -92,7 +85,7 @@ Evaluation evaluate(const ReflectanceField& sparse, const ReflectanceField& refe
     for (const double e : result.per_direction) result.total_squared_error += e;  // fixed order
     const double peak = *std::max_element(peaks.begin(), peaks.end());
     const double samples = static_cast<double>(reference.size()) * static_cast<double>(shape.samples().size());
-    result.psnr = psnr(result.total_squared_error, samples, peak);
+    result.psnr = psnr_from_mse(result.total_squared_error / samples, peak);
     result.peak = peak;
     result.samples_per_entry = static_cast<double>(shape.samples().size());
     return result;
@@ -104,18 +97,17 @@ LightEvaluation evaluate_under_lights(const ReflectanceField& sparse, const Refl
     if (lights.empty()) throw InputError("evaluation under lights needs at least one light");
     LightEvaluation result;
     Evaluation& score = result.score;
+    score.samples_per_entry = static_cast<double>(sparse.images.front().samples().size());
     for (const Light& light : lights) {
         Image relit = render(sparse, {light}, method), truth = render(reference, {light}, method);
-        score.per_direction.push_back(relit_squared_error(truth, {&relit, &relit, &relit}, {1.0f, 0.0f, 0.0f}));
+        score.per_direction.push_back(mean_squared_error(relit, truth) * score.samples_per_entry);
         score.total_squared_error += score.per_direction.back();
         for (const float v : truth.samples()) score.peak = std::max(score.peak, static_cast<double>(v));
         result.relit.push_back(std::move(relit));
         result.reference_relit.push_back(std::move(truth));
     }
-    const double samples =
-        static_cast<double>(lights.size()) * static_cast<double>(sparse.images.front().samples().size());
-    score.psnr = psnr(score.total_squared_error, samples, score.peak);
-    score.samples_per_entry = static_cast<double>(sparse.images.front().samples().size());
+    const double samples = static_cast<double>(lights.size()) * score.samples_per_entry;
+    score.psnr = psnr_from_mse(score.total_squared_error / samples, score.peak);
     return result;
 }
 

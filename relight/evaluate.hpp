@@ -26,14 +26,11 @@ struct Evaluation {
     double psnr = 0.0;                  ///< dB, peak = max reference sample
     double peak = 0.0;                  ///< that largest reference sample (linear)
     double samples_per_entry = 0.0;     ///< samples behind each per_direction entry (one image)
+    std::vector<double> per_direction;  ///< squared error per reference direction, reference order
 
     /// PSNR of per_direction[j] alone, against the same peak.
     double entry_psnr(std::size_t j) const;
-    std::vector<double> per_direction;  ///< squared error per reference direction, reference order
 };
-
-/// 10 log10(peak^2 samples / squared_error): +inf for no error, -inf for a zero peak.
-double psnr(double squared_error, double samples, double peak);
 
 /// Throws InputError when the fields' images differ in shape or a field is empty, and what
 /// SphericalInterpolator throws for the sparse field's directions.

@@ -12,35 +12,15 @@
 namespace rfd::relight {
 namespace {
 
-// Channel-mean luminance sampled with clamped coordinates, so that windows reaching past
-// the border repeat the edge instead of needing special cases.
-class Luminance {
-public:
-    explicit Luminance(const Image& image) : width_(image.width()), height_(image.height()) {
-        values_.assign(image.pixel_count(), 0.0f);
-        const float scale = 1.0f / static_cast<float>(image.channels());
-        for (int c = 0; c < image.channels(); ++c) {
-            const auto plane = image.plane(c);
-            for (std::size_t p = 0; p < values_.size(); ++p) values_[p] += scale * plane[p];
-        }
-    }
-    float at(int x, int y) const {
-        x = std::clamp(x, 0, width_ - 1);
-        y = std::clamp(y, 0, height_ - 1);
-        return values_[static_cast<std::size_t>(y) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(x)];
-    }
-    void window(int cx, int cy, int radius, float* out) const {
-        for (int v = -radius; v <= radius; ++v)
-            for (int u = -radius; u <= radius; ++u) *out++ = at(cx + u, cy + v);
-    }
-
-private:
-    int width_, height_;
-    std::vector<float> values_;
-};
-
+// Windows reaching past the border repeat the edge instead of needing special cases.
 float sample(const Image& image, int x, int y, int c) {
     return image.at(std::clamp(x, 0, image.width() - 1), std::clamp(y, 0, image.height() - 1), c);
+}
+
+// The (2 radius + 1)^2 window of a one-channel image around (cx, cy), row-major.
+void window_of(const Image& one_channel, int cx, int cy, int radius, float* out) {
+    for (int v = -radius; v <= radius; ++v)
+        for (int u = -radius; u <= radius; ++u) *out++ = sample(one_channel, cx + u, cy + v, 0);
 }
 
 // The sources' windows as points of the k-d tree: PCA coordinates, then position.
@@ -93,6 +73,15 @@ struct Match {
 
 }  // namespace
 
+void check_prior_options(const PriorOptions& options) {
+    if (options.iterations < 0)
+        throw InputError("prior iterations must be >= 0 (0: off), got " + std::to_string(options.iterations));
+    if (!(options.proximity > 0.0) || !std::isfinite(options.proximity))
+        throw InputError("the prior's proximity weight must be > 0, got " + std::to_string(options.proximity));
+    if (options.candidates < 1)
+        throw InputError("the prior needs at least 1 candidate window, got " + std::to_string(options.candidates));
+}
+
 PatchBasis PatchBasis::fit(const std::vector<const Image*>& images, int radius, int components, int stride) {
     if (images.empty()) throw InputError("image priors need at least one source image");
     if (radius < 1) throw InputError("the prior window radius must be >= 1, got " + std::to_string(radius));
@@ -107,10 +96,10 @@ PatchBasis PatchBasis::fit(const std::vector<const Image*>& images, int radius, 
     Eigen::MatrixXd scatter = Eigen::MatrixXd::Zero(size, size);
     std::vector<float> window(static_cast<std::size_t>(size));
     for (const Image* image : images) {
-        const Luminance luminance(*image);
+        const Image lum = luminance(*image);
         for (int y = 0; y < image->height(); y += stride)
             for (int x = 0; x < image->width(); x += stride) {
-                luminance.window(x, y, radius, window.data());
+                window_of(lum, x, y, radius, window.data());
                 const Eigen::Map<const Eigen::VectorXf> w(window.data(), size);
                 const double norm = w.norm();
                 if (norm <= 0.0) continue;
@@ -138,10 +127,7 @@ void PatchBasis::project(const float* window, float* out) const {
 Image regularise_with_priors(const Image& estimate, const std::vector<std::uint8_t>& uncertain,
                              const std::vector<const Image*>& sources, const PatchBasis& basis,
                              const PriorOptions& options) {
-    if (options.iterations < 0) throw InputError("prior iterations must be >= 0");
-    if (!(options.proximity > 0.0) || !std::isfinite(options.proximity))
-        throw InputError("the prior's proximity weight must be > 0");
-    if (options.candidates < 1) throw InputError("the prior needs at least one candidate window");
+    check_prior_options(options);
     if (sources.empty()) throw InputError("image priors need at least one source image");
     for (const Image* source : sources)
         if (!source->same_shape(estimate)) throw InputError("image prior sources must have the estimate's shape");
@@ -163,11 +149,11 @@ Image regularise_with_priors(const Image& estimate, const std::vector<std::uint8
     cloud.dims = components + 2;
     std::vector<float> window(static_cast<std::size_t>(side * side));
     for (std::size_t s = 0; s < sources.size(); ++s) {
-        const Luminance luminance(*sources[s]);
+        const Image lum = luminance(*sources[s]);
         for (int y = 0; y < height; ++y)
             for (int x = 0; x < width; ++x) {
                 if (!offered[static_cast<std::size_t>(y * width + x)]) continue;
-                luminance.window(x, y, radius, window.data());
+                window_of(lum, x, y, radius, window.data());
                 const std::size_t at = cloud.features.size();
                 cloud.features.resize(at + cloud.dims);
                 basis.project(window.data(), &cloud.features[at]);
@@ -185,14 +171,14 @@ Image regularise_with_priors(const Image& estimate, const std::vector<std::uint8
     std::vector<double> distances;
     Image current = estimate;
     for (int iteration = 0; iteration < options.iterations; ++iteration) {
-        const Luminance luminance(current);
+        const Image lum = luminance(current);
         distances.clear();
         for (int y = 0; y < height; ++y)
             for (int x = 0; x < width; ++x) {
                 const auto p = static_cast<std::size_t>(y * width + x);
                 matches[p] = Match{};
                 if (!queries[p]) continue;
-                luminance.window(x, y, radius, window.data());
+                window_of(lum, x, y, radius, window.data());
                 basis.project(window.data(), query.data());
                 query[components] = proximity * static_cast<float>(x);
                 query[components + 1] = proximity * static_cast<float>(y);

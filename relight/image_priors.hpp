@@ -41,6 +41,9 @@ struct PriorOptions {
     int candidates = 4;        ///< nearest windows re-scored with the exact distance
 };
 
+/// InputError for iterations < 0, a proximity that is not > 0 and finite, candidates < 1.
+void check_prior_options(const PriorOptions& options);
+
 /// Principal components of unit-normalised luminance windows: the space the k-d tree
 /// searches in.
 class PatchBasis {

@@ -133,13 +133,10 @@ void check_options(const ReflectanceField& field, int levels, const UpsampleOpti
         throw InputError("f_lit must be in (0, 1] (the thesis uses 0.66 to 0.9), got " + std::to_string(options.f_lit));
     if (!(options.percentile >= 0.0 && options.percentile <= 1.0))
         throw InputError("the percentile must be in [0, 1], got " + std::to_string(options.percentile));
-    if (options.priors.iterations < 0 || options.priors.iterations > 20)
+    if (options.priors.iterations > 20)
         throw InputError("prior iterations must be 0 (off) to 20 (the thesis uses 3), got " +
                          std::to_string(options.priors.iterations));
-    if (!(options.priors.proximity > 0.0) || !std::isfinite(options.priors.proximity))
-        throw InputError("the prior's proximity weight must be > 0, got " + std::to_string(options.priors.proximity));
-    if (options.priors.candidates < 1)
-        throw InputError("the prior needs at least 1 candidate window, got " + std::to_string(options.priors.candidates));
+    check_prior_options(options.priors);
     if (!(options.blob_reach >= 0.0) || !std::isfinite(options.blob_reach))
         throw InputError("the blob reach must be a distance in pixels >= 0, got " + std::to_string(options.blob_reach));
     if (options.highlight_dilation < 1 || options.highlight_dilation % 2 == 0)
@@ -183,7 +180,6 @@ std::vector<float> blurred_shadow(const std::vector<Node>& nodes, const std::vec
     return sum;
 }
 
-// The synthesis of 6.4.1 for one new direction.
 // The image priors' windows (5 x 5, as in the thesis's figures) and the principal
 // components the k-d tree searches; the basis is fitted to every 8th window of the inputs.
 constexpr int kPriorWindowRadius = 2;
@@ -202,6 +198,7 @@ void mark_shadow_edges(const ShadowMap& shadow, int width, int height, std::vect
         }
 }
 
+// The synthesis of 6.4.1 for one new direction.
 class Synthesis {
 public:
     Synthesis(const ReflectanceField& field, const std::vector<Image>& diffuse,
@@ -336,18 +333,6 @@ private:
 };
 
 }  // namespace
-
-Image luminance(const Image& image) {
-    Image out(image.width(), image.height(), 1);
-    auto dst = out.plane(0);
-    const float scale = 1.0f / static_cast<float>(std::max(image.channels(), 1));
-    for (int c = 0; c < image.channels(); ++c) {
-        const auto src = image.plane(c);
-        for (std::size_t p = 0; p < dst.size(); ++p) dst[p] += src[p];
-    }
-    for (float& v : dst) v *= scale;
-    return out;
-}
 
 Image percentile_image(const std::vector<Image>& luminances, double quantile) {
     if (luminances.empty()) throw InputError("the percentile image needs at least one image");

@@ -73,9 +73,6 @@ struct UpsampleOptions {
 /// A binary map per pixel, row-major, 1 = lit.
 using ShadowMap = std::vector<std::uint8_t>;
 
-/// Per-pixel luminance (channel mean) of an image, one channel.
-Image luminance(const Image& image);
-
 /// P: per pixel, the sample at index floor(quantile * n) (clamped to n - 1) of the n
 /// luminances sorted ascending. InputError for an empty list or quantile outside [0, 1].
 Image percentile_image(const std::vector<Image>& luminances, double quantile);
