@@ -17,6 +17,7 @@
 #include "core/parallel.hpp"
 #include "core/progress.hpp"
 #include "core/sphere.hpp"
+#include "core/units.hpp"
 #include "relight/image_priors.hpp"
 #include "relight/interpolation.hpp"
 
@@ -491,15 +492,16 @@ void splat(const Image& image, const cv::Mat& labels, const Blob& blob, double d
         }
 }
 
-// Half-way by dense optical flow both ways; either layer may be all zero (it then fades).
-Image halfway_by_flow(const Image& a, const Image& b) {
+// Half-way by dense optical flow both ways; either layer may be all zero (the other is then
+// scaled by one_sided_weight).
+Image halfway_by_flow(const Image& a, const Image& b, float one_sided_weight) {
     const bool a_empty = all_zero(a), b_empty = all_zero(b);
     Image out(a.width(), a.height(), a.channels());
     if (a_empty && b_empty) return out;
-    // A highlight that appears or vanishes has nothing to match: it fades, as in blending.
+    // A highlight that appears or vanishes has nothing to match: it stays, weighted.
     if (a_empty || b_empty) {
         const Image& only = a_empty ? b : a;
-        for (std::size_t s = 0; s < out.samples().size(); ++s) out.samples()[s] = 0.5f * only.samples()[s];
+        for (std::size_t s = 0; s < out.samples().size(); ++s) out.samples()[s] = one_sided_weight * only.samples()[s];
         return out;
     }
     const Image la = luminance(a), lb = luminance(b);
@@ -525,7 +527,7 @@ Image halfway_by_flow(const Image& a, const Image& b) {
 
 }  // namespace
 
-Image halfway_highlights(const Image& first, const Image& second, double blob_reach) {
+Image halfway_highlights(const Image& first, const Image& second, double blob_reach, double one_sided_weight) {
     if (first.empty() && second.empty()) return {};
     const Image& shape = first.empty() ? second : first;
     const Image zero(shape.width(), shape.height(), shape.channels());
@@ -538,9 +540,10 @@ Image halfway_highlights(const Image& first, const Image& second, double blob_re
     // A highlight of a few pixels gives the flow almost nothing to fit (its images barely
     // overlap), yet its centroid is exact.
     cv::Mat labels_a, labels_b;
-    const std::vector<Blob> blobs_a = blobs_of(luminance(a), labels_a), blobs_b = blobs_of(luminance(b), labels_b);
+    const Image luminance_a = luminance(a), luminance_b = luminance(b);
+    const std::vector<Blob> blobs_a = blobs_of(luminance_a, labels_a), blobs_b = blobs_of(luminance_b, labels_b);
     Image out(a.width(), a.height(), a.channels());
-    std::vector<bool> matched_a(blobs_a.size(), false), matched_b(blobs_b.size(), false);
+    std::vector<bool> handled_a(blobs_a.size(), false), handled_b(blobs_b.size(), false);
     for (std::size_t i = 0; i < blobs_a.size() && blob_reach > 0.0; ++i) {
         const Blob& p = blobs_a[i];
         const std::size_t j = nearest_blob(p, blobs_b);
@@ -548,26 +551,55 @@ Image halfway_highlights(const Image& first, const Image& second, double blob_re
         const Blob& q = blobs_b[j];
         const double ratio = p.energy / q.energy;
         if (std::hypot(q.x - p.x, q.y - p.y) > blob_reach || ratio < 0.25 || ratio > 4.0) continue;
-        matched_a[i] = matched_b[j] = true;
+        handled_a[i] = handled_b[j] = true;
         splat(a, labels_a, p, 0.5 * (q.x - p.x), 0.5 * (q.y - p.y), 0.5f, out);
         splat(b, labels_b, q, 0.5 * (p.x - q.x), 0.5 * (p.y - q.y), 0.5f, out);
     }
+    // A highlight with nothing of the other layer within blob_reach of it is seen from one
+    // side only: it stays where it is, weighted by the chance that the new direction still
+    // lights it (one_sided_highlight_weight). Blending would smear it over the whole edge.
+    const auto isolate = [&](const Image& layer, const cv::Mat& labels, const std::vector<Blob>& blobs,
+                             std::vector<bool>& handled, const Image& other) {
+        if (blob_reach <= 0.0) return;
+        const int r = static_cast<int>(std::ceil(blob_reach));
+        for (std::size_t k = 0; k < blobs.size(); ++k) {
+            if (handled[k]) continue;
+            const Blob& blob = blobs[k];
+            bool near = false;
+            for (int y = std::max(0, blob.y0 - r); y <= std::min(other.height() - 1, blob.y1 + r) && !near; ++y)
+                for (int x = std::max(0, blob.x0 - r); x <= std::min(other.width() - 1, blob.x1 + r) && !near; ++x)
+                    near = other.at(x, y, 0) > 0.0f;
+            if (near) continue;
+            handled[k] = true;
+            splat(layer, labels, blob, 0.0, 0.0, static_cast<float>(one_sided_weight), out);
+        }
+    };
+    isolate(a, labels_a, blobs_a, handled_a, luminance_b);
+    isolate(b, labels_b, blobs_b, handled_b, luminance_a);
     // Everything else (large, merging or splitting highlights, caustics) goes to the flow.
-    const auto unmatched = [](const Image& layer, const cv::Mat& labels, const std::vector<Blob>& blobs,
-                              const std::vector<bool>& matched) {
+    const auto unhandled = [](const Image& layer, const cv::Mat& labels, const std::vector<Blob>& blobs,
+                              const std::vector<bool>& handled) {
         Image rest = layer;
         for (std::size_t k = 0; k < blobs.size(); ++k)
-            if (matched[k])
+            if (handled[k])
                 for (int y = blobs[k].y0; y <= blobs[k].y1; ++y)
                     for (int x = blobs[k].x0; x <= blobs[k].x1; ++x)
                         if (labels.at<int>(y, x) == blobs[k].label)
                             for (int c = 0; c < rest.channels(); ++c) rest.at(x, y, c) = 0.0f;
         return rest;
     };
-    const Image flowed = halfway_by_flow(unmatched(a, labels_a, blobs_a, matched_a),
-                                         unmatched(b, labels_b, blobs_b, matched_b));
+    const Image flowed = halfway_by_flow(unhandled(a, labels_a, blobs_a, handled_a),
+                                         unhandled(b, labels_b, blobs_b, handled_b),
+                                         static_cast<float>(one_sided_weight));
     for (std::size_t s = 0; s < out.samples().size(); ++s) out.samples()[s] += flowed.samples()[s];
     return out;
+}
+
+double one_sided_highlight_weight(double distance, double kernel_radius) {
+    if (!(distance > 0.0)) return 1.0;
+    const double x = distance / (2.0 * kernel_radius);
+    if (!(x < 1.0)) return 0.0;
+    return 2.0 / kPi * (std::acos(x) - x * std::sqrt(1.0 - x * x));
 }
 
 ShadowMap halfway_shadow_map(const ShadowMap& first, const ShadowMap& second, int width, int height) {
@@ -675,7 +707,9 @@ UpsampledField upsample_field(const ReflectanceField& field, int levels, const U
                 const Node& b = nodes[edges[e][1]];
                 added[e].direction = (a.direction + b.direction).normalized();
                 added[e].kernel_radius = 0.5 * (a.kernel_radius + b.kernel_radius);
-                added[e].highlights = halfway_highlights(a.highlights, b.highlights, options.blob_reach);
+                const double one_sided = one_sided_highlight_weight(
+                    angle_between(a.direction, added[e].direction), added[e].kernel_radius);
+                added[e].highlights = halfway_highlights(a.highlights, b.highlights, options.blob_reach, one_sided);
                 if (!added[e].highlights.empty() && all_zero(added[e].highlights)) added[e].highlights = Image();
                 added[e].shadow = halfway_shadow_map(a.shadow, b.shadow, width, height);
                 progress.advance();

@@ -17,7 +17,14 @@
 //    the two layers (mutual nearest energy centroids within `blob_reach` pixels) move
 //    rigidly half-way; a reflected small light is a blob of a few pixels that the flow
 //    cannot track (at 256 stage lights the flow gained 0.5 dB over blending where the
-//    matching gains 5). The rest: optical flow (OpenCV's Farneback) both
+//    matching gains 5). A highlight with no highlight near it in the other layer is seen
+//    from one end of the edge only, a glint narrower in light directions than the sampling
+//    (the bottle's glass edges): it stays in place, scaled by the overlap of the two light
+//    kernels (one_sided_highlight_weight), so it vanishes at a midpoint more than two
+//    kernel radii away instead of being smeared half-bright over the edge as blending does
+//    (bottle scene, 256 lights with a 2-degree kernel, one level, against fading to half:
+//    61.18 -> 62.33 dB at 1024 other directions, 41.33 -> 44.07 dB under four 15-degree
+//    area lights). The rest: optical flow (OpenCV's Farneback) both
 //    ways on clamped, blurred highlight luminance, both layers warped half-way with their
 //    full range (each keeping its total energy) and averaged. S_k: level-set blending: the
 //    two maps' signed distance functions, each carried half-way along the flow between
@@ -94,10 +101,21 @@ std::vector<ShadowMap> shadow_maps(const std::vector<Image>& prefiltered_luminan
 
 /// H_k half-way between two highlight layers of the same shape. Connected highlights that
 /// are each other's nearest (by energy centroid) within `blob_reach` pixels and within a
-/// factor 4 in energy are moved rigidly half-way, each with half its energy; the rest goes
-/// by optical flow both ways, and what has no partner fades to half. An empty image stands
-/// for a layer without highlights; returns empty when both are.
-Image halfway_highlights(const Image& first, const Image& second, double blob_reach = 12.0);
+/// factor 4 in energy are moved rigidly half-way, each with half its energy. A highlight
+/// with nothing of the other layer within `blob_reach` pixels of its bounding box is seen
+/// from one side only and stays in place, times `one_sided_weight`. The rest goes by
+/// optical flow both ways; a flow layer without a partner layer is also scaled by
+/// `one_sided_weight`. An empty image stands for a layer without highlights; returns empty
+/// when both are.
+Image halfway_highlights(const Image& first, const Image& second, double blob_reach = 12.0,
+                         double one_sided_weight = 0.5);
+
+/// The share of a highlight seen at one light direction that a direction `distance` radians
+/// away still shows, when both are lights of angular radius `kernel_radius` and the
+/// highlight is a mirror reflection (a point in light space somewhere inside the first
+/// disc): the overlap of the two discs over the area of one (small-angle, planar), 1 at 0
+/// and 0 from 2 * kernel_radius on. A point light (radius 0) shares nothing.
+double one_sided_highlight_weight(double distance, double kernel_radius);
 
 /// S_k half-way between two shadow maps of width x height, by level-set blending.
 ShadowMap halfway_shadow_map(const ShadowMap& first, const ShadowMap& second, int width, int height);
