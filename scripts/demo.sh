@@ -58,10 +58,11 @@ echo "== implicit relighting: scenes/snooker.toml" >&2
 # level (987 directions), scored against 512 other rendered lights at their own directions
 # and under 15-degree area lights, with linear blending of the 256 beside it. Pictures per
 # light (the field relit | the truth) for linear blending (linear/) and the upsampled field
-# (upsampled/), at four point lights the stage renders exactly and four area lights (truth:
-# the 512-light field relit). Below about 2 pixels (128 x 80 at 4 samples) the chrome
+# (upsampled/), at four point lights and under four area lights, both rendered by the stage
+# itself (an area light as about 200 directions 1.2 degrees apart over its cap,
+# scripts/cap_lights.awk). Below about 2 pixels (128 x 80 at 4 samples) the chrome
 # ball's reflection of the light is a single noisy pixel and no method can place it; the
-# gain then shrinks to a few tenths of a dB. About 3 minutes on 2 cores.
+# gain then shrinks to a few tenths of a dB. About 5 minutes on 2 cores.
 upsample="$out/upsample"
 mkdir -p "$upsample"
 echo "== upsampling: scenes/spheres.toml" >&2
@@ -83,6 +84,10 @@ area_lights=(30,0,7.5 30,120,7.5 60,60,7.5 60,240,7.5)
 } > "$upsample/point_lights.lp"
 "$rfd" capture render scenes/spheres.toml --lights "$upsample/point_lights.lp" "${stage[@]}" \
   --out "$upsample/truth_points" > /dev/null
+# The truth under the area lights: the stage renders their caps densely.
+printf '%s\n' "${area_lights[@]}" | awk -v step=1.2 -f scripts/cap_lights.awk > "$upsample/area_lights.lp"
+"$rfd" capture render scenes/spheres.toml --lights "$upsample/area_lights.lp" "${stage[@]}" \
+  --out "$upsample/truth_area" > /dev/null
 for method in linear upsampled; do
   field="$upsample/field_256"
   if [ "$method" = upsampled ]; then field="$upsample/upsampled"; fi
@@ -92,7 +97,7 @@ for method in linear upsampled; do
   for light in "${area_lights[@]}"; do area_args+=(--light "$light"); done
   "$rfd" relight eval "$field" --reference "$upsample/truth_points" "${point_args[@]}" \
     --out "$upsample/$method/point_lights" > "$upsample/eval_${method}_point_lights.txt"
-  "$rfd" relight eval "$field" --reference "$upsample/reference_512" "${area_args[@]}" \
+  "$rfd" relight eval "$field" --reference "$upsample/truth_area" "${area_args[@]}" \
     --out "$upsample/$method/area_lights" > "$upsample/eval_${method}_area_lights.txt"
   for kind in directions point_lights area_lights; do
     echo "$method, $kind: $(grep -m1 PSNR "$upsample/eval_${method}_${kind}.txt" | sed 's/^ *PSNR *//')"
