@@ -471,6 +471,44 @@ std::size_t nearest_blob(const Blob& from, const std::vector<Blob>& to) {
     return best;
 }
 
+// How well blob p of luminance la, moved by the offset between the two centroids, lands on
+// blob q of lb: the sum of min(p', q') over pixels, p' and q' the two blurred by a 3 x 3
+// box (a glint of a pixel or two is sampled differently at two light directions) and
+// scaled to unit energy. 1 for the same shape, 0 for disjoint ones.
+double moved_shape_agreement(const Image& la, const cv::Mat& labels_a, const Blob& p, const Image& lb,
+                             const cv::Mat& labels_b, const Blob& q) {
+    const double dx = q.x - p.x, dy = q.y - p.y;
+    const int x0 = std::min(q.x0, p.x0 + static_cast<int>(std::floor(dx))) - 2;
+    const int y0 = std::min(q.y0, p.y0 + static_cast<int>(std::floor(dy))) - 2;
+    const int x1 = std::max(q.x1, p.x1 + static_cast<int>(std::floor(dx)) + 1) + 2;
+    const int y1 = std::max(q.y1, p.y1 + static_cast<int>(std::floor(dy)) + 1) + 2;
+    cv::Mat moved = cv::Mat::zeros(y1 - y0 + 1, x1 - x0 + 1, CV_32F), target = moved.clone();
+    const int ix = static_cast<int>(std::floor(dx)), iy = static_cast<int>(std::floor(dy));
+    const float fx = static_cast<float>(dx - ix), fy = static_cast<float>(dy - iy);
+    for (int y = p.y0; y <= p.y1; ++y)
+        for (int x = p.x0; x <= p.x1; ++x) {
+            if (labels_a.at<int>(y, x) != p.label) continue;
+            const float v = la.at(x, y, 0);
+            const int tx = x + ix - x0, ty = y + iy - y0;
+            moved.at<float>(ty, tx) += (1 - fx) * (1 - fy) * v;
+            moved.at<float>(ty, tx + 1) += fx * (1 - fy) * v;
+            moved.at<float>(ty + 1, tx) += (1 - fx) * fy * v;
+            moved.at<float>(ty + 1, tx + 1) += fx * fy * v;
+        }
+    for (int y = q.y0; y <= q.y1; ++y)
+        for (int x = q.x0; x <= q.x1; ++x)
+            if (labels_b.at<int>(y, x) == q.label) target.at<float>(y - y0, x - x0) = lb.at(x, y, 0);
+    cv::blur(moved, moved, cv::Size(3, 3), cv::Point(-1, -1), cv::BORDER_CONSTANT);
+    cv::blur(target, target, cv::Size(3, 3), cv::Point(-1, -1), cv::BORDER_CONSTANT);
+    const double sum_moved = cv::sum(moved)[0], sum_target = cv::sum(target)[0];
+    if (!(sum_moved > 0.0) || !(sum_target > 0.0)) return 0.0;
+    double shared = 0.0;
+    for (int y = 0; y < moved.rows; ++y)
+        for (int x = 0; x < moved.cols; ++x)
+            shared += std::min(moved.at<float>(y, x) / sum_moved, target.at<float>(y, x) / sum_target);
+    return shared;
+}
+
 // Adds weight x the pixels of `blob` in `image`, moved by (dx, dy) and spread bilinearly
 // over the four pixels around where each lands, so that the energy is kept exactly.
 void splat(const Image& image, const cv::Mat& labels, const Blob& blob, double dx, double dy, float weight,
@@ -551,6 +589,9 @@ Image halfway_highlights(const Image& first, const Image& second, double blob_re
         const Blob& q = blobs_b[j];
         const double ratio = p.energy / q.energy;
         if (std::hypot(q.x - p.x, q.y - p.y) > blob_reach || ratio < 0.25 || ratio > 4.0) continue;
+        // Moved rigidly, the one must land on the other; a highlight that changes shape
+        // (a glossy streak that splits, grows or bends) goes to the flow instead.
+        if (moved_shape_agreement(luminance_a, labels_a, p, luminance_b, labels_b, q) < 0.5) continue;
         handled_a[i] = handled_b[j] = true;
         splat(a, labels_a, p, 0.5 * (q.x - p.x), 0.5 * (q.y - p.y), 0.5f, out);
         splat(b, labels_b, q, 0.5 * (p.x - q.x), 0.5 * (p.y - q.y), 0.5f, out);

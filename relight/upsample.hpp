@@ -14,22 +14,24 @@
 //    i next to a lit j becomes lit when L_i > f_lit * L_j, until nothing changes.
 // 2. Feature upsampling (6.3), `levels` times: every edge of the Delaunay triangulation of
 //    the directions so far gets its midpoint k. H_k: compact highlights matched between
-//    the two layers (mutual nearest energy centroids within `blob_reach` pixels) move
-//    rigidly half-way; a reflected small light is a blob of a few pixels that the flow
-//    cannot track (at 256 stage lights the flow gained 0.5 dB over blending where the
-//    matching gains 5). A highlight with no highlight near it in the other layer is seen
-//    from one end of the edge only, a glint narrower in light directions than the sampling
-//    (the bottle's glass edges): it stays in place, scaled by the overlap of the two light
-//    kernels (one_sided_highlight_weight), so it vanishes at a midpoint more than two
-//    kernel radii away instead of being smeared half-bright over the edge as blending does
-//    (bottle scene, 256 lights with a 2-degree kernel, one level, against fading to half:
-//    61.18 -> 62.33 dB at 1024 other directions, 41.33 -> 44.07 dB under four 15-degree
-//    area lights). The rest: optical flow (OpenCV's Farneback) both
-//    ways on clamped, blurred highlight luminance, both layers warped half-way with their
-//    full range (each keeping its total energy) and averaged. S_k: level-set blending: the
-//    two maps' signed distance functions, each carried half-way along the flow between
-//    them, averaged, and re-quantised to 0/1 at the zero level set. (The plain mean of two
-//    distance functions, without the flow, shrinks a sliding shadow to the overlap.)
+//    the two layers (mutual nearest energy centroids within `blob_reach` pixels, and the one
+//    moved onto the other covering at least half of it) move rigidly half-way; a reflected
+//    small light is a blob of a few pixels that the flow cannot track (at 256 stage lights
+//    the flow gained 0.5 dB over blending where the matching gains 5). A glossy streak that
+//    changes shape goes to the flow (figure scene: 42.38 -> 42.74 dB). A highlight with no
+//    highlight near it in the other layer is seen from one end of the edge only, a glint
+//    narrower in light directions than the sampling (the bottle's glass edges): it stays in
+//    place, scaled by the overlap of the two light kernels (one_sided_highlight_weight), so
+//    it vanishes at a midpoint more than two kernel radii away instead of being smeared
+//    half-bright over the edge as blending does (bottle scene, 256 lights with a 2-degree
+//    kernel, one level, against fading to half: 61.18 -> 62.33 dB at 1024 other
+//    directions, 41.33 -> 44.07 dB under four 15-degree area lights). The rest: optical
+//    flow (OpenCV's Farneback) both ways on clamped, blurred highlight luminance, both
+//    layers warped half-way with their full range (each keeping its total energy) and
+//    averaged. S_k: level-set blending: the two maps' signed distance functions, each
+//    carried half-way along the flow between them, averaged, and re-quantised to 0/1 at
+//    the zero level set. (The plain mean of two distance functions, without the flow,
+//    shrinks a sliding shadow to the overlap.)
 // 3. Synthesis (6.4.1), per new direction k in input triangle (a, b, c) with barycentric
 //    weights: blurred shadow maps S-bar = the mean S over the `blur_neighbours` nearest
 //    directions (inputs and new ones). The thesis averages 10; the default here is 1 (S-bar =
@@ -100,8 +102,11 @@ std::vector<ShadowMap> shadow_maps(const std::vector<Image>& prefiltered_luminan
                                    double f_lit);
 
 /// H_k half-way between two highlight layers of the same shape. Connected highlights that
-/// are each other's nearest (by energy centroid) within `blob_reach` pixels and within a
-/// factor 4 in energy are moved rigidly half-way, each with half its energy. A highlight
+/// are each other's nearest (by energy centroid) within `blob_reach` pixels, within a
+/// factor 4 in energy and of the same shape (moved by the offset of their centroids, the one
+/// shares at least half its energy with the other, both blurred by a 3 x 3 box) are moved
+/// rigidly half-way, each with half its energy; a highlight that splits, merges or bends
+/// (a glossy streak over a curved surface) goes to the flow instead. A highlight
 /// with nothing of the other layer within `blob_reach` pixels of its bounding box is seen
 /// from one side only and stays in place, times `one_sided_weight`. The rest goes by
 /// optical flow both ways; a flow layer without a partner layer is also scaled by

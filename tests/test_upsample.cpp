@@ -223,6 +223,23 @@ TEST(Upsample, OneSidedHighlightsStayInPlaceWithTheirWeight) {
     }
 }
 
+TEST(Upsample, HighlightThatSplitsIsNotMovedRigidly) {
+    // A streak (x = 9..19) that splits into two short ones (x = 5..7 and 21..23): its
+    // nearest piece is within reach and within a factor 4 in energy, but moved rigidly onto
+    // it, the streak does not land on it. The flow spreads it symmetrically; a rigid move
+    // would pull it to one side (centroid 12 instead of 14).
+    const auto bars = [](const std::vector<std::pair<int, int>>& spans) {
+        Image out(kSide, kSide, 1);
+        for (const auto& [x0, x1] : spans)
+            for (int x = x0; x <= x1; ++x) out.at(x, 20, 0) = 1.0f;
+        return out;
+    };
+    const Image k = halfway_highlights(bars({{9, 19}}), bars({{5, 7}, {21, 23}}), 12.0, 0.5);
+    const auto [cx, total] = centroid_x(k);
+    EXPECT_NEAR(cx, 14.0, 0.75);
+    EXPECT_GT(total, 0.5 * 11.0);
+}
+
 TEST(Upsample, OneSidedWeightIsTheOverlapOfTwoLightDiscs) {
     // Against counting the points of a fine grid over one disc that the other disc covers.
     const double radius = degrees_to_radians(2.0);
