@@ -471,33 +471,43 @@ std::size_t nearest_blob(const Blob& from, const std::vector<Blob>& to) {
     return best;
 }
 
+// Adds weight x the pixels of `blob` in `image`, moved by (dx, dy) and spread bilinearly
+// over the four pixels around where each lands, so that the energy is kept exactly. `out`
+// covers the image from (origin_x, origin_y) on; what lands outside it is dropped.
+void splat(const Image& image, const cv::Mat& labels, const Blob& blob, double dx, double dy, float weight,
+           Image& out, int origin_x = 0, int origin_y = 0) {
+    const int shift_x = static_cast<int>(std::floor(dx)), shift_y = static_cast<int>(std::floor(dy));
+    const auto fx = static_cast<float>(dx - shift_x), fy = static_cast<float>(dy - shift_y);
+    const std::array<float, 4> share = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
+    for (int y = blob.y0; y <= blob.y1; ++y)
+        for (int x = blob.x0; x <= blob.x1; ++x) {
+            if (labels.at<int>(y, x) != blob.label) continue;
+            for (int q = 0; q < 4; ++q) {
+                const int tx = x + shift_x + q % 2 - origin_x, ty = y + shift_y + q / 2 - origin_y;
+                if (share[static_cast<std::size_t>(q)] == 0.0f || tx < 0 || ty < 0 || tx >= out.width() ||
+                    ty >= out.height())
+                    continue;
+                const float w = weight * share[static_cast<std::size_t>(q)];
+                for (int c = 0; c < image.channels(); ++c) out.at(tx, ty, c) += w * image.at(x, y, c);
+            }
+        }
+}
+
 // How well blob p of luminance la, moved by the offset between the two centroids, lands on
 // blob q of lb: the sum of min(p', q') over pixels, p' and q' the two blurred by a 3 x 3
 // box (a glint of a pixel or two is sampled differently at two light directions) and
 // scaled to unit energy. 1 for the same shape, 0 for disjoint ones.
 double moved_shape_agreement(const Image& la, const cv::Mat& labels_a, const Blob& p, const Image& lb,
                              const cv::Mat& labels_b, const Blob& q) {
+    // Both, over a box holding every pixel p lands on and a margin for the blur.
     const double dx = q.x - p.x, dy = q.y - p.y;
-    const int x0 = std::min(q.x0, p.x0 + static_cast<int>(std::floor(dx))) - 2;
-    const int y0 = std::min(q.y0, p.y0 + static_cast<int>(std::floor(dy))) - 2;
-    const int x1 = std::max(q.x1, p.x1 + static_cast<int>(std::floor(dx)) + 1) + 2;
-    const int y1 = std::max(q.y1, p.y1 + static_cast<int>(std::floor(dy)) + 1) + 2;
-    cv::Mat moved = cv::Mat::zeros(y1 - y0 + 1, x1 - x0 + 1, CV_32F), target = moved.clone();
     const int ix = static_cast<int>(std::floor(dx)), iy = static_cast<int>(std::floor(dy));
-    const float fx = static_cast<float>(dx - ix), fy = static_cast<float>(dy - iy);
-    for (int y = p.y0; y <= p.y1; ++y)
-        for (int x = p.x0; x <= p.x1; ++x) {
-            if (labels_a.at<int>(y, x) != p.label) continue;
-            const float v = la.at(x, y, 0);
-            const int tx = x + ix - x0, ty = y + iy - y0;
-            moved.at<float>(ty, tx) += (1 - fx) * (1 - fy) * v;
-            moved.at<float>(ty, tx + 1) += fx * (1 - fy) * v;
-            moved.at<float>(ty + 1, tx) += (1 - fx) * fy * v;
-            moved.at<float>(ty + 1, tx + 1) += fx * fy * v;
-        }
-    for (int y = q.y0; y <= q.y1; ++y)
-        for (int x = q.x0; x <= q.x1; ++x)
-            if (labels_b.at<int>(y, x) == q.label) target.at<float>(y - y0, x - x0) = lb.at(x, y, 0);
+    const int x0 = std::min(q.x0, p.x0 + ix) - 2, y0 = std::min(q.y0, p.y0 + iy) - 2;
+    const int x1 = std::max(q.x1, p.x1 + ix + 1) + 2, y1 = std::max(q.y1, p.y1 + iy + 1) + 2;
+    Image moved_image(x1 - x0 + 1, y1 - y0 + 1, 1), target_image(x1 - x0 + 1, y1 - y0 + 1, 1);
+    splat(la, labels_a, p, dx, dy, 1.0f, moved_image, x0, y0);
+    splat(lb, labels_b, q, 0.0, 0.0, 1.0f, target_image, x0, y0);
+    cv::Mat moved = plane_mat(moved_image, 0), target = plane_mat(target_image, 0);
     cv::blur(moved, moved, cv::Size(3, 3), cv::Point(-1, -1), cv::BORDER_CONSTANT);
     cv::blur(target, target, cv::Size(3, 3), cv::Point(-1, -1), cv::BORDER_CONSTANT);
     const double sum_moved = cv::sum(moved)[0], sum_target = cv::sum(target)[0];
@@ -507,27 +517,6 @@ double moved_shape_agreement(const Image& la, const cv::Mat& labels_a, const Blo
         for (int x = 0; x < moved.cols; ++x)
             shared += std::min(moved.at<float>(y, x) / sum_moved, target.at<float>(y, x) / sum_target);
     return shared;
-}
-
-// Adds weight x the pixels of `blob` in `image`, moved by (dx, dy) and spread bilinearly
-// over the four pixels around where each lands, so that the energy is kept exactly.
-void splat(const Image& image, const cv::Mat& labels, const Blob& blob, double dx, double dy, float weight,
-           Image& out) {
-    const int shift_x = static_cast<int>(std::floor(dx)), shift_y = static_cast<int>(std::floor(dy));
-    const auto fx = static_cast<float>(dx - shift_x), fy = static_cast<float>(dy - shift_y);
-    const std::array<float, 4> share = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
-    for (int y = blob.y0; y <= blob.y1; ++y)
-        for (int x = blob.x0; x <= blob.x1; ++x) {
-            if (labels.at<int>(y, x) != blob.label) continue;
-            for (int q = 0; q < 4; ++q) {
-                const int tx = x + shift_x + q % 2, ty = y + shift_y + q / 2;
-                if (share[static_cast<std::size_t>(q)] == 0.0f || tx < 0 || ty < 0 || tx >= out.width() ||
-                    ty >= out.height())
-                    continue;
-                const float w = weight * share[static_cast<std::size_t>(q)];
-                for (int c = 0; c < image.channels(); ++c) out.at(tx, ty, c) += w * image.at(x, y, c);
-            }
-        }
 }
 
 // Half-way by dense optical flow both ways; either layer may be all zero (the other is then
