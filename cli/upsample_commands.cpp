@@ -52,6 +52,13 @@ void add_upsample_command(CLI::App& relight) {
                     "Pixels a compact highlight may move between neighbouring inputs and still be matched as one "
                     "(0: optical flow only)")
         ->capture_default_str();
+    cmd->add_option("--lobe-samples", opt->upsample.lobe_samples,
+                    "Inputs a pixel's highlight must show in to be fitted as a glossy lobe over the light "
+                    "directions (0: off; else >= 4)")
+        ->capture_default_str();
+    cmd->add_option("--lobe-spread", opt->upsample.lobe_spread_deg,
+                    "Degrees from the lobe's axis within which all of a pixel's highlight samples must lie")
+        ->capture_default_str();
     cmd->add_option("--prior-iterations", opt->upsample.priors.iterations,
                     "Image-based prior iterations on extrapolated and shadow-edge pixels (thesis 6.4.2: 3; 0: off)")
         ->capture_default_str();

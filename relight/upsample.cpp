@@ -145,6 +145,12 @@ void check_options(const ReflectanceField& field, int levels, const UpsampleOpti
                          std::to_string(options.highlight_dilation));
     if (options.blur_neighbours < 1 || options.fit_neighbours < 1)
         throw InputError("neighbour counts for blurring and fitting must be >= 1");
+    if (options.lobe_samples < 0 || (options.lobe_samples > 0 && options.lobe_samples < 4))
+        throw InputError("lobe samples must be 0 (off) or >= 4 (a lobe has 4 parameters), got " +
+                         std::to_string(options.lobe_samples));
+    if (!(options.lobe_spread_deg > 0.0 && options.lobe_spread_deg <= 180.0))
+        throw InputError("the lobe spread must be an angle in (0, 180] degrees, got " +
+                         std::to_string(options.lobe_spread_deg));
 }
 
 // One direction of the upsampled set with the features carried from level to level.
@@ -153,6 +159,7 @@ struct Node {
     Image highlights;  // H, empty when there are none
     ShadowMap shadow;  // S
     double kernel_radius = 0.0;
+    std::array<std::size_t, 2> parents{0, 0};  // the ends of the edge it halves (new nodes)
 };
 
 // The edges of the Delaunay triangulation of `directions`, each once, (low, high), sorted.
@@ -197,6 +204,74 @@ void mark_shadow_edges(const ShadowMap& shadow, int width, int height, std::vect
             if (right) mask[p] = mask[p + 1] = 1;
             if (below) mask[p] = mask[p + static_cast<std::size_t>(width)] = 1;
         }
+}
+
+// True where the highlight layer of `node` shows something at pixel p.
+bool shows_highlight(const Node& node, std::size_t p) {
+    if (node.highlights.empty()) return false;
+    for (int c = 0; c < node.highlights.channels(); ++c)
+        if (node.highlights.plane(c)[p] > 0.0f) return true;
+    return false;
+}
+
+// The glossy lobes of upsample.hpp: per pixel, the inputs' highlight luminances are fitted
+// as a lobe over the light directions; each new node next to an input (or an earlier new
+// node) that shows the highlight at the pixel takes the lobe's value there, in the
+// highlight's own colour (its channels' share of the samples' total).
+void refit_glossy_highlights(std::vector<Node>& nodes, std::size_t inputs, const UpsampleOptions& options) {
+    const Node* shaped = nullptr;
+    for (std::size_t i = 0; i < inputs && shaped == nullptr; ++i)
+        if (!nodes[i].highlights.empty()) shaped = &nodes[i];
+    if (shaped == nullptr) return;
+    const int width = shaped->highlights.width(), height = shaped->highlights.height();
+    const int channels = shaped->highlights.channels();
+    const std::size_t pixels = shaped->highlights.pixel_count();
+    std::vector<Image> luminances(inputs);
+    for (std::size_t i = 0; i < inputs; ++i)
+        if (!nodes[i].highlights.empty()) luminances[i] = luminance(nodes[i].highlights);
+
+    const auto min_samples = static_cast<std::size_t>(options.lobe_samples);
+    const double max_spread = degrees_to_radians(options.lobe_spread_deg);
+    std::vector<std::optional<HighlightLobe>> lobes(pixels);
+    std::vector<float> colour(pixels * static_cast<std::size_t>(channels), 0.0f);
+    parallel_for_chunks(pixels, 1024, [&](std::size_t begin, std::size_t end) {
+        std::vector<Eigen::Vector3d> directions;
+        std::vector<double> values;
+        for (std::size_t p = begin; p < end; ++p) {
+            directions.clear();
+            values.clear();
+            std::vector<double> channel_sum(static_cast<std::size_t>(channels), 0.0);
+            double total = 0.0;
+            for (std::size_t i = 0; i < inputs; ++i) {
+                if (luminances[i].empty() || !(luminances[i].plane(0)[p] > 0.0f)) continue;
+                directions.push_back(nodes[i].direction);
+                values.push_back(luminances[i].plane(0)[p]);
+                total += values.back();
+                for (int c = 0; c < channels; ++c)
+                    channel_sum[static_cast<std::size_t>(c)] += nodes[i].highlights.plane(c)[p];
+            }
+            if (directions.size() < min_samples) continue;
+            lobes[p] = fit_highlight_lobe(directions, values, min_samples, max_spread);
+            for (int c = 0; c < channels; ++c)
+                colour[p * static_cast<std::size_t>(channels) + static_cast<std::size_t>(c)] =
+                    static_cast<float>(channel_sum[static_cast<std::size_t>(c)] / total);
+        }
+    });
+    std::vector<std::size_t> fitted;
+    for (std::size_t p = 0; p < pixels; ++p)
+        if (lobes[p]) fitted.push_back(p);
+    // In order: a node's parents come before it, so a second level sees the first's lobes.
+    for (std::size_t k = inputs; k < nodes.size(); ++k) {
+        Node& node = nodes[k];
+        for (std::size_t p : fitted) {
+            if (!shows_highlight(nodes[node.parents[0]], p) && !shows_highlight(nodes[node.parents[1]], p)) continue;
+            if (node.highlights.empty()) node.highlights = Image(width, height, channels);
+            const double value = (*lobes[p])(node.direction);
+            for (int c = 0; c < channels; ++c)
+                node.highlights.plane(c)[p] = static_cast<float>(
+                    value * colour[p * static_cast<std::size_t>(channels) + static_cast<std::size_t>(c)]);
+        }
+    }
 }
 
 // The synthesis of 6.4.1 for one new direction.
@@ -632,6 +707,42 @@ double one_sided_highlight_weight(double distance, double kernel_radius) {
     return 2.0 / kPi * (std::acos(x) - x * std::sqrt(1.0 - x * x));
 }
 
+double HighlightLobe::operator()(const Eigen::Vector3d& light) const {
+    return std::min(std::exp(log_scale + sharpness_axis.dot(light)), 2.0 * brightest);
+}
+
+std::optional<HighlightLobe> fit_highlight_lobe(const std::vector<Eigen::Vector3d>& directions,
+                                                const std::vector<double>& values, std::size_t min_samples,
+                                                double max_spread) {
+    if (directions.size() != values.size()) throw InputError("a lobe needs one value per direction");
+    // log h = log_scale + v . l is linear in (log_scale, v): one weighted least-squares solve.
+    Eigen::Matrix4d normal = Eigen::Matrix4d::Zero();
+    Eigen::Vector4d rhs = Eigen::Vector4d::Zero();
+    double brightest = 0.0;
+    std::size_t used = 0;
+    for (std::size_t s = 0; s < values.size(); ++s) {
+        const double h = values[s];
+        if (!(h > 0.0) || !std::isfinite(h)) continue;
+        const Eigen::Vector4d basis(1.0, directions[s].x(), directions[s].y(), directions[s].z());
+        normal += h * basis * basis.transpose();
+        rhs += h * std::log(h) * basis;
+        brightest = std::max(brightest, h);
+        ++used;
+    }
+    if (used < std::max<std::size_t>(min_samples, 4)) return std::nullopt;
+    const Eigen::Vector4d solution = normal.ldlt().solve(rhs);
+    HighlightLobe lobe;
+    lobe.log_scale = solution[0];
+    lobe.sharpness_axis = solution.tail<3>();
+    lobe.brightest = brightest;
+    const double sharpness = lobe.sharpness_axis.norm();
+    if (!solution.allFinite() || !(sharpness >= 1.0)) return std::nullopt;
+    const Eigen::Vector3d axis = lobe.sharpness_axis / sharpness;
+    for (std::size_t s = 0; s < values.size(); ++s)
+        if (values[s] > 0.0 && angle_between(axis, directions[s]) > max_spread) return std::nullopt;
+    return lobe;
+}
+
 ShadowMap halfway_shadow_map(const ShadowMap& first, const ShadowMap& second, int width, int height) {
     const cv::Mat phi_a = signed_distance(first, width, height), phi_b = signed_distance(second, width, height);
     // The two level-set functions are carried half-way along the flow between them before
@@ -737,6 +848,7 @@ UpsampledField upsample_field(const ReflectanceField& field, int levels, const U
                 const Node& b = nodes[edges[e][1]];
                 added[e].direction = (a.direction + b.direction).normalized();
                 added[e].kernel_radius = 0.5 * (a.kernel_radius + b.kernel_radius);
+                added[e].parents = edges[e];
                 const double one_sided = one_sided_highlight_weight(
                     angle_between(a.direction, added[e].direction), added[e].kernel_radius);
                 added[e].highlights = halfway_highlights(a.highlights, b.highlights, options.blob_reach, one_sided);
@@ -747,6 +859,8 @@ UpsampledField upsample_field(const ReflectanceField& field, int levels, const U
         });
         for (Node& node : added) nodes.push_back(std::move(node));
     }
+
+    if (options.lobe_samples > 0) refit_glossy_highlights(nodes, n, options);
 
     // 3. Synthesis.
     std::vector<Eigen::Vector3d> all_directions(nodes.size());

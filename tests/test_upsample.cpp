@@ -263,6 +263,53 @@ TEST(Upsample, OneSidedWeightIsTheOverlapOfTwoLightDiscs) {
     EXPECT_DOUBLE_EQ(one_sided_highlight_weight(0.01, 0.0), 0.0);
 }
 
+// A von Mises-Fisher lobe of sharpness 40 (about a GGX roughness of 0.12 in light space).
+double vmf(const Eigen::Vector3d& axis, const Eigen::Vector3d& light) {
+    return 3.0 * std::exp(40.0 * (axis.dot(light) - 1.0));
+}
+
+std::vector<Eigen::Vector3d> within(const Eigen::Vector3d& axis, double degrees) {
+    std::vector<Eigen::Vector3d> near;
+    for (const Eigen::Vector3d& d : fibonacci_hemisphere(400))
+        if (std::acos(std::clamp(axis.dot(d), -1.0, 1.0)) < degrees * kPi / 180.0) near.push_back(d);
+    return near;
+}
+
+TEST(Upsample, LobeFitRecoversAVonMisesFisherLobe) {
+    const Eigen::Vector3d axis = Eigen::Vector3d(0.3, -0.2, 1.0).normalized();
+    const std::vector<Eigen::Vector3d> directions = within(axis, 20.0);
+    ASSERT_GE(directions.size(), 8u);
+    std::vector<double> values;
+    for (const auto& d : directions) values.push_back(vmf(axis, d));
+    const auto lobe = fit_highlight_lobe(directions, values, 8, 30.0 * kPi / 180.0);
+    ASSERT_TRUE(lobe.has_value());
+    EXPECT_NEAR((lobe->sharpness_axis - 40.0 * axis).norm(), 0.0, 1e-6);
+    // Between the samples, at the peak (above every sample) and on the flank.
+    for (const Eigen::Vector3d& at : {axis, Eigen::Vector3d(0.35, -0.1, 1.0).normalized(),
+                                      Eigen::Vector3d(0.1, -0.3, 1.0).normalized()})
+        EXPECT_NEAR((*lobe)(at), vmf(axis, at), 1e-6 * vmf(axis, at));
+}
+
+TEST(Upsample, LobeFitRejectsFewSamplesTwoHighlightsAndFlatLight) {
+    const Eigen::Vector3d axis = Eigen::Vector3d(0.3, -0.2, 1.0).normalized();
+    const std::vector<Eigen::Vector3d> directions = within(axis, 20.0);
+    std::vector<double> values;
+    for (const auto& d : directions) values.push_back(vmf(axis, d));
+    const double spread = 30.0 * kPi / 180.0;
+    EXPECT_FALSE(fit_highlight_lobe(directions, values, directions.size() + 1, spread).has_value());
+    // Two highlights 60 degrees apart at one pixel are no single lobe.
+    const Eigen::Vector3d a = Eigen::Vector3d(std::sin(0.52), 0.0, std::cos(0.52));
+    const Eigen::Vector3d b = Eigen::Vector3d(-std::sin(0.52), 0.0, std::cos(0.52));
+    std::vector<Eigen::Vector3d> both = within(a, 15.0);
+    for (const auto& d : within(b, 15.0)) both.push_back(d);
+    std::vector<double> two;
+    for (const auto& d : both) two.push_back(vmf(a, d) + vmf(b, d));
+    EXPECT_FALSE(fit_highlight_lobe(both, two, 8, spread).has_value());
+    // Light that hardly changes with direction is not a highlight lobe.
+    EXPECT_FALSE(fit_highlight_lobe(directions, std::vector<double>(directions.size(), 0.5), 8, spread).has_value());
+    EXPECT_THROW(fit_highlight_lobe(directions, {1.0}, 8, spread), InputError);
+}
+
 // Whole fields with closed-form images: pixel (x, y) sees the point (x - 23.5, 23.5 - y, 0)
 // of a plane (field frame: y up), viewed from straight above.
 using Shade = std::function<float(int, int, const Eigen::Vector3d&)>;
@@ -367,6 +414,27 @@ TEST(Upsample, MovingHighlightBeatsLinearBlending) {
     EXPECT_LT(e.upsampled, 0.5 * e.blended) << "upsampled " << e.upsampled << ", blended " << e.blended;
 }
 
+// A broad glossy highlight on the dome: each pixel shows it over many input directions.
+// Lobes cut the error of the new images to 0.72 of moving the highlight (267 against 372),
+// yet linear blending is still better here (137): the highlight masks catch only the top
+// of so broad a lobe, and the rest is shaded as diffuse. A known limit, not asserted away.
+float broad_dome_scene(int x, int y, const Eigen::Vector3d& l) {
+    const double dx = x - 23.5, dy = 23.5 - y, r = 14.0;
+    if (dx * dx + dy * dy >= r * r) return static_cast<float>(0.4 * std::max(0.0, l.z()));
+    const Eigen::Vector3d n = Eigen::Vector3d(dx, dy, std::sqrt(r * r - dx * dx - dy * dy)) / r;
+    const Eigen::Vector3d h = (l + Eigen::Vector3d::UnitZ()).normalized();
+    const double diffuse = 0.4 * std::max(0.0, n.dot(l));
+    const double specular = n.dot(l) > 0.0 ? 2.0 * std::pow(std::max(0.0, n.dot(h)), 25.0) : 0.0;
+    return static_cast<float>(diffuse + specular);
+}
+
+TEST(Upsample, BroadHighlightIsReadOffItsLobe) {
+    UpsampleOptions no_lobes;
+    no_lobes.lobe_samples = 0;
+    const Errors with = score(broad_dome_scene, 256, 1), without = score(broad_dome_scene, 256, 1, no_lobes);
+    EXPECT_LT(with.upsampled, 0.8 * without.upsampled) << "lobes " << with.upsampled << ", without " << without.upsampled;
+}
+
 TEST(Upsample, SmallReflectionMovesWhereTheFlowCannotFollow) {
     // A mirror-like reflection of a small light: a spot of a few pixels that travels 20
     // pixels per radian of light motion (5 between neighbouring inputs) over a dim diffuse
@@ -465,6 +533,12 @@ TEST(Upsample, BadOptionsAreInputErrors) {
     EXPECT_THROW(upsample_field(input, 1, o), InputError);
     o = {};
     o.blob_reach = -1.0;
+    EXPECT_THROW(upsample_field(input, 1, o), InputError);
+    o = {};
+    o.lobe_samples = 3;
+    EXPECT_THROW(upsample_field(input, 1, o), InputError);
+    o = {};
+    o.lobe_spread_deg = 0.0;
     EXPECT_THROW(upsample_field(input, 1, o), InputError);
     EXPECT_THROW(upsample_field(input, 5, {}), InputError);
     EXPECT_THROW(upsample_field(render(fibonacci_hemisphere(3), occluder_scene), 1, {}), InputError);
