@@ -333,17 +333,21 @@ float occluder_scene(int x, int y, const Eigen::Vector3d& l) {
     return shadowed ? 0.02f * albedo : albedo * static_cast<float>(std::max(0.0, l.z()));
 }
 
-// A glossy dome of radius 14 in the middle of a plain plane: a sharp moving highlight.
-float dome_scene(int x, int y, const Eigen::Vector3d& l) {
+// A glossy dome of radius 14 in the middle of a plain plane, with a Blinn-Phong highlight
+// of the given peak and exponent.
+float glossy_dome(int x, int y, const Eigen::Vector3d& l, double peak, double exponent) {
     const double dx = x - 23.5, dy = 23.5 - y, r = 14.0;
     // Seen orthographically, a glossy plane would flash all at once; only the dome is glossy.
     if (dx * dx + dy * dy >= r * r) return static_cast<float>(0.4 * std::max(0.0, l.z()));
     const Eigen::Vector3d n = Eigen::Vector3d(dx, dy, std::sqrt(r * r - dx * dx - dy * dy)) / r;
     const Eigen::Vector3d h = (l + Eigen::Vector3d::UnitZ()).normalized();
     const double diffuse = 0.4 * std::max(0.0, n.dot(l));
-    const double specular = n.dot(l) > 0.0 ? 6.0 * std::pow(std::max(0.0, n.dot(h)), 400.0) : 0.0;
+    const double specular = n.dot(l) > 0.0 ? peak * std::pow(std::max(0.0, n.dot(h)), exponent) : 0.0;
     return static_cast<float>(diffuse + specular);
 }
+
+// A sharp moving highlight.
+float dome_scene(int x, int y, const Eigen::Vector3d& l) { return glossy_dome(x, y, l, 6.0, 400.0); }
 
 struct Errors {
     double upsampled = 0.0;  // squared error of the new images
@@ -418,15 +422,7 @@ TEST(Upsample, MovingHighlightBeatsLinearBlending) {
 // Lobes cut the error of the new images to 0.72 of moving the highlight (267 against 372),
 // yet linear blending is still better here (137): the highlight masks catch only the top
 // of so broad a lobe, and the rest is shaded as diffuse. A known limit, not asserted away.
-float broad_dome_scene(int x, int y, const Eigen::Vector3d& l) {
-    const double dx = x - 23.5, dy = 23.5 - y, r = 14.0;
-    if (dx * dx + dy * dy >= r * r) return static_cast<float>(0.4 * std::max(0.0, l.z()));
-    const Eigen::Vector3d n = Eigen::Vector3d(dx, dy, std::sqrt(r * r - dx * dx - dy * dy)) / r;
-    const Eigen::Vector3d h = (l + Eigen::Vector3d::UnitZ()).normalized();
-    const double diffuse = 0.4 * std::max(0.0, n.dot(l));
-    const double specular = n.dot(l) > 0.0 ? 2.0 * std::pow(std::max(0.0, n.dot(h)), 25.0) : 0.0;
-    return static_cast<float>(diffuse + specular);
-}
+float broad_dome_scene(int x, int y, const Eigen::Vector3d& l) { return glossy_dome(x, y, l, 2.0, 25.0); }
 
 TEST(Upsample, BroadHighlightIsReadOffItsLobe) {
     UpsampleOptions no_lobes;
