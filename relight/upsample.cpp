@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <optional>
 #include <string>
 #include <utility>
@@ -237,24 +238,26 @@ void refit_glossy_highlights(std::vector<Node>& nodes, std::size_t inputs, const
     parallel_for_chunks(pixels, 1024, [&](std::size_t begin, std::size_t end) {
         std::vector<Eigen::Vector3d> directions;
         std::vector<double> values;
+        std::vector<std::size_t> showing;
         for (std::size_t p = begin; p < end; ++p) {
             directions.clear();
             values.clear();
-            std::vector<double> channel_sum(static_cast<std::size_t>(channels), 0.0);
-            double total = 0.0;
+            showing.clear();
             for (std::size_t i = 0; i < inputs; ++i) {
                 if (luminances[i].empty() || !(luminances[i].plane(0)[p] > 0.0f)) continue;
                 directions.push_back(nodes[i].direction);
                 values.push_back(luminances[i].plane(0)[p]);
-                total += values.back();
-                for (int c = 0; c < channels; ++c)
-                    channel_sum[static_cast<std::size_t>(c)] += nodes[i].highlights.plane(c)[p];
+                showing.push_back(i);
             }
-            if (directions.size() < min_samples) continue;
             lobes[p] = fit_highlight_lobe(directions, values, min_samples, max_spread);
-            for (int c = 0; c < channels; ++c)
+            if (!lobes[p]) continue;
+            const double total = std::accumulate(values.begin(), values.end(), 0.0);
+            for (int c = 0; c < channels; ++c) {
+                double sum = 0.0;
+                for (std::size_t i : showing) sum += nodes[i].highlights.plane(c)[p];
                 colour[p * static_cast<std::size_t>(channels) + static_cast<std::size_t>(c)] =
-                    static_cast<float>(channel_sum[static_cast<std::size_t>(c)] / total);
+                    static_cast<float>(sum / total);
+            }
         }
     });
     std::vector<std::size_t> fitted;
@@ -720,9 +723,10 @@ std::optional<HighlightLobe> fit_highlight_lobe(const std::vector<Eigen::Vector3
     Eigen::Vector4d rhs = Eigen::Vector4d::Zero();
     double brightest = 0.0;
     std::size_t used = 0;
+    const auto usable = [](double h) { return h > 0.0 && std::isfinite(h); };
     for (std::size_t s = 0; s < values.size(); ++s) {
         const double h = values[s];
-        if (!(h > 0.0) || !std::isfinite(h)) continue;
+        if (!usable(h)) continue;
         const Eigen::Vector4d basis(1.0, directions[s].x(), directions[s].y(), directions[s].z());
         normal += h * basis * basis.transpose();
         rhs += h * std::log(h) * basis;
@@ -739,7 +743,7 @@ std::optional<HighlightLobe> fit_highlight_lobe(const std::vector<Eigen::Vector3
     if (!solution.allFinite() || !(sharpness >= 1.0)) return std::nullopt;
     const Eigen::Vector3d axis = lobe.sharpness_axis / sharpness;
     for (std::size_t s = 0; s < values.size(); ++s)
-        if (values[s] > 0.0 && angle_between(axis, directions[s]) > max_spread) return std::nullopt;
+        if (usable(values[s]) && angle_between(axis, directions[s]) > max_spread) return std::nullopt;
     return lobe;
 }
 
