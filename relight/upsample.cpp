@@ -218,7 +218,8 @@ bool shows_highlight(const Node& node, std::size_t p) {
 // The glossy lobes of upsample.hpp: per pixel, the inputs' highlight luminances are fitted
 // as a lobe over the light directions; each new node next to an input (or an earlier new
 // node) that shows the highlight at the pixel takes the lobe's value there, in the
-// highlight's own colour (its channels' share of the samples' total).
+// highlight's own colour (its channels' share of the samples' total), or, where the lobe is
+// at least as wide as the node's edge, the mean of the edge's two ends.
 void refit_glossy_highlights(std::vector<Node>& nodes, std::size_t inputs, const UpsampleOptions& options) {
     const Node* shaped = nullptr;
     for (std::size_t i = 0; i < inputs && shaped == nullptr; ++i)
@@ -266,9 +267,20 @@ void refit_glossy_highlights(std::vector<Node>& nodes, std::size_t inputs, const
     // In order: a node's parents come before it, so a second level sees the first's lobes.
     for (std::size_t k = inputs; k < nodes.size(); ++k) {
         Node& node = nodes[k];
+        const Node& first = nodes[node.parents[0]];
+        const Node& second = nodes[node.parents[1]];
+        const double edge = angle_between(first.direction, second.direction);
         for (std::size_t p : fitted) {
-            if (!shows_highlight(nodes[node.parents[0]], p) && !shows_highlight(nodes[node.parents[1]], p)) continue;
+            if (!shows_highlight(first, p) && !shows_highlight(second, p)) continue;
             if (node.highlights.empty()) node.highlights = Image(width, height, channels);
+            if (lobes[p]->angular_width() >= edge) {
+                for (int c = 0; c < channels; ++c) {
+                    const float h_first = first.highlights.empty() ? 0.0f : first.highlights.plane(c)[p];
+                    const float h_second = second.highlights.empty() ? 0.0f : second.highlights.plane(c)[p];
+                    node.highlights.plane(c)[p] = 0.5f * (h_first + h_second);
+                }
+                continue;
+            }
             const double value = (*lobes[p])(node.direction);
             for (int c = 0; c < channels; ++c)
                 node.highlights.plane(c)[p] = static_cast<float>(
@@ -713,6 +725,8 @@ double one_sided_highlight_weight(double distance, double kernel_radius) {
 double HighlightLobe::operator()(const Eigen::Vector3d& light) const {
     return std::min(std::exp(log_scale + sharpness_axis.dot(light)), 2.0 * brightest);
 }
+
+double HighlightLobe::angular_width() const { return 1.0 / std::sqrt(sharpness_axis.norm()); }
 
 std::optional<HighlightLobe> fit_highlight_lobe(const std::vector<Eigen::Vector3d>& directions,
                                                 const std::vector<double>& values, std::size_t min_samples,
