@@ -74,21 +74,22 @@ cv::Mat dense_flow(const cv::Mat& from, const cv::Mat& to) {
     return flow;
 }
 
-// The sampling maps x - 0.5 flow(x) of cv::remap: what lies at x half-way along the flow.
-std::pair<cv::Mat, cv::Mat> halfway_maps(const cv::Mat& flow) {
+// The sampling maps x - fraction * flow(x) of cv::remap: what lies at x that far along the
+// flow (0.5: half-way).
+std::pair<cv::Mat, cv::Mat> flow_sampling_maps(const cv::Mat& flow, float fraction = 0.5f) {
     cv::Mat map_x(flow.rows, flow.cols, CV_32F), map_y(flow.rows, flow.cols, CV_32F);
     for (int y = 0; y < flow.rows; ++y)
         for (int x = 0; x < flow.cols; ++x) {
             const cv::Point2f f = flow.at<cv::Point2f>(y, x);
-            map_x.at<float>(y, x) = static_cast<float>(x) - 0.5f * f.x;
-            map_y.at<float>(y, x) = static_cast<float>(y) - 0.5f * f.y;
+            map_x.at<float>(y, x) = static_cast<float>(x) - fraction * f.x;
+            map_y.at<float>(y, x) = static_cast<float>(y) - fraction * f.y;
         }
     return {map_x, map_y};
 }
 
 // `image` carried half-way along the flow.
 Image warp_halfway(const Image& image, const cv::Mat& flow) {
-    const auto [map_x, map_y] = halfway_maps(flow);
+    const auto [map_x, map_y] = flow_sampling_maps(flow);
     Image out(image.width(), image.height(), image.channels());
     for (int c = 0; c < image.channels(); ++c) {
         cv::Mat dst = plane_mat(out, c);
@@ -609,9 +610,49 @@ double moved_shape_agreement(const Image& la, const cv::Mat& labels_a, const Blo
     return shared;
 }
 
+// Where the lights of an edge overlap, a highlight may not move at all: a mirror pixel lit
+// at both ends is lit half-way too (the lens two overlapping discs share lies inside the
+// midpoint's disc), and one lit at one end only is lit there with one_sided_weight.
+Image in_place_highlights(const Image& a, const Image& b, float one_sided_weight) {
+    Image out(a.width(), a.height(), a.channels());
+    for (std::size_t p = 0; p < a.pixel_count(); ++p) {
+        bool lit_a = false, lit_b = false;
+        for (int c = 0; c < a.channels(); ++c) {
+            lit_a = lit_a || a.plane(c)[p] > 0.0f;
+            lit_b = lit_b || b.plane(c)[p] > 0.0f;
+        }
+        const float weight = lit_a && lit_b ? 0.5f : one_sided_weight;
+        for (int c = 0; c < a.channels(); ++c) out.plane(c)[p] = weight * (a.plane(c)[p] + b.plane(c)[p]);
+    }
+    return out;
+}
+
+// How far each luminance layer, carried all the way along its flow, lands from the other,
+// against how far the two differ unmoved; both as sums of absolute differences. A flow that
+// does not beat standing still explains nothing.
+std::pair<double, double> flow_and_still_misfit(const Image& la, const Image& lb, const cv::Mat& flow_ab,
+                                                 const cv::Mat& flow_ba) {
+    const auto carried = [](const Image& luminance, const cv::Mat& flow) {
+        const auto [map_x, map_y] = flow_sampling_maps(flow, 1.0f);
+        Image out(luminance.width(), luminance.height(), 1);
+        cv::Mat dst = plane_mat(out, 0);
+        cv::remap(plane_mat(luminance, 0), dst, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT, 0.0);
+        return out;
+    };
+    const Image a_at_b = carried(la, flow_ab), b_at_a = carried(lb, flow_ba);
+    double flow = 0.0, still = 0.0;
+    for (std::size_t p = 0; p < la.pixel_count(); ++p) {
+        const double va = la.plane(0)[p], vb = lb.plane(0)[p];
+        flow += std::abs(a_at_b.plane(0)[p] - vb) + std::abs(b_at_a.plane(0)[p] - va);
+        still += 2.0 * std::abs(va - vb);
+    }
+    return {flow, still};
+}
+
 // Half-way by dense optical flow both ways; either layer may be all zero (the other is then
-// scaled by one_sided_weight).
-Image halfway_by_flow(const Image& a, const Image& b, float one_sided_weight) {
+// scaled by one_sided_weight). With `lights_overlap`, layers that the flow carries onto each
+// other no better than they already lie stay in place (in_place_highlights).
+Image halfway_by_flow(const Image& a, const Image& b, float one_sided_weight, bool lights_overlap) {
     const bool a_empty = all_zero(a), b_empty = all_zero(b);
     Image out(a.width(), a.height(), a.channels());
     if (a_empty && b_empty) return out;
@@ -633,7 +674,12 @@ Image halfway_by_flow(const Image& a, const Image& b, float one_sided_weight) {
     cv::Mat ga = flow_input(la, clamp), gb = flow_input(lb, clamp);
     cv::GaussianBlur(ga, ga, cv::Size(0, 0), 3.0);
     cv::GaussianBlur(gb, gb, cv::Size(0, 0), 3.0);
-    Image wa = warp_halfway(a, dense_flow(ga, gb)), wb = warp_halfway(b, dense_flow(gb, ga));
+    const cv::Mat flow_ab = dense_flow(ga, gb), flow_ba = dense_flow(gb, ga);
+    if (lights_overlap) {
+        const auto [flow_misfit, still_misfit] = flow_and_still_misfit(la, lb, flow_ab, flow_ba);
+        if (!(flow_misfit < still_misfit)) return in_place_highlights(a, b, one_sided_weight);
+    }
+    Image wa = warp_halfway(a, flow_ab), wb = warp_halfway(b, flow_ba);
     // A backward warp stretches where the flow diverges; a highlight carries its energy.
     conserve_energy(wa, a);
     conserve_energy(wb, b);
@@ -644,7 +690,8 @@ Image halfway_by_flow(const Image& a, const Image& b, float one_sided_weight) {
 
 }  // namespace
 
-Image halfway_highlights(const Image& first, const Image& second, double blob_reach, double one_sided_weight) {
+Image halfway_highlights(const Image& first, const Image& second, double blob_reach, double one_sided_weight,
+                         bool lights_overlap) {
     if (first.empty() && second.empty()) return {};
     const Image& shape = first.empty() ? second : first;
     const Image zero(shape.width(), shape.height(), shape.channels());
@@ -710,7 +757,7 @@ Image halfway_highlights(const Image& first, const Image& second, double blob_re
     };
     const Image flowed = halfway_by_flow(unhandled(a, labels_a, blobs_a, handled_a),
                                          unhandled(b, labels_b, blobs_b, handled_b),
-                                         static_cast<float>(one_sided_weight));
+                                         static_cast<float>(one_sided_weight), lights_overlap);
     for (std::size_t s = 0; s < out.samples().size(); ++s) out.samples()[s] += flowed.samples()[s];
     return out;
 }
@@ -720,6 +767,14 @@ double one_sided_highlight_weight(double distance, double kernel_radius) {
     const double x = distance / (2.0 * kernel_radius);
     if (!(x < 1.0)) return 0.0;
     return 2.0 / kPi * (std::acos(x) - x * std::sqrt(1.0 - x * x));
+}
+
+double midpoint_highlight_weight(double edge, double kernel_radius) {
+    const double whole = one_sided_highlight_weight(edge, kernel_radius);
+    // The lens both discs share lies inside the midpoint's disc, so what the midpoint sees of
+    // one end's disc outside the other is the overlap at half the edge less the lens.
+    if (!(whole < 1.0)) return 0.5;  // the two lights coincide: the limit of the ratio
+    return std::clamp((one_sided_highlight_weight(0.5 * edge, kernel_radius) - whole) / (1.0 - whole), 0.0, 1.0);
 }
 
 double HighlightLobe::operator()(const Eigen::Vector3d& light) const {
@@ -776,7 +831,7 @@ ShadowMap halfway_shadow_map(const ShadowMap& first, const ShadowMap& second, in
     };
     const cv::Mat ga = flow_input_of(phi_a), gb = flow_input_of(phi_b);
     const auto warp = [](const cv::Mat& phi, const cv::Mat& flow) {
-        const auto [map_x, map_y] = halfway_maps(flow);
+        const auto [map_x, map_y] = flow_sampling_maps(flow);
         cv::Mat out;
         cv::remap(phi, out, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
         return out;
@@ -867,9 +922,10 @@ UpsampledField upsample_field(const ReflectanceField& field, int levels, const U
                 added[e].direction = (a.direction + b.direction).normalized();
                 added[e].kernel_radius = 0.5 * (a.kernel_radius + b.kernel_radius);
                 added[e].parents = edges[e];
-                const double one_sided = one_sided_highlight_weight(
-                    angle_between(a.direction, added[e].direction), added[e].kernel_radius);
-                added[e].highlights = halfway_highlights(a.highlights, b.highlights, options.blob_reach, one_sided);
+                const double edge = angle_between(a.direction, b.direction);
+                const double radius = added[e].kernel_radius;
+                added[e].highlights = halfway_highlights(a.highlights, b.highlights, options.blob_reach,
+                                                         midpoint_highlight_weight(edge, radius), edge < 2.0 * radius);
                 if (!added[e].highlights.empty() && all_zero(added[e].highlights)) added[e].highlights = Image();
                 added[e].shadow = halfway_shadow_map(a.shadow, b.shadow, width, height);
                 progress.advance();
