@@ -191,6 +191,14 @@ Image dots(const std::vector<std::pair<int, float>>& at_x) {
     return out;
 }
 
+// Highlights along row 20 over the spans [x0, x1] of `value`.
+Image bars(const std::vector<std::pair<int, int>>& spans, float value) {
+    Image out(kSide, kSide, 1);
+    for (const auto& [x0, x1] : spans)
+        for (int x = x0; x <= x1; ++x) out.at(x, 20, 0) = value;
+    return out;
+}
+
 TEST(Upsample, MatchedHighlightsMoveRigidlyHalfWay) {
     // One-pixel highlights 5 pixels apart: each carries half its energy 2.5 pixels, split
     // bilinearly between x = 12 and 13. The flow sees almost nothing of such a dot.
@@ -228,35 +236,38 @@ TEST(Upsample, HighlightThatSplitsIsNotMovedRigidly) {
     // nearest piece is within reach and within a factor 4 in energy, but moved rigidly onto
     // it, the streak does not land on it. The flow spreads it symmetrically; a rigid move
     // would pull it to one side (centroid 12 instead of 14).
-    const auto bars = [](const std::vector<std::pair<int, int>>& spans) {
-        Image out(kSide, kSide, 1);
-        for (const auto& [x0, x1] : spans)
-            for (int x = x0; x <= x1; ++x) out.at(x, 20, 0) = 1.0f;
-        return out;
-    };
-    const Image k = halfway_highlights(bars({{9, 19}}), bars({{5, 7}, {21, 23}}), 12.0, 0.5);
+    const Image k = halfway_highlights(bars({{9, 19}}, 1.0f), bars({{5, 7}, {21, 23}}, 1.0f), 12.0, 0.5);
     const auto [cx, total] = centroid_x(k);
     EXPECT_NEAR(cx, 14.0, 0.75);
     EXPECT_GT(total, 0.5 * 11.0);
 }
 
+// Light discs in the plane: of the points of a fine grid over the square around the disc
+// of `radius` at the origin for which `counted` holds, the share for which `kept` holds too.
+using DiscTest = std::function<bool(double x, double y)>;
+double disc_grid_share(double radius, const DiscTest& counted, const DiscTest& kept) {
+    constexpr int kSteps = 800;
+    std::size_t all = 0, share = 0;
+    for (int i = 0; i < kSteps; ++i)
+        for (int j = 0; j < kSteps; ++j) {
+            const double x = radius * (2.0 * (i + 0.5) / kSteps - 1.0), y = radius * (2.0 * (j + 0.5) / kSteps - 1.0);
+            if (!counted(x, y)) continue;
+            ++all;
+            if (kept(x, y)) ++share;
+        }
+    return static_cast<double>(share) / static_cast<double>(all);
+}
+
 TEST(Upsample, OneSidedWeightIsTheOverlapOfTwoLightDiscs) {
     // Against counting the points of a fine grid over one disc that the other disc covers.
     const double radius = degrees_to_radians(2.0);
+    const auto inside = [&](double x, double y, double cx) { return (x - cx) * (x - cx) + y * y < radius * radius; };
     for (const double ratio : {0.1, 0.5, 1.0, 1.5, 1.9}) {
         const double distance = ratio * radius;
-        constexpr int kSteps = 800;
-        std::size_t inside = 0, shared = 0;
-        for (int i = 0; i < kSteps; ++i)
-            for (int j = 0; j < kSteps; ++j) {
-                const double x = radius * (2.0 * (i + 0.5) / kSteps - 1.0), y = radius * (2.0 * (j + 0.5) / kSteps - 1.0);
-                if (x * x + y * y >= radius * radius) continue;
-                ++inside;
-                if ((x - distance) * (x - distance) + y * y < radius * radius) ++shared;
-            }
-        EXPECT_NEAR(one_sided_highlight_weight(distance, radius),
-                    static_cast<double>(shared) / static_cast<double>(inside), 2e-3)
-            << "distance " << ratio << " radii";
+        const double share = disc_grid_share(
+            radius, [&](double x, double y) { return inside(x, y, 0.0); },
+            [&](double x, double y) { return inside(x, y, distance); });
+        EXPECT_NEAR(one_sided_highlight_weight(distance, radius), share, 2e-3) << "distance " << ratio << " radii";
     }
     EXPECT_DOUBLE_EQ(one_sided_highlight_weight(0.0, radius), 1.0);
     EXPECT_DOUBLE_EQ(one_sided_highlight_weight(2.0 * radius, radius), 0.0);
@@ -267,20 +278,13 @@ TEST(Upsample, MidpointWeightIsWhatTheMidpointSeesOfOneEndsOwnLight) {
     // Against a fine grid over the first end's disc: of its points outside the second end's
     // disc, the share inside the midpoint's.
     const double radius = degrees_to_radians(2.0);
+    const auto inside = [&](double x, double y, double cx) { return (x - cx) * (x - cx) + y * y < radius * radius; };
     for (const double ratio : {0.2, 0.6, 1.0, 1.5, 1.9, 2.5}) {
         const double edge = ratio * radius;
-        constexpr int kSteps = 800;
-        std::size_t own = 0, seen = 0;
-        for (int i = 0; i < kSteps; ++i)
-            for (int j = 0; j < kSteps; ++j) {
-                const double x = radius * (2.0 * (i + 0.5) / kSteps - 1.0), y = radius * (2.0 * (j + 0.5) / kSteps - 1.0);
-                const auto inside = [&](double cx) { return (x - cx) * (x - cx) + y * y < radius * radius; };
-                if (!inside(0.0) || inside(edge)) continue;
-                ++own;
-                if (inside(0.5 * edge)) ++seen;
-            }
-        EXPECT_NEAR(midpoint_highlight_weight(edge, radius), static_cast<double>(seen) / static_cast<double>(own), 3e-3)
-            << "edge " << ratio << " radii";
+        const double share = disc_grid_share(
+            radius, [&](double x, double y) { return inside(x, y, 0.0) && !inside(x, y, edge); },
+            [&](double x, double y) { return inside(x, y, 0.5 * edge); });
+        EXPECT_NEAR(midpoint_highlight_weight(edge, radius), share, 3e-3) << "edge " << ratio << " radii";
     }
     // Apart, the lights share nothing and it is the one-sided weight at half the edge; as
     // the edge shrinks it tends to blending's half; point lights share nothing.
@@ -295,13 +299,7 @@ TEST(Upsample, HighlightLitInPlaceUnderOverlappingLightsStaysInPlace) {
     // disc overlapping the first's, no longer reaches (only x = 10..15 and 25..30 lit).
     // Nothing moved: no flow carries the one onto the other better than they already lie.
     // The pixels both lights reach stay lit, the rest keep the one-sided weight.
-    const auto bars = [](const std::vector<std::pair<int, int>>& spans) {
-        Image out(kSide, kSide, 1);
-        for (const auto& [x0, x1] : spans)
-            for (int x = x0; x <= x1; ++x) out.at(x, 20, 0) = 4.0f;
-        return out;
-    };
-    const Image whole = bars({{10, 30}}), ends = bars({{10, 15}, {25, 30}});
+    const Image whole = bars({{10, 30}}, 4.0f), ends = bars({{10, 15}, {25, 30}}, 4.0f);
     const float weight = 0.45f;
     const Image k = halfway_highlights(whole, ends, 12.0, weight, true);
     for (int y = 0; y < kSide; ++y)
