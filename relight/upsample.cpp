@@ -87,9 +87,9 @@ std::pair<cv::Mat, cv::Mat> flow_sampling_maps(const cv::Mat& flow, float fracti
     return {map_x, map_y};
 }
 
-// `image` carried half-way along the flow.
-Image warp_halfway(const Image& image, const cv::Mat& flow) {
-    const auto [map_x, map_y] = flow_sampling_maps(flow);
+// `image` carried `fraction` of the way along the flow (0.5: half-way).
+Image warp_along(const Image& image, const cv::Mat& flow, float fraction = 0.5f) {
+    const auto [map_x, map_y] = flow_sampling_maps(flow, fraction);
     Image out(image.width(), image.height(), image.channels());
     for (int c = 0; c < image.channels(); ++c) {
         cv::Mat dst = plane_mat(out, c);
@@ -632,14 +632,7 @@ Image in_place_highlights(const Image& a, const Image& b, float one_sided_weight
 // does not beat standing still explains nothing.
 std::pair<double, double> flow_and_still_misfit(const Image& la, const Image& lb, const cv::Mat& flow_ab,
                                                  const cv::Mat& flow_ba) {
-    const auto carried = [](const Image& luminance, const cv::Mat& flow) {
-        const auto [map_x, map_y] = flow_sampling_maps(flow, 1.0f);
-        Image out(luminance.width(), luminance.height(), 1);
-        cv::Mat dst = plane_mat(out, 0);
-        cv::remap(plane_mat(luminance, 0), dst, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT, 0.0);
-        return out;
-    };
-    const Image a_at_b = carried(la, flow_ab), b_at_a = carried(lb, flow_ba);
+    const Image a_at_b = warp_along(la, flow_ab, 1.0f), b_at_a = warp_along(lb, flow_ba, 1.0f);
     double flow = 0.0, still = 0.0;
     for (std::size_t p = 0; p < la.pixel_count(); ++p) {
         const double va = la.plane(0)[p], vb = lb.plane(0)[p];
@@ -679,7 +672,7 @@ Image halfway_by_flow(const Image& a, const Image& b, float one_sided_weight, bo
         const auto [flow_misfit, still_misfit] = flow_and_still_misfit(la, lb, flow_ab, flow_ba);
         if (!(flow_misfit < still_misfit)) return in_place_highlights(a, b, one_sided_weight);
     }
-    Image wa = warp_halfway(a, flow_ab), wb = warp_halfway(b, flow_ba);
+    Image wa = warp_along(a, flow_ab), wb = warp_along(b, flow_ba);
     // A backward warp stretches where the flow diverges; a highlight carries its energy.
     conserve_energy(wa, a);
     conserve_energy(wb, b);
