@@ -33,3 +33,17 @@ target_compile_options(rfd_codegen INTERFACE -fno-trapping-math -fno-math-errno 
 
 add_library(rfd_flags INTERFACE)
 target_link_libraries(rfd_flags INTERFACE rfd_warnings rfd_sanitizers rfd_codegen)
+
+# Modules (core/module.hpp): librfd_NAME.so beside the programs, opened with dlopen on first
+# use; target rfd_NAME_module. A module resolves everything it needs from its own libraries
+# (--no-undefined) and exports only its entry point.
+set(RFD_MODULE_DIR ${CMAKE_BINARY_DIR}/bin)
+function(rfd_add_module name)
+  set(target rfd_${name}_module)
+  add_library(${target} MODULE ${ARGN})
+  target_include_directories(${target} PRIVATE ${PROJECT_SOURCE_DIR})
+  target_link_libraries(${target} PRIVATE rfd_flags)
+  target_link_options(${target} PRIVATE -Wl,--no-undefined)
+  set_target_properties(${target} PROPERTIES OUTPUT_NAME rfd_${name} LIBRARY_OUTPUT_DIRECTORY ${RFD_MODULE_DIR}
+                        CXX_VISIBILITY_PRESET hidden VISIBILITY_INLINES_HIDDEN ON)
+endfunction()

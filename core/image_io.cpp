@@ -6,31 +6,10 @@
 #include <memory>
 #include <string>
 
-#include <OpenImageIO/imageio.h>
-
 #include "core/error.hpp"
-#include "core/files.hpp"
+#include "core/image_file.hpp"
 
 namespace rfd {
-namespace {
-
-std::unique_ptr<OIIO::ImageInput> open_input(const std::filesystem::path& path) {
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec))
-        throw IoError(SourceLocation{path.string()}, "cannot open: no such image file");
-    auto input = OIIO::ImageInput::open(path.string());
-    if (!input)
-        throw IoError(SourceLocation{path.string()},
-                      "cannot read image: " + OIIO::geterror());
-    return input;
-}
-
-int colour_channels(const OIIO::ImageSpec& spec) {
-    // Alpha is dropped; it is the last channel in every format rfd reads.
-    return spec.alpha_channel >= 0 && spec.nchannels > 1 ? spec.nchannels - 1 : spec.nchannels;
-}
-
-}  // namespace
 
 std::string lower_extension(const std::filesystem::path& path) {
     std::string ext = path.extension().string();
@@ -45,21 +24,19 @@ bool is_linear_format(const std::filesystem::path& path) {
 }
 
 ImageSize read_image_size(const std::filesystem::path& path) {
-    auto input = open_input(path);
-    const OIIO::ImageSpec& spec = input->spec();
-    return {spec.width, spec.height, colour_channels(spec)};
+    const ImageFileReader file(path);
+    return {file.spec().width, file.spec().height, file.spec().channels};
 }
 
 Image read_image(const std::filesystem::path& path) {
-    auto input = open_input(path);
-    const OIIO::ImageSpec& spec = input->spec();
-    const int channels = colour_channels(spec);
+    ImageFileReader file(path);
+    const ImageFileSpec& spec = file.spec();
+    const int channels = spec.channels;
     if (spec.width <= 0 || spec.height <= 0 || channels <= 0)
         throw InputError(SourceLocation{path.string()}, "image has no pixels");
     std::vector<float> interleaved(static_cast<std::size_t>(spec.width) * spec.height * channels);
-    if (!input->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, interleaved.data()))
-        throw IoError(SourceLocation{path.string()}, "cannot read image: " + input->geterror());
-    const bool srgb = !spec.format.is_floating_point();
+    file.read_rows(0, spec.height, interleaved);
+    const bool srgb = spec.type == SampleType::uint8 || spec.type == SampleType::uint16;
     Image image(spec.width, spec.height, channels);
     std::size_t k = 0;
     for (int y = 0; y < spec.height; ++y)
@@ -79,15 +56,17 @@ Image read_image(const std::filesystem::path& path) {
 void write_image(const std::filesystem::path& path, const Image& image) {
     RFD_CHECK(!image.empty());
     const std::string ext = lower_extension(path);
-    OIIO::TypeDesc format = OIIO::TypeDesc::FLOAT;
+    ImageFileSpec spec{.width = image.width(), .height = image.height(), .channels = image.channels()};
     bool srgb = false;
     if (ext == ".png" || ext == ".jpg" || ext == ".jpeg") {
-        format = OIIO::TypeDesc::UINT8;
+        spec.type = SampleType::uint8;
         srgb = true;
     } else if (ext == ".tif" || ext == ".tiff") {
-        format = OIIO::TypeDesc::UINT16;
+        spec.type = SampleType::uint16;
         srgb = true;
-    } else if (ext != ".exr" && ext != ".hdr") {
+    } else if (ext == ".exr") {
+        spec.compression = "zip";
+    } else if (ext != ".hdr") {
         throw InputError(SourceLocation{path.string()},
                          "unknown image extension '" + ext +
                              "' (expected .exr, .hdr, .png, .jpg, .tif)");
@@ -106,25 +85,9 @@ void write_image(const std::filesystem::path& path, const Image& image) {
                                          ": not a finite number");
                 interleaved[k++] = srgb ? linear_to_srgb(std::clamp(v, 0.0f, 1.0f)) : v;
             }
-    const std::filesystem::path temporary = temporary_sibling(path);
-    auto output = OIIO::ImageOutput::create(temporary.string());
-    if (!output)
-        throw IoError(SourceLocation{path.string()}, "cannot write image: " + OIIO::geterror());
-    OIIO::ImageSpec spec(image.width(), image.height(), channels, format);
-    if (ext == ".exr") spec.attribute("compression", "zip");
-    // Identical images must give identical files: OpenImageIO's EXR writer stamps the current
-    // time as capDate unless DateTime is set, so set it to a fixed, obviously neutral value.
-    spec.attribute("DateTime", "1970:01:01 00:00:00");
-    const bool written = output->open(temporary.string(), spec) &&
-                         output->write_image(OIIO::TypeDesc::FLOAT, interleaved.data()) &&
-                         output->close();
-    if (!written) {
-        const std::string message = output->geterror();
-        std::error_code ec;
-        std::filesystem::remove(temporary, ec);
-        throw IoError(SourceLocation{path.string()}, "cannot write image: " + message);
-    }
-    move_into_place(temporary, path);
+    ImageFileWriter file(path, spec);
+    file.write_rows(0, image.height(), interleaved);
+    file.finish();
 }
 
 }  // namespace rfd

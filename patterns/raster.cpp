@@ -12,13 +12,12 @@
 #include <span>
 #include <vector>
 
-#include <OpenImageIO/imageio.h>
-
 #include "core/error.hpp"
 #include "core/number.hpp"
 #include "core/files.hpp"
 #include "core/half.hpp"
 #include "core/image.hpp"
+#include "core/image_file.hpp"
 #include "core/image_io.hpp"
 #include "core/parallel.hpp"
 #include "core/progress.hpp"
@@ -93,58 +92,36 @@ void write_pattern(const std::filesystem::path& path, const PatternSource& sourc
     const int channels = source.channels();
     RFD_CHECK(g.width > 0 && g.height > 0 && channels > 0 && options.rows_per_strip > 0);
     const std::string ext = lower_extension(path);
-    OIIO::TypeDesc format;
+    ImageFileSpec spec{.width = g.width, .height = g.height, .channels = channels, .dpi_x = g.dpi_x, .dpi_y = g.dpi_y};
     bool srgb = false;
     if (ext == ".exr") {
-        format = options.half_float ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT;
-    } else if (ext == ".tif" || ext == ".tiff") {
-        format = OIIO::TypeDesc::UINT16;
+        spec.type = options.half_float ? SampleType::half : SampleType::float32;
+        spec.compression = options.exr_compression;
+        for (const auto& [key, value] : attributes) spec.attributes[key] = value;
+    } else if (ext == ".tif" || ext == ".tiff" || ext == ".png") {
+        spec.type = ext == ".png" ? SampleType::uint8 : SampleType::uint16;
+        if (ext != ".png") spec.compression = "zip";
         srgb = true;
-    } else if (ext == ".png") {
-        format = OIIO::TypeDesc::UINT8;
-        srgb = true;
+        // TIFF and PNG keep no custom attributes: one "rfd:key=value" line each in the
+        // image description instead.
+        for (const auto& [key, value] : attributes) {
+            RFD_CHECK(key.find('=') == std::string::npos && value.find('\n') == std::string::npos);
+            spec.description += kAttributePrefix + key + "=" + value + "\n";
+        }
     } else {
         throw InputError(SourceLocation{path.string()},
                          "unknown pattern extension '" + ext + "' (expected .exr, .tif or .png)");
     }
-
-    TemporaryFile temporary(temporary_sibling(path));
-    auto output = OIIO::ImageOutput::create(temporary.path().string());
-    if (!output)
-        throw IoError(SourceLocation{path.string()}, "cannot write pattern: " + OIIO::geterror());
-    OIIO::ImageSpec spec(g.width, g.height, channels, format);
-    spec.attribute("XResolution", static_cast<float>(g.dpi_x));
-    spec.attribute("YResolution", static_cast<float>(g.dpi_y));
-    spec.attribute("ResolutionUnit", "in");
-    // Pixel width over height, i.e. dpi_y / dpi_x: OpenImageIO's TIFF writer stores the y
-    // resolution as XResolution times this, and drops YResolution without it.
-    spec.attribute("PixelAspectRatio", static_cast<float>(g.dpi_y / g.dpi_x));
-    spec.attribute("DateTime", "1970:01:01 00:00:00");  // byte-identical reruns
-    if (ext == ".exr") spec.attribute("compression", options.exr_compression);
-    if (ext == ".tif" || ext == ".tiff") spec.attribute("compression", "zip");
-    if (ext == ".exr") {
-        for (const auto& [key, value] : attributes) spec.attribute(kAttributePrefix + key, value);
-    } else {
-        // TIFF and PNG keep no custom attributes: one "rfd:key=value" line each in the
-        // image description instead.
-        std::string description;
-        for (const auto& [key, value] : attributes) {
-            RFD_CHECK(key.find('=') == std::string::npos && value.find('\n') == std::string::npos);
-            description += kAttributePrefix + key + "=" + value + "\n";
-        }
-        if (!description.empty()) spec.attribute("ImageDescription", description);
-    }
-    if (!output->open(temporary.path().string(), spec))
-        throw IoError(SourceLocation{path.string()}, "cannot write pattern: " + output->geterror());
+    ImageFileWriter output(path, spec, "pattern");
 
     const std::size_t row_floats = static_cast<std::size_t>(g.width) * static_cast<std::size_t>(channels);
     const int strip_rows = std::min(options.rows_per_strip, g.height);
     // Half-float EXR rows are converted by the rendering threads (F16C, in parallel), so the
     // writer thread is left with compression and disk; other formats go as float to
     // OpenImageIO, which converts them.
-    const bool half = format == OIIO::TypeDesc::HALF;
-    const OIIO::TypeDesc strip_format = half ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT;
-    const std::size_t row_bytes = row_floats * strip_format.size();
+    const bool half = spec.type == SampleType::half;
+    const SampleType strip_type = half ? SampleType::half : SampleType::float32;
+    const std::size_t row_bytes = row_floats * sample_size(strip_type);
     // Two strips: one is written (on its own thread: compression and disk) while the next
     // is rendered in parallel.
     std::array<std::vector<std::byte>, 2> strips;
@@ -180,9 +157,8 @@ void write_pattern(const std::filesystem::path& path, const PatternSource& sourc
                                      "refusing to write dot (" + std::to_string(first_bad[static_cast<std::size_t>(r)]) +
                                          ", " + std::to_string(y0 + r) + "): the pattern value is not a finite number");
             finish_writing();  // the other strip's write, before this one starts
-            writing = std::async(std::launch::async, [&output, &path, &strip, strip_format, y0, y1] {
-                if (!output->write_scanlines(y0, y1, 0, strip_format, strip.data()))
-                    throw IoError(SourceLocation{path.string()}, "cannot write pattern: " + output->geterror());
+            writing = std::async(std::launch::async, [&output, &strip, strip_type, y0, y1] {
+                output.write_rows(y0, y1, strip_type, strip.data());
             });
             progress.advance(static_cast<std::size_t>(y1 - y0));
         }
@@ -191,30 +167,17 @@ void write_pattern(const std::filesystem::path& path, const PatternSource& sourc
         if (writing.valid()) writing.wait();  // never leave the writer running on freed strips
         throw;
     }
-    if (!output->close())
-        throw IoError(SourceLocation{path.string()}, "cannot write pattern: " + output->geterror());
+    output.finish();
     progress.finish();
-    move_into_place(temporary.path(), path);
-    temporary.release();
 }
 
 namespace {
 
-PatternFileInfo info_of(const OIIO::ImageSpec& spec) {
-    PatternFileInfo info;
-    info.width = spec.width;
-    info.height = spec.height;
-    info.channels = spec.alpha_channel >= 0 && spec.nchannels > 1 ? spec.nchannels - 1 : spec.nchannels;
-    const std::string unit = spec.get_string_attribute("ResolutionUnit");
-    const double per_inch = unit == "cm" ? kMillimetresPerInch / 10.0 : 1.0;
-    info.dpi_x = spec.get_float_attribute("XResolution", 0.0f) * per_inch;
-    info.dpi_y = spec.get_float_attribute("YResolution", 0.0f) * per_inch;
+PatternFileInfo info_of(const ImageFileSpec& spec) {
+    PatternFileInfo info{.width = spec.width, .height = spec.height, .channels = spec.channels,
+                         .dpi_x = spec.dpi_x, .dpi_y = spec.dpi_y, .attributes = spec.attributes};
     const std::string prefix = kAttributePrefix;
-    for (const OIIO::ParamValue& p : spec.extra_attribs) {
-        const std::string name = p.name().string();
-        if (name.rfind(prefix, 0) == 0) info.attributes[name.substr(prefix.size())] = p.get_string();
-    }
-    const std::string description = spec.get_string_attribute("ImageDescription");
+    const std::string& description = spec.description;
     std::size_t start = 0;
     while (start < description.size()) {
         std::size_t end = description.find('\n', start);
@@ -230,25 +193,8 @@ PatternFileInfo info_of(const OIIO::ImageSpec& spec) {
 
 }  // namespace
 
-struct PatternReader::Input {
-    std::filesystem::path path;
-    std::unique_ptr<OIIO::ImageInput> image;
-    int file_channels = 0;
-    bool srgb = false;
-};
-
-PatternReader::PatternReader(const std::filesystem::path& path) : input_(std::make_unique<Input>()) {
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec))
-        throw IoError(SourceLocation{path.string()}, "cannot open: no such pattern file");
-    input_->path = path;
-    input_->image = OIIO::ImageInput::open(path.string());
-    if (!input_->image)
-        throw IoError(SourceLocation{path.string()}, "cannot read pattern: " + OIIO::geterror());
-    const OIIO::ImageSpec& spec = input_->image->spec();
-    info_ = info_of(spec);
-    input_->file_channels = spec.nchannels;
-    input_->srgb = !spec.format.is_floating_point();
+PatternReader::PatternReader(const std::filesystem::path& path)
+    : file_(std::make_unique<ImageFileReader>(path, "pattern")), info_(info_of(file_->spec())) {
     if (info_.width <= 0 || info_.height <= 0 || info_.channels <= 0)
         throw InputError(SourceLocation{path.string()}, "pattern has no pixels");
 }
@@ -262,22 +208,19 @@ void PatternReader::read_rows(int y0, int y1, std::span<float> out) {
     const std::size_t row_floats = static_cast<std::size_t>(info_.width) * static_cast<std::size_t>(info_.channels);
     RFD_CHECK(out.size() >= row_floats * static_cast<std::size_t>(y1 - y0));
     if (y0 == y1) return;
-    // Only the colour channels: alpha, when present, is the last one.
-    if (!input_->image->read_scanlines(0, 0, y0, y1, 0, 0, info_.channels, OIIO::TypeDesc::FLOAT, out.data()))
-        throw IoError(SourceLocation{input_->path.string()},
-                      "cannot read pattern rows " + std::to_string(y0) + "-" + std::to_string(y1) +
-                          ": " + input_->image->geterror());
+    file_->read_rows(y0, y1, out);
+    const bool srgb = file_->spec().type == SampleType::uint8 || file_->spec().type == SampleType::uint16;
     const std::size_t count = row_floats * static_cast<std::size_t>(y1 - y0);
     for (std::size_t k = 0; k < count; ++k) {
         float& v = out[k];
         if (!std::isfinite(v)) {
             const std::size_t row = k / row_floats;
             const std::size_t column = (k % row_floats) / static_cast<std::size_t>(info_.channels);
-            throw InputError(SourceLocation{input_->path.string()},
+            throw InputError(SourceLocation{file_->path().string()},
                              "dot (" + std::to_string(column) + ", " + std::to_string(y0 + static_cast<int>(row)) +
                                  ") is not a finite number");
         }
-        if (input_->srgb) v = srgb_to_linear(v);
+        if (srgb) v = srgb_to_linear(v);
     }
 }
 

@@ -23,6 +23,7 @@
 
 #include <Eigen/Core>
 
+#include "core/image_file.hpp"
 #include "core/units.hpp"
 #include "optics/design.hpp"
 
@@ -118,8 +119,7 @@ public:
     void read_rows(int y0, int y1, std::span<float> out);
 
 private:
-    struct Input;
-    std::unique_ptr<Input> input_;
+    std::unique_ptr<ImageFileReader> file_;
     PatternFileInfo info_;
 };
 

@@ -8,13 +8,13 @@
 #include <memory>
 #include <vector>
 
-#include <OpenImageIO/imageio.h>
 #include <cairo-pdf.h>
 #include <cairo.h>
 
 #include "core/error.hpp"
 #include "core/number.hpp"
 #include "core/files.hpp"
+#include "core/image_file.hpp"
 #include "core/image_io.hpp"
 #include "core/parallel.hpp"
 #include "core/progress.hpp"
@@ -104,24 +104,11 @@ void write_tiff(const std::filesystem::path& out, const SheetLayout& layout, con
     const int W = layout.page_width, H = layout.page_height;
     const int channels = reader.info().channels;
     const patterns::PatternGeometry& g = layout.pattern;
-    TemporaryFile temporary(temporary_sibling(out));
-    auto output = OIIO::ImageOutput::create(temporary.path().string());
-    if (!output) throw IoError(SourceLocation{out.string()}, "cannot write sheet: " + OIIO::geterror());
-    const OIIO::TypeDesc format = options.bits == 16 ? OIIO::TypeDesc::UINT16 : OIIO::TypeDesc::UINT8;
-    OIIO::ImageSpec spec(W, H, 3, format);
-    spec.attribute("XResolution", static_cast<float>(layout.dpi_x));
-    spec.attribute("YResolution", static_cast<float>(layout.dpi_y));
-    spec.attribute("ResolutionUnit", "in");
-    // Pixel width over height: OpenImageIO's TIFF writer stores YResolution as
-    // XResolution times this, and drops it without (as patterns/raster.cpp).
-    spec.attribute("PixelAspectRatio", static_cast<float>(layout.dpi_y / layout.dpi_x));
-    spec.attribute("DateTime", "1970:01:01 00:00:00");  // byte-identical reruns
-    spec.attribute("compression", "zip");
-    std::string description;
-    for (const std::string& line : layout.label) description += line + "\n";
-    spec.attribute("ImageDescription", description);
-    if (!output->open(temporary.path().string(), spec))
-        throw IoError(SourceLocation{out.string()}, "cannot write sheet: " + output->geterror());
+    ImageFileSpec spec{.width = W, .height = H, .channels = 3,
+                       .type = options.bits == 16 ? SampleType::uint16 : SampleType::uint8,
+                       .dpi_x = layout.dpi_x, .dpi_y = layout.dpi_y, .compression = "zip"};
+    for (const std::string& line : layout.label) spec.description += line + "\n";
+    ImageFileWriter output(out, spec, "sheet");
 
     const int strip = std::max(1, std::min(options.rows_per_strip, H));
     const std::size_t row_codes = 3 * static_cast<std::size_t>(W);
@@ -168,14 +155,11 @@ void write_tiff(const std::filesystem::path& out, const SheetLayout& layout, con
                 }
             }
         });
-        if (!output->write_scanlines(y0, y1, 0, OIIO::TypeDesc::FLOAT, codes.data()))
-            throw IoError(SourceLocation{out.string()}, "cannot write sheet: " + output->geterror());
+        output.write_rows(y0, y1, codes);
         progress.advance(static_cast<std::size_t>(y1 - y0));
     }
-    if (!output->close()) throw IoError(SourceLocation{out.string()}, "cannot write sheet: " + output->geterror());
+    output.finish();
     progress.finish();
-    move_into_place(temporary.path(), out);
-    temporary.release();
 }
 
 cairo_status_t write_to_stream(void* closure, const unsigned char* data, unsigned int length) {

@@ -2,14 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <string>
+#include <vector>
 
-#include <opencv2/core.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "core/error.hpp"
 #include "core/image_io.hpp"
+#include "relight/vision.hpp"
 
 namespace rfd::relight {
 namespace {
@@ -64,8 +65,10 @@ Highlight find_highlight(const Image& image, const MirrorSphere& sphere) {
 
     // Channel-mean brightness of the pixels whose centres lie inside the outline.
     const int w = x1 - x0, h = y1 - y0;
-    cv::Mat inside = cv::Mat::zeros(h, w, CV_8U);
-    cv::Mat brightness = cv::Mat::zeros(h, w, CV_32F);
+    const PlaneSize size{w, h};
+    const auto at = [w](int x, int y) { return static_cast<std::size_t>(y) * static_cast<std::size_t>(w) + static_cast<std::size_t>(x); };
+    std::vector<std::uint8_t> inside(size.area(), 0);
+    std::vector<float> brightness(size.area(), 0.0f);
     std::vector<float> values;
     const double r2 = sphere.radius * sphere.radius;
     // The outermost ring of pixels (within one pixel diagonal of the outline).
@@ -77,8 +80,8 @@ Highlight find_highlight(const Image& image, const MirrorSphere& sphere) {
             float sum = 0.0f;
             for (int c = 0; c < image.channels(); ++c) sum += image.at(x, y, c);
             const float v = sum / static_cast<float>(image.channels());
-            inside.at<std::uint8_t>(y - y0, x - x0) = 255;
-            brightness.at<float>(y - y0, x - x0) = v;
+            inside[at(x - x0, y - y0)] = 255;
+            brightness[at(x - x0, y - y0)] = v;
             values.push_back(v);
         }
     if (values.empty()) return result;
@@ -92,13 +95,15 @@ Highlight find_highlight(const Image& image, const MirrorSphere& sphere) {
     // Blobs: pixels above half the contrast, with one-pixel gaps bridged (a small light near
     // the rim images to an arc thinner than a pixel, whose pixels dip below the threshold).
     const float threshold = result.background + 0.5f * (result.peak - result.background);
-    const cv::Mat above = (brightness > threshold) & inside;
-    cv::Mat bridged;
-    cv::dilate(above, bridged, cv::Mat::ones(3, 3, CV_8U));
-    bridged &= inside;
-    cv::Mat labels;
-    result.blobs = cv::connectedComponents(bridged, labels, 8, CV_32S) - 1;  // label 0: the rest
-    result.coverage = static_cast<double>(cv::countNonZero(above)) / static_cast<double>(values.size());
+    std::vector<std::uint8_t> above(size.area());
+    for (std::size_t p = 0; p < above.size(); ++p) above[p] = brightness[p] > threshold ? inside[p] : 0;
+    std::vector<std::uint8_t> bridged = above;
+    vision().dilate(size, bridged, 3);
+    for (std::size_t p = 0; p < bridged.size(); ++p) bridged[p] &= inside[p];
+    std::vector<int> labels(size.area());
+    result.blobs = vision().connected_components(size, bridged, labels) - 1;  // label 0: the rest
+    const auto lit_pixels = std::count_if(above.begin(), above.end(), [](std::uint8_t v) { return v != 0; });
+    result.coverage = static_cast<double>(lit_pixels) / static_cast<double>(values.size());
     if (result.blobs > 1) {
         result.status = HighlightStatus::multiple;
         return result;
@@ -108,28 +113,28 @@ Highlight find_highlight(const Image& image, const MirrorSphere& sphere) {
         result.status = HighlightStatus::overexposed;
         return result;
     }
-    result.pixels = cv::countNonZero(above);
+    result.pixels = static_cast<int>(lit_pixels);
 
     // Measure over the blob grown by two pixels, so the partly lit pixels on its edge count
     // in full, each weighing its brightness above the background: brightness-weighted means
     // of the reflected directions (the estimate; the map is equal-area, see the header) and
     // of the image positions (for reporting).
-    cv::Mat region;
-    cv::dilate(bridged, region, cv::Mat::ones(5, 5, CV_8U));
-    region &= inside;
+    std::vector<std::uint8_t> region = bridged;
+    vision().dilate(size, region, 5);
+    for (std::size_t p = 0; p < region.size(); ++p) region[p] &= inside[p];
     Eigen::Vector3d direction_sum = Eigen::Vector3d::Zero();
     Eigen::Vector2d point_sum = Eigen::Vector2d::Zero();
     double weight_sum = 0.0;
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
-            if (region.at<std::uint8_t>(y, x) == 0) continue;
-            const double weight = std::max(0.0f, brightness.at<float>(y, x) - result.background);
+            if (region[at(x, y)] == 0) continue;
+            const double weight = std::max(0.0f, brightness[at(x, y)] - result.background);
             const Eigen::Vector2d point(x0 + x + 0.5, y0 + y + 0.5);
             direction_sum += weight * reflect_view(mirror_normal(sphere, point));
             point_sum += weight * point;
             weight_sum += weight;
             const double dx = point.x() - sphere.centre_x, dy = point.y() - sphere.centre_y;
-            if (above.at<std::uint8_t>(y, x) != 0 && dx * dx + dy * dy >= rim2) result.touches_rim = true;
+            if (above[at(x, y)] != 0 && dx * dx + dy * dy >= rim2) result.touches_rim = true;
         }
     RFD_CHECK(weight_sum > 0.0);
     if (direction_sum.norm() < 1e-12 * weight_sum) {

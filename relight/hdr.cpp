@@ -7,13 +7,14 @@
 #include <fstream>
 #include <memory>
 #include <set>
+#include <span>
+#include <vector>
 
-#include <OpenImageIO/imageio.h>
-#include <opencv2/core.hpp>
-#include <opencv2/photo.hpp>
 
 #include "core/error.hpp"
 #include "core/files.hpp"
+#include "core/image_file.hpp"
+#include "relight/vision.hpp"
 
 namespace rfd::relight {
 namespace {
@@ -29,37 +30,38 @@ constexpr double kCalibrationPixels = 250000.0;
 constexpr const char* kChannelNames[3] = {"red", "green", "blue"};
 constexpr const char* kResponseHeader = "code,red,green,blue";
 
-std::unique_ptr<OIIO::ImageInput> open_input(const std::filesystem::path& path) {
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec))
-        throw IoError(SourceLocation{path.string()}, "cannot open: no such image file");
-    auto input = OIIO::ImageInput::open(path.string());
-    if (!input) throw IoError(SourceLocation{path.string()}, "cannot read image: " + OIIO::geterror());
-    return input;
-}
+// OpenCV's Robertson code handles three channels only, interleaved in B, G, R order: a grey
+// image is given to it as three equal channels. The images of a bracket, all of one size.
+struct BgrImages {
+    PlaneSize size;
+    std::vector<std::vector<std::uint8_t>> images;
+    std::vector<std::span<const std::uint8_t>> views() const { return {images.begin(), images.end()}; }
+};
 
-// OpenCV's Robertson code handles three channels only (its tables are Vec3f), in B, G, R
-// order. A grey image is given to it as three equal channels.
 // `stride` > 1 keeps every stride-th pixel of every stride-th row.
-cv::Mat to_bgr_mat(const CodeImage& image, int stride = 1) {
-    cv::Mat mat((image.height + stride - 1) / stride, (image.width + stride - 1) / stride, CV_8UC3);
-    for (int y = 0; y < mat.rows; ++y) {
-        auto* row = mat.ptr<cv::Vec3b>(y);
-        for (int x = 0; x < mat.cols; ++x)
-            for (int c = 0; c < 3; ++c)
-                row[x][2 - c] = image.at(x * stride, y * stride, image.channels == 1 ? 0 : c);
+BgrImages to_bgr(const Bracket& bracket, int stride = 1) {
+    const CodeImage& first = bracket.images.front();
+    BgrImages bgr{{(first.width + stride - 1) / stride, (first.height + stride - 1) / stride}, {}};
+    for (const CodeImage& image : bracket.images) {
+        std::vector<std::uint8_t>& codes = bgr.images.emplace_back(3 * bgr.size.area());
+        std::size_t k = 0;
+        for (int y = 0; y < bgr.size.height; ++y)
+            for (int x = 0; x < bgr.size.width; ++x, k += 3)
+                for (int c = 0; c < 3; ++c)
+                    codes[k + static_cast<std::size_t>(2 - c)] =
+                        image.at(x * stride, y * stride, image.channels == 1 ? 0 : c);
     }
-    return mat;
+    return bgr;
 }
 
 // A grey bracket is merged with the green column: green carries most of a grey camera's
 // luminance-like sensitivity, and a grey calibration makes all three columns equal anyway.
-cv::Mat to_bgr_response(const CameraResponse& response, int channels) {
-    cv::Mat mat(kCodeCount, 1, CV_32FC3);
+BgrResponse to_bgr_response(const CameraResponse& response, int channels) {
+    BgrResponse bgr{};
     for (int z = 0; z < kCodeCount; ++z)
         for (int c = 0; c < 3; ++c)
-            mat.at<cv::Vec3f>(z)[2 - c] = response.channels[channels == 1 ? 1 : c][z];
-    return mat;
+            bgr[static_cast<std::size_t>(z)][static_cast<std::size_t>(2 - c)] = response.channels[channels == 1 ? 1 : c][z];
+    return bgr;
 }
 
 std::vector<float> exposure_times(const Bracket& bracket) {
@@ -113,21 +115,20 @@ SourceLocation at(const std::filesystem::path& path, int line) {
 }  // namespace
 
 CodeImage read_code_image(const std::filesystem::path& path) {
-    auto input = open_input(path);
-    const OIIO::ImageSpec& spec = input->spec();
-    if (spec.format != OIIO::TypeDesc::UINT8)
+    ImageFileReader file(path);
+    const ImageFileSpec& spec = file.spec();
+    if (spec.type != SampleType::uint8)
         throw InputError(SourceLocation{path.string()},
                          "expected an 8-bit camera image (code values 0..255), got " +
-                             std::string(spec.format.c_str()) + " samples");
-    const int channels = spec.alpha_channel >= 0 && spec.nchannels > 1 ? spec.nchannels - 1 : spec.nchannels;
+                             std::string(sample_type_name(spec.type)) + " samples");
+    const int channels = spec.channels;
     if (channels != 1 && channels != 3)
         throw InputError(SourceLocation{path.string()},
                          "expected a grey or RGB image, got " + std::to_string(channels) + " colour channels");
     if (spec.width <= 0 || spec.height <= 0)
         throw InputError(SourceLocation{path.string()}, "image has no pixels");
     std::vector<std::uint8_t> interleaved(static_cast<std::size_t>(spec.width) * spec.height * channels);
-    if (!input->read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, interleaved.data()))
-        throw IoError(SourceLocation{path.string()}, "cannot read image: " + input->geterror());
+    file.read_rows(0, spec.height, interleaved);
     CodeImage image{spec.width, spec.height, channels, std::vector<std::uint8_t>(interleaved.size())};
     const std::size_t plane = static_cast<std::size_t>(spec.width) * spec.height;
     for (std::size_t p = 0; p < plane; ++p)
@@ -137,10 +138,7 @@ CodeImage read_code_image(const std::filesystem::path& path) {
 }
 
 std::optional<double> read_exposure_time(const std::filesystem::path& path) {
-    auto input = open_input(path);
-    const OIIO::ParamValue* value = input->spec().find_attribute("ExposureTime");
-    if (value == nullptr) return std::nullopt;
-    return static_cast<double>(value->get_float());
+    return ImageFileReader(path).spec().exposure_seconds;
 }
 
 Bracket read_bracket(const std::vector<std::filesystem::path>& files,
@@ -202,30 +200,27 @@ CameraResponse calibrate_response(const Bracket& bracket) {
     // determines 256 values per channel just as well and keeps big photographs fast.
     const double pixels = static_cast<double>(bracket.images.front().width) * bracket.images.front().height;
     const int stride = std::max(1, static_cast<int>(std::ceil(std::sqrt(pixels / kCalibrationPixels))));
-    std::vector<cv::Mat> mats;
-    for (const CodeImage& image : bracket.images) mats.push_back(to_bgr_mat(image, stride));
+    const BgrImages bgr = to_bgr(bracket, stride);
 
     // How often each code occurs in what the calibration sees, per channel R, G, B.
     std::array<std::array<std::size_t, kCodeCount>, 3> count{};
-    for (const cv::Mat& mat : mats)
-        for (int y = 0; y < mat.rows; ++y)
-            for (int x = 0; x < mat.cols; ++x)
-                for (int c = 0; c < channels; ++c) ++count[c][mat.at<cv::Vec3b>(y, x)[2 - c]];
+    for (const std::vector<std::uint8_t>& codes : bgr.images)
+        for (std::size_t k = 0; k < codes.size(); k += 3)
+            for (int c = 0; c < channels; ++c) ++count[c][codes[k + static_cast<std::size_t>(2 - c)]];
     for (int c = 0; c < channels; ++c)
         if (count[c][kMidCode] == 0)
             throw InputError("cannot calibrate the camera response from " + bracket.names.front() +
                              ", ...: code 128 (the normalisation point) never occurs in the " +
                              (channels == 1 ? std::string("grey") : std::string(kChannelNames[c])) +
                              " channel; use a bracket whose exposures cover mid-grey, or --response");
-    cv::Mat bgr;
-    cv::createCalibrateRobertson(kRobertsonIterations, kRobertsonTolerance)->process(mats, bgr, exposure_times(bracket));
-    RFD_CHECK(bgr.rows == kCodeCount && bgr.type() == CV_32FC3);
+    const BgrResponse bgr_response = vision().robertson_calibrate(bgr.size, bgr.views(), exposure_times(bracket),
+                                                                  kRobertsonIterations, kRobertsonTolerance);
 
     CameraResponse response;
     for (int c = 0; c < 3; ++c) {
         const int source = channels == 1 ? 0 : c;
         for (int z = 0; z < kCodeCount; ++z) {
-            const float g = bgr.at<cv::Vec3f>(z)[2 - (channels == 1 ? 1 : c)];
+            const float g = bgr_response[static_cast<std::size_t>(z)][static_cast<std::size_t>(2 - (channels == 1 ? 1 : c))];
             // g(128) > 0 occurs (checked above), so the normalisation is finite.
             // Codes the bracket never shows come out as 0 * inf = NaN (OpenCV divides by
             // their zero count); fill_unobserved() replaces them below.
@@ -259,11 +254,10 @@ MergedImage merge_bracket(const Bracket& bracket, const CameraResponse& response
     const CodeImage& first = bracket.images.front();
     const int channels = first.channels;
 
-    std::vector<cv::Mat> mats;
-    for (const CodeImage& image : bracket.images) mats.push_back(to_bgr_mat(image));
-    cv::Mat bgr;
-    cv::createMergeRobertson()->process(mats, bgr, exposure_times(bracket), to_bgr_response(response, channels));
-    RFD_CHECK(bgr.rows == first.height && bgr.cols == first.width && bgr.type() == CV_32FC3);
+    const BgrImages images = to_bgr(bracket);
+    std::vector<float> bgr(3 * images.size.area());
+    vision().robertson_merge(images.size, images.views(), exposure_times(bracket), to_bgr_response(response, channels),
+                             bgr);
 
     // Samples clipped in every exposure have zero total weight and come out of OpenCV as 0.
     // A sample at 255 somewhere is at least g(254) / t: the brightest exposure the camera
@@ -273,7 +267,7 @@ MergedImage merge_bracket(const Bracket& bracket, const CameraResponse& response
     for (int c = 0; c < channels; ++c) {
         const auto& g = response.channels[channels == 1 ? 1 : c];
         for (int y = 0; y < first.height; ++y) {
-            const auto* row = bgr.ptr<cv::Vec3f>(y);
+            const float* row = bgr.data() + 3 * static_cast<std::size_t>(y) * static_cast<std::size_t>(first.width);
             for (int x = 0; x < first.width; ++x) {
                 bool clipped = true;
                 double saturated_time = 0.0;
@@ -287,7 +281,7 @@ MergedImage merge_bracket(const Bracket& bracket, const CameraResponse& response
                         (saturated_time == 0.0 || bracket.exposure_seconds[i] < saturated_time))
                         saturated_time = bracket.exposure_seconds[i];
                 }
-                float value = row[x][channels == 1 ? 1 : 2 - c];
+                float value = row[3 * x + (channels == 1 ? 1 : 2 - c)];
                 if (clipped && saturated_time > 0.0) {
                     value = static_cast<float>(g[kCodeCount - 2] / saturated_time);
                     ++merged.saturated_samples;

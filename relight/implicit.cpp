@@ -1,6 +1,7 @@
 #include "relight/implicit.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -10,7 +11,6 @@
 
 #include <Eigen/SVD>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "core/error.hpp"
 #include "core/files.hpp"
@@ -18,6 +18,7 @@
 #include "core/parallel.hpp"
 #include "core/sphere.hpp"
 #include "core/units.hpp"
+#include "relight/vision.hpp"
 
 namespace rfd::relight {
 namespace {
@@ -259,20 +260,22 @@ Image crop_probe(const Image& image, const ProbeBox& box, int size) {
     const int x1 = std::min(image.width(), static_cast<int>(std::ceil(box.x + box.width)) + margin);
     const int y1 = std::min(image.height(), static_cast<int>(std::ceil(box.y + box.height)) + margin);
 
-    // OpenCV puts pixel centres at integers, continuous coordinates at +0.5: probe pixel j
-    // samples the image at box.x + (j + 0.5) scale_x, which is OpenCV's x - 0.5.
-    const cv::Matx23d to_source(scale_x, 0.0, box.x + 0.5 * scale_x - 0.5 - x0,  //
-                                0.0, scale_y, box.y + 0.5 * scale_y - 0.5 - y0);
+    // The warp puts pixel centres at integers, continuous coordinates at +0.5: probe pixel j
+    // samples the image at box.x + (j + 0.5) scale_x, which is the warp's x - 0.5.
+    const std::array<double, 6> to_source = {scale_x, 0.0, box.x + 0.5 * scale_x - 0.5 - x0,  //
+                                             0.0, scale_y, box.y + 0.5 * scale_y - 0.5 - y0};
     Image out(size, size, image.channels());
+    const PlaneSize region_size{x1 - x0, y1 - y0};
+    std::vector<float> region(region_size.area());
     for (int c = 0; c < image.channels(); ++c) {
-        const cv::Mat plane(image.height(), image.width(), CV_32F, const_cast<float*>(image.plane(c).data()));
-        cv::Mat region = plane(cv::Rect(x0, y0, x1 - x0, y1 - y0)).clone();
+        for (int y = y0; y < y1; ++y)
+            for (int x = x0; x < x1; ++x)
+                region[static_cast<std::size_t>(y - y0) * static_cast<std::size_t>(region_size.width) +
+                       static_cast<std::size_t>(x - x0)] = image.at(x, y, c);
         if (sigma_x > 0.0 || sigma_y > 0.0)
-            cv::GaussianBlur(region, region, cv::Size(0, 0), std::max(sigma_x, 1e-3), std::max(sigma_y, 1e-3),
-                             cv::BORDER_REPLICATE);
-        cv::Mat target(size, size, CV_32F, out.plane(c).data());
-        cv::warpAffine(region, target, to_source, target.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP,
-                       cv::BORDER_REPLICATE);
+            vision().gaussian_blur(region_size, region, region, 0, std::max(sigma_x, 1e-3), std::max(sigma_y, 1e-3),
+                                   Border::replicate);
+        vision().warp_affine(region_size, region, to_source, {size, size}, out.plane(c), Border::replicate);
     }
     std::vector<char> inside(static_cast<std::size_t>(size * size), 0);
     for (const int i : probe_mask(size)) inside[static_cast<std::size_t>(i)] = 1;

@@ -10,9 +10,6 @@
 #include <utility>
 
 #include <Eigen/Dense>
-#include <opencv2/imgproc.hpp>
-#include <opencv2/photo.hpp>
-#include <opencv2/video/tracking.hpp>
 
 #include "core/error.hpp"
 #include "core/parallel.hpp"
@@ -21,17 +18,12 @@
 #include "core/units.hpp"
 #include "relight/image_priors.hpp"
 #include "relight/interpolation.hpp"
+#include "relight/vision.hpp"
 
 namespace rfd::relight {
 namespace {
 
-// A cv::Mat viewing one channel of an image in place (planar storage makes it contiguous).
-cv::Mat plane_mat(Image& image, int channel) {
-    return {image.height(), image.width(), CV_32F, image.plane(channel).data()};
-}
-cv::Mat plane_mat(const Image& image, int channel) {
-    return {image.height(), image.width(), CV_32F, const_cast<float*>(image.plane(channel).data())};
-}
+PlaneSize size_of(const Image& image) { return {image.width(), image.height()}; }
 
 bool all_zero(const Image& image) {
     const auto samples = image.samples();
@@ -52,12 +44,12 @@ std::vector<std::size_t> nearest_directions(const Eigen::Vector3d& d, const std:
 
 // The clamped highlight luminance the flow matches on: HDR highlights span decades, so
 // everything above the median highlight level `clamp` is one plateau (6.3.1).
-cv::Mat flow_input(const Image& luminance, float clamp) {
-    cv::Mat out(luminance.height(), luminance.width(), CV_8U);
+std::vector<std::uint8_t> flow_input(const Image& luminance, float clamp) {
     const auto values = luminance.plane(0);
+    std::vector<std::uint8_t> out(values.size());
     for (std::size_t p = 0; p < values.size(); ++p) {
         const float v = std::clamp(values[p] / clamp, 0.0f, 1.0f);
-        out.data[p] = static_cast<std::uint8_t>(std::lround(255.0f * v));
+        out[p] = static_cast<std::uint8_t>(std::lround(255.0f * v));
     }
     return out;
 }
@@ -65,36 +57,37 @@ cv::Mat flow_input(const Image& luminance, float clamp) {
 // Dense flow from `from` to `to` (8-bit, one channel): from(x) ~ to(x + flow(x)). A wide
 // window and smoothing, so that the field carries a match into the mostly flat surroundings
 // (the smooth fields of Brox et al. in the thesis).
-cv::Mat dense_flow(const cv::Mat& from, const cv::Mat& to) {
+std::vector<float> dense_flow(PlaneSize size, std::span<const std::uint8_t> from, std::span<const std::uint8_t> to) {
+    FlowOptions options{.pyramid_scale = 0.5, .levels = 1, .window = 21, .iterations = 3, .polynomial_size = 7,
+                        .polynomial_sigma = 1.5};
     // Pyramid levels down to about 16 pixels: coarser ones only add noise to the flow.
-    int levels = 1;
-    for (int side = std::min(from.rows, from.cols); side >= 32 && levels < 5; side /= 2) ++levels;
-    cv::Mat flow;
-    cv::calcOpticalFlowFarneback(from, to, flow, 0.5, levels, 21, 3, 7, 1.5, 0);
+    for (int side = std::min(size.width, size.height); side >= 32 && options.levels < 5; side /= 2) ++options.levels;
+    std::vector<float> flow(2 * size.area());
+    vision().optical_flow(size, from, to, options, flow);
     return flow;
 }
 
-// The sampling maps x - fraction * flow(x) of cv::remap: what lies at x that far along the
+// The sampling maps x - fraction * flow(x) of a remap: what lies at x that far along the
 // flow (0.5: half-way).
-std::pair<cv::Mat, cv::Mat> flow_sampling_maps(const cv::Mat& flow, float fraction = 0.5f) {
-    cv::Mat map_x(flow.rows, flow.cols, CV_32F), map_y(flow.rows, flow.cols, CV_32F);
-    for (int y = 0; y < flow.rows; ++y)
-        for (int x = 0; x < flow.cols; ++x) {
-            const cv::Point2f f = flow.at<cv::Point2f>(y, x);
-            map_x.at<float>(y, x) = static_cast<float>(x) - fraction * f.x;
-            map_y.at<float>(y, x) = static_cast<float>(y) - fraction * f.y;
+std::pair<std::vector<float>, std::vector<float>> flow_sampling_maps(PlaneSize size, std::span<const float> flow,
+                                                                     float fraction = 0.5f) {
+    std::vector<float> map_x(size.area()), map_y(size.area());
+    for (int y = 0; y < size.height; ++y)
+        for (int x = 0; x < size.width; ++x) {
+            const std::size_t p = static_cast<std::size_t>(y) * static_cast<std::size_t>(size.width) +
+                                  static_cast<std::size_t>(x);
+            map_x[p] = static_cast<float>(x) - fraction * flow[2 * p];
+            map_y[p] = static_cast<float>(y) - fraction * flow[2 * p + 1];
         }
-    return {map_x, map_y};
+    return {std::move(map_x), std::move(map_y)};
 }
 
 // `image` carried `fraction` of the way along the flow (0.5: half-way).
-Image warp_along(const Image& image, const cv::Mat& flow, float fraction = 0.5f) {
-    const auto [map_x, map_y] = flow_sampling_maps(flow, fraction);
+Image warp_along(const Image& image, std::span<const float> flow, float fraction = 0.5f) {
+    const auto [map_x, map_y] = flow_sampling_maps(size_of(image), flow, fraction);
     Image out(image.width(), image.height(), image.channels());
-    for (int c = 0; c < image.channels(); ++c) {
-        cv::Mat dst = plane_mat(out, c);
-        cv::remap(plane_mat(image, c), dst, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT, 0.0);
-    }
+    for (int c = 0; c < image.channels(); ++c)
+        vision().remap(size_of(image), image.plane(c), map_x, map_y, out.plane(c), Border::zero);
     return out;
 }
 
@@ -111,17 +104,17 @@ void conserve_energy(Image& warped, const Image& original) {
 
 // Signed distance to the lit/shadow boundary: > 0 inside lit regions, < 0 in shadow. A
 // uniform map has no boundary; its distance is the image diagonal, farther than any edge.
-cv::Mat signed_distance(const ShadowMap& map, int width, int height) {
-    const double diagonal = std::hypot(width, height);
+std::vector<float> signed_distance(const ShadowMap& map, PlaneSize size) {
+    const auto diagonal = static_cast<float>(std::hypot(size.width, size.height));
     const auto lit = static_cast<std::size_t>(std::count(map.begin(), map.end(), std::uint8_t{1}));
-    if (lit == map.size() || lit == 0)
-        return {height, width, CV_32F, cv::Scalar(lit == 0 ? -diagonal : diagonal)};
-    const cv::Mat lit_mat(height, width, CV_8U, const_cast<std::uint8_t*>(map.data()));
-    cv::Mat shadow_mat = 1 - lit_mat;
-    cv::Mat inside, outside;
-    cv::distanceTransform(lit_mat, inside, cv::DIST_L2, cv::DIST_MASK_PRECISE);
-    cv::distanceTransform(shadow_mat, outside, cv::DIST_L2, cv::DIST_MASK_PRECISE);
-    return inside - outside;
+    if (lit == map.size() || lit == 0) return std::vector<float>(size.area(), lit == 0 ? -diagonal : diagonal);
+    ShadowMap shadow(map.size());
+    for (std::size_t p = 0; p < map.size(); ++p) shadow[p] = map[p] == 0 ? 1 : 0;
+    std::vector<float> inside(size.area()), outside(size.area());
+    vision().distance_transform(size, map, inside);
+    vision().distance_transform(size, shadow, outside);
+    for (std::size_t p = 0; p < inside.size(); ++p) inside[p] -= outside[p];
+    return inside;
 }
 
 void check_options(const ReflectanceField& field, int levels, const UpsampleOptions& options) {
@@ -451,25 +444,21 @@ std::vector<std::uint8_t> highlight_mask(const Image& luminance, const Image& pe
     std::vector<std::uint8_t> mask(l.size());
     for (std::size_t p = 0; p < l.size(); ++p)
         mask[p] = l[p] > floor && static_cast<double>(l[p]) >= f_highlight * static_cast<double>(level[p]) ? 1 : 0;
-    if (dilation > 1) {
-        cv::Mat m(luminance.height(), luminance.width(), CV_8U, mask.data());
-        cv::dilate(m, m, cv::Mat::ones(dilation, dilation, CV_8U));
-    }
+    if (dilation > 1) vision().dilate(size_of(luminance), mask, dilation);
     return mask;
 }
 
 Image remove_highlights(const Image& image, const std::vector<std::uint8_t>& mask) {
     Image out = image;
     if (std::none_of(mask.begin(), mask.end(), [](std::uint8_t v) { return v != 0; })) return out;
-    const cv::Mat m(image.height(), image.width(), CV_8U, const_cast<std::uint8_t*>(mask.data()));
+    std::vector<float> filled(image.pixel_count());
     for (int c = 0; c < image.channels(); ++c) {
-        cv::Mat filled;
         // Navier-Stokes inpainting (Bertalmio et al. 2001): OpenCV 4.6's Telea method returns
         // values far off the surroundings for float images (see tests/test_upsample.cpp).
-        cv::inpaint(plane_mat(image, c), m, filled, 3.0, cv::INPAINT_NS);
+        vision().inpaint(size_of(image), image.plane(c), mask, 3.0, filled);
         // D <= R: inpainting that overshoots the image would give negative highlights.
         auto dst = out.plane(c);
-        for (std::size_t p = 0; p < dst.size(); ++p) dst[p] = std::min(dst[p], filled.ptr<float>()[p]);
+        for (std::size_t p = 0; p < dst.size(); ++p) dst[p] = std::min(dst[p], filled[p]);
     }
     return out;
 }
@@ -516,19 +505,32 @@ struct Blob {
     int x0 = 0, y0 = 0, x1 = -1, y1 = -1;
 };
 
-std::vector<Blob> blobs_of(const Image& luminance, cv::Mat& labels) {
-    const cv::Mat l = plane_mat(luminance, 0);
-    const int count = cv::connectedComponents(l > 0.0f, labels, 8, CV_32S);
+// The component label of every pixel of a layer, 0 where it is dark.
+struct Labels {
+    int width = 0;
+    std::vector<int> ids;
+    int at(int x, int y) const {
+        return ids[static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)];
+    }
+};
+
+std::vector<Blob> blobs_of(const Image& luminance, Labels& labels) {
+    const auto l = luminance.plane(0);
+    std::vector<std::uint8_t> lit(l.size());
+    for (std::size_t p = 0; p < l.size(); ++p) lit[p] = l[p] > 0.0f ? 255 : 0;
+    labels.width = luminance.width();
+    labels.ids.assign(l.size(), 0);
+    const int count = vision().connected_components(size_of(luminance), lit, labels.ids);
     std::vector<Blob> blobs(static_cast<std::size_t>(count));
     for (Blob& b : blobs) {
-        b.x0 = l.cols;
-        b.y0 = l.rows;
+        b.x0 = luminance.width();
+        b.y0 = luminance.height();
     }
-    for (int y = 0; y < l.rows; ++y)
-        for (int x = 0; x < l.cols; ++x) {
-            const int k = labels.at<int>(y, x);
+    for (int y = 0; y < luminance.height(); ++y)
+        for (int x = 0; x < luminance.width(); ++x) {
+            const int k = labels.at(x, y);
             if (k == 0) continue;
-            const double v = l.at<float>(y, x);
+            const double v = luminance.at(x, y, 0);
             Blob& b = blobs[static_cast<std::size_t>(k)];
             b.label = k;
             b.energy += v;
@@ -565,14 +567,14 @@ std::size_t nearest_blob(const Blob& from, const std::vector<Blob>& to) {
 // Adds weight x the pixels of `blob` in `image`, moved by (dx, dy) and spread bilinearly
 // over the four pixels around where each lands, so that the energy is kept exactly. `out`
 // covers the image from (origin_x, origin_y) on; what lands outside it is dropped.
-void splat(const Image& image, const cv::Mat& labels, const Blob& blob, double dx, double dy, float weight,
+void splat(const Image& image, const Labels& labels, const Blob& blob, double dx, double dy, float weight,
            Image& out, int origin_x = 0, int origin_y = 0) {
     const int shift_x = static_cast<int>(std::floor(dx)), shift_y = static_cast<int>(std::floor(dy));
     const auto fx = static_cast<float>(dx - shift_x), fy = static_cast<float>(dy - shift_y);
     const std::array<float, 4> share = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
     for (int y = blob.y0; y <= blob.y1; ++y)
         for (int x = blob.x0; x <= blob.x1; ++x) {
-            if (labels.at<int>(y, x) != blob.label) continue;
+            if (labels.at(x, y) != blob.label) continue;
             for (int q = 0; q < 4; ++q) {
                 const int tx = x + shift_x + q % 2 - origin_x, ty = y + shift_y + q / 2 - origin_y;
                 if (share[static_cast<std::size_t>(q)] == 0.0f || tx < 0 || ty < 0 || tx >= out.width() ||
@@ -588,8 +590,8 @@ void splat(const Image& image, const cv::Mat& labels, const Blob& blob, double d
 // blob q of lb: the sum of min(p', q') over pixels, p' and q' the two blurred by a 3 x 3
 // box (a glint of a pixel or two is sampled differently at two light directions) and
 // scaled to unit energy. 1 for the same shape, 0 for disjoint ones.
-double moved_shape_agreement(const Image& la, const cv::Mat& labels_a, const Blob& p, const Image& lb,
-                             const cv::Mat& labels_b, const Blob& q) {
+double moved_shape_agreement(const Image& la, const Labels& labels_a, const Blob& p, const Image& lb,
+                             const Labels& labels_b, const Blob& q) {
     // Both, over a box holding every pixel p lands on and a margin for the blur.
     const double dx = q.x - p.x, dy = q.y - p.y;
     const int ix = static_cast<int>(std::floor(dx)), iy = static_cast<int>(std::floor(dy));
@@ -598,15 +600,14 @@ double moved_shape_agreement(const Image& la, const cv::Mat& labels_a, const Blo
     Image moved_image(x1 - x0 + 1, y1 - y0 + 1, 1), target_image(x1 - x0 + 1, y1 - y0 + 1, 1);
     splat(la, labels_a, p, dx, dy, 1.0f, moved_image, x0, y0);
     splat(lb, labels_b, q, 0.0, 0.0, 1.0f, target_image, x0, y0);
-    cv::Mat moved = plane_mat(moved_image, 0), target = plane_mat(target_image, 0);
-    cv::blur(moved, moved, cv::Size(3, 3), cv::Point(-1, -1), cv::BORDER_CONSTANT);
-    cv::blur(target, target, cv::Size(3, 3), cv::Point(-1, -1), cv::BORDER_CONSTANT);
-    const double sum_moved = cv::sum(moved)[0], sum_target = cv::sum(target)[0];
+    const auto moved = moved_image.plane(0), target = target_image.plane(0);
+    vision().box_blur(size_of(moved_image), moved, 3);
+    vision().box_blur(size_of(target_image), target, 3);
+    const double sum_moved = std::accumulate(moved.begin(), moved.end(), 0.0);
+    const double sum_target = std::accumulate(target.begin(), target.end(), 0.0);
     if (!(sum_moved > 0.0) || !(sum_target > 0.0)) return 0.0;
     double shared = 0.0;
-    for (int y = 0; y < moved.rows; ++y)
-        for (int x = 0; x < moved.cols; ++x)
-            shared += std::min(moved.at<float>(y, x) / sum_moved, target.at<float>(y, x) / sum_target);
+    for (std::size_t k = 0; k < moved.size(); ++k) shared += std::min(moved[k] / sum_moved, target[k] / sum_target);
     return shared;
 }
 
@@ -630,8 +631,8 @@ Image in_place_highlights(const Image& a, const Image& b, float one_sided_weight
 // How far each luminance layer, carried all the way along its flow, lands from the other,
 // against how far the two differ unmoved; both as sums of absolute differences. A flow that
 // does not beat standing still explains nothing.
-std::pair<double, double> flow_and_still_misfit(const Image& la, const Image& lb, const cv::Mat& flow_ab,
-                                                 const cv::Mat& flow_ba) {
+std::pair<double, double> flow_and_still_misfit(const Image& la, const Image& lb, std::span<const float> flow_ab,
+                                                 std::span<const float> flow_ba) {
     const Image a_at_b = warp_along(la, flow_ab, 1.0f), b_at_a = warp_along(lb, flow_ba, 1.0f);
     double flow = 0.0, still = 0.0;
     for (std::size_t p = 0; p < la.pixel_count(); ++p) {
@@ -664,10 +665,11 @@ Image halfway_by_flow(const Image& a, const Image& b, float one_sided_weight, bo
     const float clamp = levels[levels.size() / 2];
 
     // Blurred, so that highlights of a few pixels give the flow's polynomials a slope to fit.
-    cv::Mat ga = flow_input(la, clamp), gb = flow_input(lb, clamp);
-    cv::GaussianBlur(ga, ga, cv::Size(0, 0), 3.0);
-    cv::GaussianBlur(gb, gb, cv::Size(0, 0), 3.0);
-    const cv::Mat flow_ab = dense_flow(ga, gb), flow_ba = dense_flow(gb, ga);
+    const PlaneSize size = size_of(la);
+    std::vector<std::uint8_t> ga = flow_input(la, clamp), gb = flow_input(lb, clamp);
+    vision().gaussian_blur(size, ga, ga, 3.0);
+    vision().gaussian_blur(size, gb, gb, 3.0);
+    const std::vector<float> flow_ab = dense_flow(size, ga, gb), flow_ba = dense_flow(size, gb, ga);
     if (lights_overlap) {
         const auto [flow_misfit, still_misfit] = flow_and_still_misfit(la, lb, flow_ab, flow_ba);
         if (!(flow_misfit < still_misfit)) return in_place_highlights(a, b, one_sided_weight);
@@ -696,7 +698,7 @@ Image halfway_highlights(const Image& first, const Image& second, double blob_re
     // energy, are one highlight that moved: each is carried rigidly half-way to the other.
     // A highlight of a few pixels gives the flow almost nothing to fit (its images barely
     // overlap), yet its centroid is exact.
-    cv::Mat labels_a, labels_b;
+    Labels labels_a, labels_b;
     const Image luminance_a = luminance(a), luminance_b = luminance(b);
     const std::vector<Blob> blobs_a = blobs_of(luminance_a, labels_a), blobs_b = blobs_of(luminance_b, labels_b);
     Image out(a.width(), a.height(), a.channels());
@@ -718,7 +720,7 @@ Image halfway_highlights(const Image& first, const Image& second, double blob_re
     // A highlight with nothing of the other layer within blob_reach of it is seen from one
     // side only: it stays where it is, weighted by the chance that the new direction still
     // lights it (one_sided_highlight_weight). Blending would smear it over the whole edge.
-    const auto isolate = [&](const Image& layer, const cv::Mat& labels, const std::vector<Blob>& blobs,
+    const auto isolate = [&](const Image& layer, const Labels& labels, const std::vector<Blob>& blobs,
                              std::vector<bool>& handled, const Image& other) {
         if (blob_reach <= 0.0) return;
         const int r = static_cast<int>(std::ceil(blob_reach));
@@ -737,14 +739,14 @@ Image halfway_highlights(const Image& first, const Image& second, double blob_re
     isolate(a, labels_a, blobs_a, handled_a, luminance_b);
     isolate(b, labels_b, blobs_b, handled_b, luminance_a);
     // Everything else (large, merging or splitting highlights, caustics) goes to the flow.
-    const auto unhandled = [](const Image& layer, const cv::Mat& labels, const std::vector<Blob>& blobs,
+    const auto unhandled = [](const Image& layer, const Labels& labels, const std::vector<Blob>& blobs,
                               const std::vector<bool>& handled) {
         Image rest = layer;
         for (std::size_t k = 0; k < blobs.size(); ++k)
             if (handled[k])
                 for (int y = blobs[k].y0; y <= blobs[k].y1; ++y)
                     for (int x = blobs[k].x0; x <= blobs[k].x1; ++x)
-                        if (labels.at<int>(y, x) == blobs[k].label)
+                        if (labels.at(x, y) == blobs[k].label)
                             for (int c = 0; c < rest.channels(); ++c) rest.at(x, y, c) = 0.0f;
         return rest;
     };
@@ -810,28 +812,31 @@ std::optional<HighlightLobe> fit_highlight_lobe(const std::vector<Eigen::Vector3
 }
 
 ShadowMap halfway_shadow_map(const ShadowMap& first, const ShadowMap& second, int width, int height) {
-    const cv::Mat phi_a = signed_distance(first, width, height), phi_b = signed_distance(second, width, height);
+    const PlaneSize size{width, height};
+    const std::vector<float> phi_a = signed_distance(first, size), phi_b = signed_distance(second, size);
     // The two level-set functions are carried half-way along the flow between them before
     // they are averaged: a shadow that slides keeps its shape instead of shrinking to the
     // overlap, as the plain mean of two distance functions would. The flow matches the
     // distances near the boundary only (clamped to +-kBand pixels, 8 grey levels per pixel).
     constexpr double kBand = 15.0;
-    const auto flow_input_of = [&](const cv::Mat& phi) {
-        cv::Mat grey;
-        cv::Mat clamped = cv::min(cv::max(phi, -kBand), kBand);
-        clamped.convertTo(grey, CV_8U, 127.0 / kBand, 127.5);
+    const auto flow_input_of = [&](const std::vector<float>& phi) {
+        std::vector<float> clamped(phi.size());
+        for (std::size_t p = 0; p < phi.size(); ++p)
+            clamped[p] = std::clamp(phi[p], static_cast<float>(-kBand), static_cast<float>(kBand));
+        std::vector<std::uint8_t> grey(phi.size());
+        vision().scale_to_bytes(clamped, 127.0 / kBand, 127.5, grey);
         return grey;
     };
-    const cv::Mat ga = flow_input_of(phi_a), gb = flow_input_of(phi_b);
-    const auto warp = [](const cv::Mat& phi, const cv::Mat& flow) {
-        const auto [map_x, map_y] = flow_sampling_maps(flow);
-        cv::Mat out;
-        cv::remap(phi, out, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+    const std::vector<std::uint8_t> ga = flow_input_of(phi_a), gb = flow_input_of(phi_b);
+    const auto warp = [&](const std::vector<float>& phi, const std::vector<float>& flow) {
+        const auto [map_x, map_y] = flow_sampling_maps(size, flow);
+        std::vector<float> out(phi.size());
+        vision().remap(size, phi, map_x, map_y, out, Border::replicate);
         return out;
     };
-    const cv::Mat sum = warp(phi_a, dense_flow(ga, gb)) + warp(phi_b, dense_flow(gb, ga));
+    const std::vector<float> a = warp(phi_a, dense_flow(size, ga, gb)), b = warp(phi_b, dense_flow(size, gb, ga));
     ShadowMap out(first.size());
-    for (std::size_t p = 0; p < out.size(); ++p) out[p] = sum.ptr<float>()[p] > 0.0f ? 1 : 0;
+    for (std::size_t p = 0; p < out.size(); ++p) out[p] = a[p] + b[p] > 0.0f ? 1 : 0;
     return out;
 }
 
@@ -854,8 +859,8 @@ UpsampledField upsample_field(const ReflectanceField& field, int levels, const U
         for (std::size_t i = begin; i < end; ++i) {
             luminances[i] = luminance(field.images[i]);
             prefiltered[i] = luminances[i];
-            cv::Mat m = plane_mat(prefiltered[i], 0);
-            cv::GaussianBlur(plane_mat(luminances[i], 0), m, cv::Size(3, 3), 0.0, 0.0, cv::BORDER_REPLICATE);
+            vision().gaussian_blur(size_of(luminances[i]), luminances[i].plane(0), prefiltered[i].plane(0), 3, 0.0, 0.0,
+                                   Border::replicate);
         }
     });
     const Image percentile = percentile_image(prefiltered, options.percentile);

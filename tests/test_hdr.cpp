@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include <OpenImageIO/imageio.h>
+#include "core/image_file.hpp"
 #include <gtest/gtest.h>
 
 #include "core/error.hpp"
@@ -289,17 +289,16 @@ TEST(Hdr, CalibrationFailsWithoutMidGrey) {
 }
 
 void write_codes(const std::filesystem::path& path, const CodeImage& image, double exposure_seconds) {
-    auto out = OIIO::ImageOutput::create(path.string());
-    ASSERT_TRUE(out);
-    OIIO::ImageSpec spec(image.width, image.height, image.channels, OIIO::TypeDesc::UINT8);
-    if (exposure_seconds > 0.0) spec.attribute("ExposureTime", static_cast<float>(exposure_seconds));
+    ImageFileSpec spec{.width = image.width, .height = image.height, .channels = image.channels,
+                       .type = SampleType::uint8};
+    if (exposure_seconds > 0.0) spec.exposure_seconds = exposure_seconds;
     std::vector<std::uint8_t> interleaved;
     for (int y = 0; y < image.height; ++y)
         for (int x = 0; x < image.width; ++x)
             for (int c = 0; c < image.channels; ++c) interleaved.push_back(image.at(x, y, c));
-    ASSERT_TRUE(out->open(path.string(), spec));
-    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::UINT8, interleaved.data()));
-    ASSERT_TRUE(out->close());
+    ImageFileWriter out(path, spec);
+    out.write_rows(0, image.height, SampleType::uint8, interleaved.data());
+    out.finish();
 }
 
 TEST(Hdr, FilesGiveCodesAndExifTimes) {

@@ -1,0 +1,42 @@
+#pragma once
+// The interface between rfd_core's image files (core/image_file.hpp) and the module that
+// wraps OpenImageIO (core/imageio_module.cpp, built as librfd_imageio.so). Plain virtual
+// calls and error strings: the module uses no symbol of rfd's libraries, and core turns a
+// failure into an IoError that names the file.
+
+#include <memory>
+#include <string>
+
+#include "core/image_file.hpp"
+
+namespace rfd {
+
+class ImageFileReader::Backend {
+public:
+    virtual ~Backend() = default;
+    virtual const ImageFileSpec& spec() const = 0;
+    /// False on failure; error() says why.
+    virtual bool read_rows(int y0, int y1, SampleType type, void* out) = 0;
+    virtual std::string error() = 0;
+};
+
+class ImageFileWriter::Backend {
+public:
+    virtual ~Backend() = default;
+    virtual bool write_rows(int y0, int y1, SampleType type, const void* rows) = 0;
+    virtual bool close() = 0;
+    virtual std::string error() = 0;
+};
+
+/// What librfd_imageio.so's entry point, rfd_imageio_backend(), returns.
+class ImageBackend {
+public:
+    virtual ~ImageBackend() = default;
+    /// The file at `path` opened for reading, or null with `error` set.
+    virtual std::unique_ptr<ImageFileReader::Backend> open(const std::string& path, std::string& error) = 0;
+    /// A new file at `path` (its format from the extension), or null with `error` set.
+    virtual std::unique_ptr<ImageFileWriter::Backend> create(const std::string& path, const ImageFileSpec& spec,
+                                                             std::string& error) = 0;
+};
+
+}  // namespace rfd

@@ -1,0 +1,135 @@
+// librfd_imageio.so: rfd's image files (core/image_backend.hpp) on OpenImageIO. Adaptor
+// code only; it links OpenImageIO and nothing of rfd.
+
+#include <OpenImageIO/imageio.h>
+
+#include <memory>
+#include <string>
+
+#include "core/image_backend.hpp"
+
+namespace rfd {
+namespace {
+
+constexpr const char* kAttributePrefix = "rfd:";
+constexpr double kCentimetresPerInch = 2.54;
+
+OIIO::TypeDesc type_desc(SampleType type) {
+    switch (type) {
+        case SampleType::uint8: return OIIO::TypeDesc::UINT8;
+        case SampleType::uint16: return OIIO::TypeDesc::UINT16;
+        case SampleType::half: return OIIO::TypeDesc::HALF;
+        case SampleType::float32: return OIIO::TypeDesc::FLOAT;
+    }
+    return OIIO::TypeDesc::FLOAT;
+}
+
+// Files of other integer or float types are read as the nearest of rfd's four.
+SampleType sample_type(OIIO::TypeDesc desc) {
+    if (desc == OIIO::TypeDesc::UINT8) return SampleType::uint8;
+    if (desc == OIIO::TypeDesc::HALF) return SampleType::half;
+    if (desc.is_floating_point()) return SampleType::float32;
+    return SampleType::uint16;
+}
+
+ImageFileSpec spec_of(const OIIO::ImageSpec& spec) {
+    ImageFileSpec out;
+    out.width = spec.width;
+    out.height = spec.height;
+    // Alpha is dropped; it is the last channel in every format rfd reads.
+    out.channels = spec.alpha_channel >= 0 && spec.nchannels > 1 ? spec.nchannels - 1 : spec.nchannels;
+    out.type = sample_type(spec.format);
+    const double per_inch = spec.get_string_attribute("ResolutionUnit") == "cm" ? kCentimetresPerInch : 1.0;
+    out.dpi_x = spec.get_float_attribute("XResolution", 0.0f) * per_inch;
+    out.dpi_y = spec.get_float_attribute("YResolution", 0.0f) * per_inch;
+    out.description = spec.get_string_attribute("ImageDescription");
+    out.compression = spec.get_string_attribute("compression");
+    if (const OIIO::ParamValue* time = spec.find_attribute("ExposureTime"))
+        out.exposure_seconds = static_cast<double>(time->get_float());
+    const std::string prefix = kAttributePrefix;
+    for (const OIIO::ParamValue& p : spec.extra_attribs) {
+        const std::string name = p.name().string();
+        if (name.rfind(prefix, 0) == 0) out.attributes[name.substr(prefix.size())] = p.get_string();
+    }
+    return out;
+}
+
+OIIO::ImageSpec oiio_spec(const ImageFileSpec& spec) {
+    OIIO::ImageSpec out(spec.width, spec.height, spec.channels, type_desc(spec.type));
+    if (spec.dpi_x > 0.0 && spec.dpi_y > 0.0) {
+        out.attribute("XResolution", static_cast<float>(spec.dpi_x));
+        out.attribute("YResolution", static_cast<float>(spec.dpi_y));
+        out.attribute("ResolutionUnit", "in");
+        // Pixel width over height, i.e. dpi_y / dpi_x: OpenImageIO's TIFF writer stores the
+        // y resolution as XResolution times this, and drops YResolution without it.
+        out.attribute("PixelAspectRatio", static_cast<float>(spec.dpi_y / spec.dpi_x));
+    }
+    // Identical images must give identical files: OpenImageIO's writers stamp the current
+    // time (EXR's capDate, TIFF's DateTime) unless DateTime is set.
+    out.attribute("DateTime", "1970:01:01 00:00:00");
+    if (!spec.compression.empty()) out.attribute("compression", spec.compression);
+    if (!spec.description.empty()) out.attribute("ImageDescription", spec.description);
+    if (spec.exposure_seconds) out.attribute("ExposureTime", static_cast<float>(*spec.exposure_seconds));
+    for (const auto& [key, value] : spec.attributes) out.attribute(kAttributePrefix + key, value);
+    return out;
+}
+
+class Input final : public ImageFileReader::Backend {
+public:
+    explicit Input(std::unique_ptr<OIIO::ImageInput> input) : input_(std::move(input)), spec_(spec_of(input_->spec())) {}
+    const ImageFileSpec& spec() const override { return spec_; }
+    bool read_rows(int y0, int y1, SampleType type, void* out) override {
+        return input_->read_scanlines(0, 0, y0, y1, 0, 0, spec_.channels, type_desc(type), out);
+    }
+    std::string error() override { return input_->geterror(); }
+
+private:
+    std::unique_ptr<OIIO::ImageInput> input_;
+    ImageFileSpec spec_;
+};
+
+class Output final : public ImageFileWriter::Backend {
+public:
+    explicit Output(std::unique_ptr<OIIO::ImageOutput> output) : output_(std::move(output)) {}
+    bool write_rows(int y0, int y1, SampleType type, const void* rows) override {
+        return output_->write_scanlines(y0, y1, 0, type_desc(type), rows);
+    }
+    bool close() override { return output_->close(); }
+    std::string error() override { return output_->geterror(); }
+
+private:
+    std::unique_ptr<OIIO::ImageOutput> output_;
+};
+
+class Backend final : public ImageBackend {
+public:
+    std::unique_ptr<ImageFileReader::Backend> open(const std::string& path, std::string& error) override {
+        auto input = OIIO::ImageInput::open(path);
+        if (!input) {
+            error = OIIO::geterror();
+            return nullptr;
+        }
+        return std::make_unique<Input>(std::move(input));
+    }
+    std::unique_ptr<ImageFileWriter::Backend> create(const std::string& path, const ImageFileSpec& spec,
+                                                     std::string& error) override {
+        auto output = OIIO::ImageOutput::create(path);
+        if (!output) {
+            error = OIIO::geterror();
+            return nullptr;
+        }
+        if (!output->open(path, oiio_spec(spec))) {
+            error = output->geterror();
+            return nullptr;
+        }
+        return std::make_unique<Output>(std::move(output));
+    }
+};
+
+}  // namespace
+}  // namespace rfd
+
+extern "C" __attribute__((visibility("default"))) rfd::ImageBackend* rfd_imageio_backend() {
+    static rfd::Backend backend;
+    return &backend;
+}
