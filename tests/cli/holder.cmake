@@ -1,12 +1,13 @@
-# rfd holder end to end: the Design II holder built and checked through the CLI (JSON
-# report: every part a single closed solid, seats within 0.05 mm, no ray blocked); a
-# design with overlapping pockets and a bad printer profile rejected with exit code 2
-# before anything is written; the fit-test coupon.
+# rfd holder end to end: the Design I holder built and checked through the CLI (JSON
+# report: every part a single closed solid, seats within 0.05 mm, no ray blocked); a Design
+# II with overlapping pockets and a bad printer profile rejected with exit code 2 before
+# anything is written; a small fit-test coupon. (The unit tests build every design's
+# holder and the full-size coupon; this checks what the command adds.)
 include(${CMAKE_CURRENT_LIST_DIR}/run_rfd.cmake)
 file(REMOVE_RECURSE ${OUT})
 file(MAKE_DIRECTORY ${OUT})
 
-run(0 holder ${DESIGN} --out ${OUT}/holder.scad --stl ${OUT}/holder.stl --json)
+run(0 holder ${DESIGN1} --out ${OUT}/holder.scad --stl ${OUT}/holder.stl --json)
 foreach(part base lid)
   if(NOT EXISTS ${OUT}/holder_${part}.stl)
     message(FATAL_ERROR "holder_${part}.stl was not written")
@@ -27,7 +28,7 @@ if(NOT components EQUAL 1)
 endif()
 
 # The diffuser moved so close behind the corrective pair that the pockets overlap.
-file(READ ${DESIGN} text)
+file(READ ${DESIGN2} text)
 string(REPLACE "z_mm = 25.1278" "z_mm = 13.8" text "${text}")
 file(WRITE ${OUT}/overlapping.toml "${text}")
 run(2 holder ${OUT}/overlapping.toml --out ${OUT}/overlapping.scad --stl ${OUT}/overlapping.stl)
@@ -37,9 +38,9 @@ if(EXISTS ${OUT}/overlapping.scad OR EXISTS ${OUT}/overlapping_base.stl)
 endif()
 
 file(WRITE ${OUT}/profile.toml "[printer]\nclearance_mm = 0.2\nwall_mm = 2\n")
-run(2 holder ${DESIGN} --out ${OUT}/p.scad --printer-profile ${OUT}/profile.toml)
+run(2 holder ${DESIGN2} --out ${OUT}/p.scad --printer-profile ${OUT}/profile.toml)
 expect("profile.toml:3.*wall_mm")
 
-run(0 holder coupon --out ${OUT}/coupon.scad --stl ${OUT}/coupon.stl --diameter 25 --square 24)
+run(0 holder coupon --out ${OUT}/coupon.scad --stl ${OUT}/coupon.stl --diameter 6 --square 5)
 expect("9 seat rings")
 expect("volume")
