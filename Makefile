@@ -1,40 +1,56 @@
 # The two commands of the README, plus the developer targets (HACKING.md).
-# make demo   installs dependencies, builds (Release) and runs the main job into out/demo/
-# make test   installs dependencies, builds and runs the tests, then again under ASan+UBSan
-# make bench  builds and runs the benchmarks
+# make demo      installs dependencies, builds rfd (Release) and runs the maker's demo into out/demo/
+# make test      installs dependencies, builds and runs the tests, then again under ASan+UBSan
+# make studies   the research reproductions (sampling, implicit relighting, upsampling) into out/studies/
+# make bench     builds and runs the benchmarks
+# make test-all  every test in both builds, the ones `make test` leaves to the Release build too
 
 JOBS ?= $(shell nproc)
 RFD := build/bin/rfd
-DEMO := out/demo
 
-.PHONY: all deps build build-asan test test-release test-asan bench demo clean
+.PHONY: all deps configure build build-tests build-asan test test-release test-asan test-all \
+        bench demo studies clean
 
 all: build
 
 deps:
 	@./scripts/install-deps.sh
 
-build: deps
+configure: deps
 	cmake --preset release
-	cmake --build build -j $(JOBS)
+
+# Only the program (and the modules it loads): what the demo and the studies run.
+build: configure
+	cmake --build build -j $(JOBS) --target rfd
+
+build-tests: configure
+	cmake --build build -j $(JOBS) --target rfd rfd_tests
 
 build-asan: deps
 	cmake --preset asan
-	cmake --build build-asan -j $(JOBS)
+	cmake --build build-asan -j $(JOBS) --target rfd rfd_tests
 
 test: test-release test-asan
 
-test-release: build
+test-release: build-tests
 	ctest --preset release -j $(JOBS)
 
 test-asan: build-asan
 	ctest --preset asan -j $(JOBS)
 
-bench: build
+test-all: build-tests build-asan
+	ctest --preset release -j $(JOBS)
+	ctest --preset asan-all -j $(JOBS)
+
+bench: configure
+	cmake --build build -j $(JOBS) --target rfd_bench
 	./build/bin/rfd_bench --benchmark_counters_tabular=true
 
 demo: build
-	./scripts/demo.sh $(RFD) $(DEMO)
+	./scripts/demo.sh $(RFD) out/demo
+
+studies: build
+	./scripts/studies.sh $(RFD) out/studies
 
 clean:
 	rm -rf build build-asan build-debug out
