@@ -1,237 +1,175 @@
 #!/usr/bin/env bash
-# The main job on the bundled defaults: for each of Designs I-IV, the system summary and
-# the speed-versus-accuracy chart of the paraxial model against the exact tracer; then the
-# sampling study of the source-field work on the bottle scene; implicit relighting on the
-# snooker scene; feature-guided upsampling on the spheres scene; then the print patterns.
+# make demo: from the bundled bottle scene to what a maker prints, builds and checks for
+# Designs I and II (patterns, print sheets, lens holders, the predicted display), then what
+# the design tools say about all four designs. Writes OUTPUT_DIR/INDEX.md, a line per file.
+# The research reproductions (sampling study, implicit relighting, upsampling) are
+# scripts/studies.sh (make studies).
 # Usage: scripts/demo.sh RFD_BINARY OUTPUT_DIR
 set -euo pipefail
 rfd="$1"
 out="$2"
-mkdir -p "$out"
+source "$(dirname "$0")/index.sh"
+index_begin "$out" "rfd demo" \
+  "What \`make demo\` wrote, in the order a maker uses it. Paths are relative to this folder."
 
-for n in 1 2 3 4; do
-  design="designs/design$n.toml"
-  dir="$out/design$n"
-  mkdir -p "$dir"
-  echo "== $design" >&2
-  "$rfd" design show "$design" | tee "$dir/summary.txt"
-  "$rfd" design show "$design" --json > "$dir/summary.json"
-  "$rfd" optics chart "$design" --out "$dir/chart" | tee "$dir/chart.txt"
-done
+index_section field "The source field"
+"$rfd" capture render scenes/bottle.toml --lights 400 --resolution 128x64 --out "$out/field" > "$out/field.txt"
+index_entry field/field.lp "the bottle scene (scenes/bottle.toml) rendered under 400 light directions, 128 x 64: the reflectance field every display below shows (field.txt: how it was rendered)"
 
-mkdir -p "$out/lenses"
-for lens in designs/lenses/*.toml; do
-  name="$(basename "$lens" .toml)"
-  "$rfd" optics system "$lens" > "$out/lenses/$name.txt"
-  "$rfd" optics trace "$lens" --angle 5 >> "$out/lenses/$name.txt"
-done
-
-# Source fields (thesis chapters 4-5) on the default scene, the bottle: a near-uniform light
-# pattern, then the sampling study: a 4096-direction reference, fixed patterns of 256 to 1025
-# directions against adaptive sampling (error_vs_images.png, figure 5.5's analogue; per-
-# direction error maps, figure 5.4's), and narrow against wide light kernels at n = 256.
-# Images at 128x64 keep the study to a few minutes on two cores.
-mkdir -p "$out/capture"
-echo "== scenes/bottle.toml: sampling study" >&2
-"$rfd" capture pattern --count 256 --out "$out/capture/pattern_256.lp" | tee "$out/capture/pattern.txt"
-"$rfd" capture study scenes/bottle.toml --resolution 128x64 --out "$out/capture/study" \
-  | tee "$out/capture/study.txt"
-
-# Implicit relighting (thesis chapter 7) on the snooker scene: 272 overlapping smooth
-# training lights captured as HDR (camera noise 1e-4) and 16 held-out lights photographed in
-# one 8-bit exposure (noise 3e-3: the regime where eta matters, the new probe noisier than
-# the training set), the model trained from the black ball, a prediction under a designed
-# light, and PSNR against eta on the held-out lights (figure 7.3's trade-off) with pictures
-# truth | eta = 0 | best eta | largest eta. About 80 s on 2 cores.
-implicit="$out/implicit"
-mkdir -p "$implicit"
-echo "== implicit relighting: scenes/snooker.toml" >&2
-"$rfd" capture implicit scenes/snooker.toml --out "$implicit/set" | tee "$implicit/capture.txt"
-"$rfd" relight implicit train "$implicit/set/training" --out "$implicit/model" | tee "$implicit/train.txt"
-"$rfd" relight implicit predict "$implicit/model" --light 50,200,8 --out "$implicit/designed_light.png" \
-  --probe-out "$implicit/designed_light_probe.png" | tee "$implicit/predict.txt"
-"$rfd" relight implicit sweep "$implicit/model" --test "$implicit/set/test" --out "$implicit/eta" \
-  | tee "$implicit/eta_sweep.txt"
-
-# Feature-guided upsampling (thesis chapter 6) on the spheres scene (diffuse, chrome and
-# glass spheres on a card) at 256 x 160, 8 samples per pixel: 256 stage lights upsampled one
-# level (987 directions), scored against 512 other rendered lights at their own directions
-# and under 15-degree area lights, with linear blending of the 256 beside it. Pictures per
-# light (the field relit | the truth) for linear blending (linear/) and the upsampled field
-# (upsampled/), at four point lights and under four area lights, both rendered by the stage
-# itself (an area light as about 200 directions 1.2 degrees apart over its cap,
-# scripts/cap_lights.awk). Below about 2 pixels (128 x 80 at 4 samples) the chrome
-# ball's reflection of the light is a single noisy pixel and no method can place it; the
-# gain then shrinks to a few tenths of a dB. About 5 minutes on 2 cores.
-upsample="$out/upsample"
-mkdir -p "$upsample"
-echo "== upsampling: scenes/spheres.toml" >&2
-stage=(--resolution 256x160 --samples-per-pixel 8)
-"$rfd" capture render scenes/spheres.toml --lights 256 "${stage[@]}" --out "$upsample/field_256" \
-  > "$upsample/field_256.txt"
-"$rfd" capture render scenes/spheres.toml --lights 512 "${stage[@]}" --out "$upsample/reference_512" \
-  > "$upsample/reference_512.txt"
-"$rfd" relight upsample "$upsample/field_256" --levels 1 --out "$upsample/upsampled" | tee "$upsample/upsample.txt"
-point_lights=(20,10 35,100 50,200 65,300)
-area_lights=(30,0,7.5 30,120,7.5 60,60,7.5 60,240,7.5)
-# The truth at the point lights: the stage renders exactly those directions.
-{
-  echo "${#point_lights[@]}"
-  for light in "${point_lights[@]}"; do
-    echo "$light" | awk -F, '{ t = $1 * atan2(0, -1) / 180; p = $2 * atan2(0, -1) / 180;
-      printf "light_%s_%s %.17g %.17g %.17g\n", $1, $2, sin(t) * cos(p), sin(t) * sin(p), cos(t) }'
-  done
-} > "$upsample/point_lights.lp"
-"$rfd" capture render scenes/spheres.toml --lights "$upsample/point_lights.lp" "${stage[@]}" \
-  --out "$upsample/truth_points" > /dev/null
-# The truth under the area lights: the stage renders their caps densely.
-printf '%s\n' "${area_lights[@]}" | awk -v step=1.2 -f scripts/cap_lights.awk > "$upsample/area_lights.lp"
-"$rfd" capture render scenes/spheres.toml --lights "$upsample/area_lights.lp" "${stage[@]}" \
-  --out "$upsample/truth_area" > /dev/null
-for method in linear upsampled; do
-  field="$upsample/field_256"
-  if [ "$method" = upsampled ]; then field="$upsample/upsampled"; fi
-  "$rfd" relight eval "$field" --reference "$upsample/reference_512" > "$upsample/eval_${method}_directions.txt"
-  point_args=() area_args=()
-  for light in "${point_lights[@]}"; do point_args+=(--light "$light"); done
-  for light in "${area_lights[@]}"; do area_args+=(--light "$light"); done
-  "$rfd" relight eval "$field" --reference "$upsample/truth_points" "${point_args[@]}" \
-    --out "$upsample/$method/point_lights" > "$upsample/eval_${method}_point_lights.txt"
-  "$rfd" relight eval "$field" --reference "$upsample/truth_area" "${area_args[@]}" \
-    --out "$upsample/$method/area_lights" > "$upsample/eval_${method}_area_lights.txt"
-  for kind in directions point_lights area_lights; do
-    echo "$method, $kind: $(grep -m1 PSNR "$upsample/eval_${method}_${kind}.txt" | sed 's/^ *PSNR *//')"
-  done
-done | tee "$upsample/summary.txt"
-
-# Patterns (thesis 8.4): the bottle's field encoded for Designs I and II at the thesis's
-# 2880 x 1440 dpi, the light tilted by 45 degrees as the thesis did; and the "SIG08" letters
-# of its Design II demonstration. Each pattern comes with a PNG preview.
-patterns="$out/patterns"
-mkdir -p "$patterns"
-echo "== patterns: Designs I and II" >&2
-"$rfd" capture render scenes/bottle.toml --lights 400 --resolution 128x64 --out "$patterns/bottle_field" \
-  > "$patterns/bottle_field.txt"
+# Patterns (thesis 8.4): the field encoded for Designs I and II at the thesis's printer
+# resolution, 2880 x 1440 dpi, with the light tilted by 45 degrees as the thesis did; and
+# the "SIG08" letters of its Design II demonstration.
+index_section patterns "Patterns"
+mkdir -p "$out/patterns"
 for n in 1 2; do
-  "$rfd" pattern encode "designs/design$n.toml" "$patterns/bottle_field" --tilt 45 \
-    --out "$patterns/design${n}_bottle.exr" --preview "$patterns/design${n}_bottle.png" \
-    | tee "$patterns/design${n}_bottle.txt"
+  "$rfd" pattern encode "designs/design$n.toml" "$out/field" --tilt 45 \
+    --out "$out/patterns/design${n}_bottle.exr" --preview "$out/patterns/design${n}_bottle.png" \
+    > "$out/patterns/design${n}_bottle.txt"
 done
-"$rfd" pattern field letters --text SIG08 --resolution 48x40 --out "$patterns/sig08_field" > /dev/null
-"$rfd" pattern encode designs/design2.toml "$patterns/sig08_field" --interpolation nearest \
-  --out "$patterns/design2_sig08.exr" --preview "$patterns/design2_sig08.png" | tee "$patterns/design2_sig08.txt"
+"$rfd" pattern field letters --text SIG08 --resolution 48x40 --out "$out/patterns/sig08_field" > /dev/null
+"$rfd" pattern encode designs/design2.toml "$out/patterns/sig08_field" --interpolation nearest \
+  --out "$out/patterns/design2_sig08.exr" --preview "$out/patterns/design2_sig08.png" > "$out/patterns/design2_sig08.txt"
+index_entry patterns/design1_bottle.png "Design I's pattern of the bottle, scaled down for the screen (the full pattern is the .exr beside it, 2880 x 1440 dpi; .txt: the encoder's summary)"
+index_entry patterns/design2_bottle.png "Design II's pattern of the bottle"
+index_entry patterns/design2_sig08.png "Design II's pattern of the SIG08 letters, a test field: each letter shows under its own light"
 
-# Print sheets for the thesis's printer (8.4, 8.4.1): front and mirrored back sheets for
-# back-to-back printing, registration markers under the corner lenslets, crop marks, ruler,
-# label. Design I's full A4 page as TIFF (true 2880 x 1440 dpi tags), Design II's as PDF.
-echo "== print sheets" >&2
-"$rfd" print sheet designs/design1.toml "$patterns/design1_bottle.exr" --printer epson_stylus_pro_4800 \
-  --out "$patterns/design1_front.tif" | tee "$patterns/design1_sheets.txt"
-"$rfd" print sheet designs/design1.toml "$patterns/design1_bottle.exr" --printer epson_stylus_pro_4800 \
-  --mirror --out "$patterns/design1_back.tif" | tee -a "$patterns/design1_sheets.txt"
-for name in design2_bottle design2_sig08; do
-  "$rfd" print sheet designs/design2.toml "$patterns/$name.exr" --out "$patterns/${name}_front.pdf" \
-    | tee "$patterns/${name}_sheets.txt"
-  "$rfd" print sheet designs/design2.toml "$patterns/$name.exr" --mirror --out "$patterns/${name}_back.pdf" \
-    | tee -a "$patterns/${name}_sheets.txt"
+# Print sheets (thesis 8.4, 8.4.1): front and mirrored back sheets for back-to-back
+# printing, registration markers under the corner lenslets, crop marks, ruler and label.
+index_section sheets "Print sheets"
+mkdir -p "$out/sheets"
+for side in front back; do
+  mirror=()
+  if [ "$side" = back ]; then mirror=(--mirror); fi
+  "$rfd" print sheet designs/design1.toml "$out/patterns/design1_bottle.exr" --printer epson_stylus_pro_4800 \
+    "${mirror[@]}" --out "$out/sheets/design1_bottle_$side.tif" > "$out/sheets/design1_bottle_$side.txt"
+  for name in design2_bottle design2_sig08; do
+    "$rfd" print sheet designs/design2.toml "$out/patterns/$name.exr" "${mirror[@]}" \
+      --out "$out/sheets/${name}_$side.pdf" > "$out/sheets/${name}_$side.txt"
+  done
 done
-"$rfd" print moire designs/design1.toml --pitch 2.350:2.366:9 --out "$patterns/design1_moire.pdf" \
-  | tee "$patterns/design1_moire.txt"
+"$rfd" print moire designs/design1.toml --pitch 2.350:2.366:9 --out "$out/sheets/design1_moire.pdf" \
+  > "$out/sheets/design1_moire.txt"
+index_entry sheets/design1_bottle_front.tif "Design I's front sheet, A4 at the Epson Stylus Pro 4800's true 2880 x 1440 dpi: print it on transparency film at that resolution, no scaling"
+index_entry sheets/design1_bottle_back.tif "Design I's mirrored back sheet: print it too and lay it behind the front one, ink to ink, markers on markers (two sheets double the density)"
+index_entry sheets/design2_bottle_front.pdf "Design II's front sheet as PDF (and design2_bottle_back.pdf, mirrored)"
+index_entry sheets/design2_sig08_front.pdf "the SIG08 letters for Design II (and design2_sig08_back.pdf)"
+index_entry sheets/design1_moire.pdf "pitch calibration: print it, lay the lens array on it, and use the band without moire (its pitch goes into the design's lattice)"
 
-# What the displays will show (thesis 8.2): Design I and II patterns of the bottle under a
-# light on the display's axis (field theta 45, phi 90 with the 45-degree tilt) and one off
-# it, a red and a green light together, and a disc light; each with the same lights
-# relighting the field in software beside it for comparison.
-predicted="$out/predicted"
-mkdir -p "$predicted"
-echo "== predicted display output" >&2
-# An environment map for them: a dim blue-grey room (64 x 32, latitude-longitude, field
-# frame) with a bright window around the display's axis (field theta 45, phi 90).
+# The lens holders (thesis 8.2.4): parametric OpenSCAD for Designs I and II, built to STLs
+# and checked (solid, volume, seats at their planes, no ray of the field of view touching
+# the holder), and the fit-test coupon that calibrates the clearance.
+index_section holders "Lens holders"
+mkdir -p "$out/holders"
+for n in 1 2; do
+  "$rfd" holder designs/design$n.toml --printer-profile holders/profiles/fdm_0.4mm.toml \
+    --out "$out/holders/design${n}_holder.scad" --stl "$out/holders/design${n}_holder.stl" \
+    > "$out/holders/design${n}_holder.txt"
+done
+"$rfd" holder coupon --out "$out/holders/coupon.scad" --stl "$out/holders/coupon.stl" > "$out/holders/coupon.txt"
+index_entry holders/coupon.stl "print this first: nine seats per row step the clearance by 0.05 mm; the one that takes your lens with a slip fit goes into clearance_mm of your printer profile"
+index_entry holders/design1_holder_base.stl "Design I's holder, base and lid (design1_holder_lid.stl), for a 0.4 mm FDM nozzle; design1_holder.txt lists the seats and the checks passed; the .scad is the OpenSCAD source"
+index_entry holders/design2_holder_base.stl "Design II's housing with its baffles, base and lid"
+
+# What the displays will show (thesis 8.2), beside the same lights relighting the field in
+# software: on the display's axis (field theta 45, phi 90, with the 45-degree tilt) and 7
+# degrees off it, inside both designs' crosstalk-free cones.
+index_section predicted "The predicted display"
+mkdir -p "$out/predicted"
+for case in "axis:--light 45,90" "side:--light 45,80"; do
+  name="${case%%:*}"
+  for n in 1 2; do
+    # shellcheck disable=SC2086 # the light is two words on purpose
+    "$rfd" simulate "designs/design$n.toml" "$out/patterns/design${n}_bottle.exr" ${case#*:} \
+      --out "$out/predicted/design${n}_${name}.png" > "$out/predicted/design${n}_${name}.txt"
+  done
+  # shellcheck disable=SC2086
+  "$rfd" relight render "$out/field" ${case#*:} --out "$out/predicted/field_${name}.png" > /dev/null
+done
+"$rfd" simulate compare designs/design2.toml "$out/patterns/design2_bottle.exr" "$out/field" --sweep 9 \
+  --light 45,70 --chart-accuracy --out "$out/predicted/compare_design2" > "$out/predicted/compare_design2.txt"
+"$rfd" simulate tolerance designs/design2.toml "$out/patterns/design2_sig08.exr" \
+  --out "$out/predicted/tolerance_design2_sig08" > "$out/predicted/tolerance_design2_sig08.txt"
+index_entry predicted/design1_axis.png "what Design I will show with a lamp on its axis behind it (field_axis.png: the field relit in software, for comparison)"
+index_entry predicted/design1_side.png "Design I with the lamp 7 degrees to the side (field_side.png beside it)"
+index_entry predicted/design2_axis.png "Design II, lamp on the axis (and design2_side.png)"
+index_entry predicted/compare_design2/psnr.png "how faithfully Design II shows the field, PSNR against the light's angle (summary in compare_design2.txt, pictures per light in the folder)"
+index_entry predicted/tolerance_design2_sig08.txt "how precisely to assemble Design II: the shift, rotation, pitch and spacer errors it tolerates (charts in the folder)"
+
+# More predictions: coloured, disc and environment light; Design I against the field.
+index_section more_predictions "More predictions"
 oiiotool --pattern constant:color=4,3.6,3.2 10x6 3 --pattern constant:color=0.04,0.05,0.07 64x32 3 \
-  --paste +43+5 -d float -o "$predicted/window_room.exr"
+  --paste +43+5 -d float -o "$out/predicted/window_room.exr"
 for n in 1 2; do
-  "$rfd" simulate "designs/design$n.toml" "$patterns/design${n}_bottle.exr" --envmap "$predicted/window_room.exr" \
-    --out "$predicted/design${n}_window_room.png" --lenslets "$predicted/design${n}_window_room_lenslets.png" \
-    | tee "$predicted/design${n}_window_room.txt"
-done
-for n in 1 2; do
-  for case in "axis:--light 45,90" "side:--light 45,70" "red_green:--light 45,75,1:0:0 --light 45,105,0:1:0" \
-              "disc:--light 45,90,8"; do
+  for case in "red_green:--light 45,75,1:0:0 --light 45,105,0:1:0" "disc:--light 45,90,8 --area-samples 3"; do
     name="${case%%:*}"
-    samples=5
-    if [ "$name" = disc ]; then samples=3; fi  # 9 directions over the disc
-    # shellcheck disable=SC2086 # the lights are several words on purpose
-    "$rfd" simulate "designs/design$n.toml" "$patterns/design${n}_bottle.exr" ${case#*:} \
-      --area-samples "$samples" --out "$predicted/design${n}_${name}.png" --lenslets "$predicted/design${n}_${name}_lenslets.png" \
-      | tee "$predicted/design${n}_${name}.txt"
-    if [ "$n" = 1 ]; then
-      # shellcheck disable=SC2086
-      "$rfd" relight render "$patterns/bottle_field" ${case#*:} --out "$predicted/field_${name}.png" > /dev/null
-    fi
+    # shellcheck disable=SC2086
+    "$rfd" simulate "designs/design$n.toml" "$out/patterns/design${n}_bottle.exr" ${case#*:} \
+      --out "$out/predicted/design${n}_${name}.png" > "$out/predicted/design${n}_${name}.txt"
   done
+  "$rfd" simulate "designs/design$n.toml" "$out/patterns/design${n}_bottle.exr" --envmap "$out/predicted/window_room.exr" \
+    --out "$out/predicted/design${n}_window_room.png" > "$out/predicted/design${n}_window_room.txt"
 done
-# How precisely to assemble Design II (issue 5): PSNR of the predicted picture against
-# pattern shift, rotation, pitch error and spacer error, for a smooth and a sharp pattern.
-# (Design I takes about two minutes: see the README's "Assembly tolerances".)
-for pattern in bottle sig08; do
-  "$rfd" simulate tolerance designs/design2.toml "$patterns/design2_${pattern}.exr" \
-    --out "$predicted/tolerance_design2_${pattern}" | tee "$predicted/tolerance_design2_${pattern}.txt"
-done
+"$rfd" simulate compare designs/design1.toml "$out/patterns/design1_bottle.exr" "$out/field" --sweep 5 \
+  --light 45,70 --chart-accuracy --models paraxial,exact --accuracy-rays 2,4,8 --reference-rays 16 \
+  --out "$out/predicted/compare_design1" > "$out/predicted/compare_design1.txt"
+"$rfd" simulate tolerance designs/design2.toml "$out/patterns/design2_bottle.exr" \
+  --out "$out/predicted/tolerance_design2_bottle" > "$out/predicted/tolerance_design2_bottle.txt"
+index_entry predicted/design1_red_green.png "Design I under a red and a green lamp at once (design2_red_green.png too)"
+index_entry predicted/design1_disc.png "Design I under an 8-degree disc lamp (design2_disc.png too)"
+index_entry predicted/design1_window_room.png "Design I in a dim room with a bright window behind it (window_room.exr, the environment map)"
+index_entry predicted/compare_design1/psnr.png "Design I against the field, as compare_design2"
+index_entry predicted/tolerance_design2_bottle.txt "Design II's assembly tolerances for the smooth bottle pattern (the letters are less forgiving)"
 
-# Designs III and IV (thesis 8.3): figure 8.13's letters, one per incident bin, encoded for
-# Design III at the printer's resolution and predicted under a light in the bin of "0" and
-# in that of "7" (the field's frame), with the angular distribution a screen in front of
-# the display would show (figure 8.13's projected letter) and the 6 x 5 meso-pixels seen
-# head-on and from 8 degrees to the right. Figure 8.15's diamonds for Design IV at 150 dpi
-# (a preview printer profile written here keeps the 238 mm pattern to 1400 x 1400 dots),
-# lit from below and from the left (lights at meso-cell centres), seen from an eye 1 m away and from 8 degrees right.
-echo "== predicted display output: Designs III and IV" >&2
-"$rfd" pattern encode-angular designs/design3.toml --procedural letters --out "$predicted/design3_letters.exr" \
-  | tee "$predicted/design3_letters.txt"
+# Designs III and IV (thesis 8.3): figure 8.13's letters, one per incident bin, for Design
+# III, seen head-on and from 8 degrees to the right with the projected letter a screen in
+# front would show; figure 8.15's diamonds for Design IV at 150 dpi (a preview printer
+# profile keeps its 238 mm pattern small), seen from an eye 1 m away.
+index_section observer_variant "Designs III and IV"
+"$rfd" pattern encode-angular designs/design3.toml --procedural letters --out "$out/predicted/design3_letters.exr" \
+  > "$out/predicted/design3_letters.txt"
 for case in "bin0:--light 15.5,43.8" "bin7:--light 8.7,38.7"; do
   name="${case%%:*}"
   # shellcheck disable=SC2086
-  "$rfd" simulate designs/design3.toml "$predicted/design3_letters.exr" ${case#*:} --view 0,0 --view 8,0 --zoom 16 \
-    --out "$predicted/design3_${name}.png" --distribution 0,0 --distribution-out "$predicted/design3_${name}_screen.png" \
-    --distribution-pixels 128 | tee "$predicted/design3_${name}.txt"
+  "$rfd" simulate designs/design3.toml "$out/predicted/design3_letters.exr" ${case#*:} --view 0,0 --view 8,0 \
+    --zoom 16 --out "$out/predicted/design3_${name}.png" --distribution 0,0 \
+    --distribution-out "$out/predicted/design3_${name}_screen.png" --distribution-pixels 128 \
+    > "$out/predicted/design3_${name}.txt"
 done
-sed -e 's/^dpi_x = .*/dpi_x = 150/' -e 's/^dpi_y = .*/dpi_y = 150/' -e 's/^name = "generic 720 dpi inkjet"/name = "150 dpi preview"/' \
-  printers/inkjet_720.toml > "$predicted/preview_150dpi.toml"
+sed -e 's/^dpi_x = .*/dpi_x = 150/' -e 's/^dpi_y = .*/dpi_y = 150/' \
+  -e 's/^name = "generic 720 dpi inkjet"/name = "150 dpi preview"/' printers/inkjet_720.toml \
+  > "$out/predicted/preview_150dpi.toml"
 "$rfd" pattern encode-angular designs/design4.toml --procedural diamonds --dpi 150 --table 65 \
-  --out "$predicted/design4_diamonds.exr" | tee "$predicted/design4_diamonds.txt"
+  --out "$out/predicted/design4_diamonds.exr" > "$out/predicted/design4_diamonds.txt"
 for case in "below:--light 8.5,285.5" "side:--light 6.8,180"; do
   name="${case%%:*}"
   # shellcheck disable=SC2086
-  "$rfd" simulate designs/design4.toml "$predicted/design4_diamonds.exr" ${case#*:} --printer "$predicted/preview_150dpi.toml" \
-    --eye 0,0,1000 --view 8,0 --zoom 8 --out "$predicted/design4_${name}.png" --macro "$predicted/design4_${name}_macro.png" \
-    | tee "$predicted/design4_${name}.txt"
+  "$rfd" simulate designs/design4.toml "$out/predicted/design4_diamonds.exr" ${case#*:} \
+    --printer "$out/predicted/preview_150dpi.toml" --eye 0,0,1000 --view 8,0 --zoom 8 \
+    --out "$out/predicted/design4_${name}.png" --macro "$out/predicted/design4_${name}_macro.png" \
+    > "$out/predicted/design4_${name}.txt"
 done
+index_entry predicted/design3_bin0_screen_0_0.png "Design III lit in the bin of the letter 0: the letter a screen in front of it shows (figure 8.13); design3_bin0_view1.png and _view2.png are its meso-pixels seen head-on and from 8 degrees"
+index_entry predicted/design3_bin7_screen_0_0.png "the same, lit in the bin of the letter 7"
+index_entry predicted/design4_below_view1.png "Design IV's diamonds lit from below, seen by an eye 1 m away (design4_below_macro_view1.png: one value per macro-pixel)"
 
-# The predictions against the software relighting of the same field, at the display's
-# resolution (issue 5): PSNR per light direction over a sweep of each display's range (the
-# first on the axis, field 45,90 with the tilt) plus the off-axis light above, side-by-side
-# pictures and error maps, and the simulator's speed-versus-accuracy chart (paraxial and
-# exact against exact with many rays, inside the field of view). Design I's 4599 lenslets
-# take 8 rays per side (the default for whole cells: within a dB of 16) and a 16-ray
-# reference. About 30 s on 2 cores.
-echo "== predicted against relit" >&2
-"$rfd" simulate compare designs/design2.toml "$patterns/design2_bottle.exr" "$patterns/bottle_field" --sweep 9 \
-  --light 45,70 --chart-accuracy --out "$predicted/compare_design2" | tee "$predicted/compare_design2.txt"
-"$rfd" simulate compare designs/design1.toml "$patterns/design1_bottle.exr" "$patterns/bottle_field" --sweep 5 \
-  --light 45,70 --chart-accuracy --models paraxial,exact --accuracy-rays 2,4,8 --reference-rays 16 \
-  --out "$predicted/compare_design1" | tee "$predicted/compare_design1.txt"
-
-# The lens holders (issue 6): parametric OpenSCAD for the default design (Design I, the
-# bottle display) and for Design II (the housing of figure 8.9), each built to STLs with
-# openscad and checked (solid, volume, seats at their planes, no ray of the field of view
-# touching the holder); and the fit-test coupon that calibrates the clearance. About 30 s.
-echo "== lens holders" >&2
-holders="$out/holders"
-mkdir -p "$holders"
-for n in 1 2; do
-  "$rfd" holder designs/design$n.toml --printer-profile holders/profiles/fdm_0.4mm.toml \
-    --out "$holders/design${n}_holder.scad" --stl "$holders/design${n}_holder.stl" | tee "$holders/design${n}_holder.txt"
+# The design tools: for each of Designs I-IV the system summary and the speed-versus-
+# accuracy chart of the paraxial model against the exact tracer; the bundled lenses.
+index_section designs "Designs I-IV"
+for n in 1 2 3 4; do
+  dir="$out/designs/design$n"
+  mkdir -p "$dir"
+  "$rfd" design show "designs/design$n.toml" > "$dir/summary.txt"
+  "$rfd" design show "designs/design$n.toml" --json > "$dir/summary.json"
+  "$rfd" optics chart "designs/design$n.toml" --out "$dir/chart" > "$dir/chart.txt"
 done
-"$rfd" holder coupon --out "$holders/coupon.scad" --stl "$holders/coupon.stl" | tee "$holders/coupon.txt"
+mkdir -p "$out/designs/lenses"
+for lens in designs/lenses/*.toml; do
+  name="$(basename "$lens" .toml)"
+  "$rfd" optics system "$lens" > "$out/designs/lenses/$name.txt"
+  "$rfd" optics trace "$lens" --angle 5 >> "$out/designs/lenses/$name.txt"
+done
+index_entry designs/design1/summary.txt "Design I's summary: lenslet pitch, print dots per lenslet, wrap-over angle, field of view, light efficiency, focus checks and design-rule warnings (summary.json: the same for programs; design2..4 alike)"
+index_entry designs/design1/chart/paraxial_error_x.png "when to trust the fast paraxial model: its error on the pattern plane against the exact trace, by angle along x (_y: along y)"
+index_entry designs/lenses/edmund_pcx_25x50.txt "a bundled lens: focal lengths, principal planes, and an exact trace at 5 degrees"
 
-echo "demo written to $out" >&2
+index_end

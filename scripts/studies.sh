@@ -1,0 +1,99 @@
+#!/usr/bin/env bash
+# make studies: the research reproductions behind docs/results.md, on the bundled scenes:
+# the sampling study (thesis chapters 4-5), implicit relighting's eta trade-off (chapter 7)
+# and feature-guided upsampling against linear blending (chapter 6). About 15 minutes on
+# two cores. Writes OUTPUT_DIR/INDEX.md.
+# Usage: scripts/studies.sh RFD_BINARY OUTPUT_DIR
+set -euo pipefail
+rfd="$1"
+out="$2"
+source "$(dirname "$0")/index.sh"
+index_begin "$out" "rfd studies" \
+  "What \`make studies\` wrote: the measurements docs/results.md quotes. Paths are relative to this folder."
+
+# Source fields (thesis chapters 4-5) on the default scene, the bottle: a near-uniform light
+# pattern, then the sampling study: a 4096-direction reference, fixed patterns of 256 to 1025
+# directions against adaptive sampling (error_vs_images.png, figure 5.5's analogue; per-
+# direction error maps, figure 5.4's), and narrow against wide light kernels at n = 256.
+# Images at 128x64 keep the study to a few minutes on two cores.
+index_section capture "Sampling study: the bottle"
+mkdir -p "$out/capture"
+"$rfd" capture pattern --count 256 --out "$out/capture/pattern_256.lp" | tee "$out/capture/pattern.txt"
+"$rfd" capture study scenes/bottle.toml --resolution 128x64 --out "$out/capture/study" \
+  | tee "$out/capture/study.txt"
+
+# Implicit relighting (thesis chapter 7) on the snooker scene: 272 overlapping smooth
+# training lights captured as HDR (camera noise 1e-4) and 16 held-out lights photographed in
+# one 8-bit exposure (noise 3e-3: the regime where eta matters, the new probe noisier than
+# the training set), the model trained from the black ball, a prediction under a designed
+# light, and PSNR against eta on the held-out lights (figure 7.3's trade-off) with pictures
+# truth | eta = 0 | best eta | largest eta. About 80 s on 2 cores.
+index_section implicit "Implicit relighting: the snooker scene"
+implicit="$out/implicit"
+mkdir -p "$implicit"
+"$rfd" capture implicit scenes/snooker.toml --out "$implicit/set" | tee "$implicit/capture.txt"
+"$rfd" relight implicit train "$implicit/set/training" --out "$implicit/model" | tee "$implicit/train.txt"
+"$rfd" relight implicit predict "$implicit/model" --light 50,200,8 --out "$implicit/designed_light.png" \
+  --probe-out "$implicit/designed_light_probe.png" | tee "$implicit/predict.txt"
+"$rfd" relight implicit sweep "$implicit/model" --test "$implicit/set/test" --out "$implicit/eta" \
+  | tee "$implicit/eta_sweep.txt"
+
+# Feature-guided upsampling (thesis chapter 6) on the spheres scene (diffuse, chrome and
+# glass spheres on a card) at 256 x 160, 8 samples per pixel: 256 stage lights upsampled one
+# level (987 directions), scored against 512 other rendered lights at their own directions
+# and under 15-degree area lights, with linear blending of the 256 beside it. Pictures per
+# light (the field relit | the truth) for linear blending (linear/) and the upsampled field
+# (upsampled/), at four point lights and under four area lights, both rendered by the stage
+# itself (an area light as about 200 directions 1.2 degrees apart over its cap,
+# scripts/cap_lights.awk). Below about 2 pixels (128 x 80 at 4 samples) the chrome
+# ball's reflection of the light is a single noisy pixel and no method can place it; the
+# gain then shrinks to a few tenths of a dB. About 5 minutes on 2 cores.
+index_section upsample "Upsampling: the spheres"
+upsample="$out/upsample"
+mkdir -p "$upsample"
+stage=(--resolution 256x160 --samples-per-pixel 8)
+"$rfd" capture render scenes/spheres.toml --lights 256 "${stage[@]}" --out "$upsample/field_256" \
+  > "$upsample/field_256.txt"
+"$rfd" capture render scenes/spheres.toml --lights 512 "${stage[@]}" --out "$upsample/reference_512" \
+  > "$upsample/reference_512.txt"
+"$rfd" relight upsample "$upsample/field_256" --levels 1 --out "$upsample/upsampled" | tee "$upsample/upsample.txt"
+point_lights=(20,10 35,100 50,200 65,300)
+area_lights=(30,0,7.5 30,120,7.5 60,60,7.5 60,240,7.5)
+# The truth at the point lights: the stage renders exactly those directions.
+{
+  echo "${#point_lights[@]}"
+  for light in "${point_lights[@]}"; do
+    echo "$light" | awk -F, '{ t = $1 * atan2(0, -1) / 180; p = $2 * atan2(0, -1) / 180;
+      printf "light_%s_%s %.17g %.17g %.17g\n", $1, $2, sin(t) * cos(p), sin(t) * sin(p), cos(t) }'
+  done
+} > "$upsample/point_lights.lp"
+"$rfd" capture render scenes/spheres.toml --lights "$upsample/point_lights.lp" "${stage[@]}" \
+  --out "$upsample/truth_points" > /dev/null
+# The truth under the area lights: the stage renders their caps densely.
+printf '%s\n' "${area_lights[@]}" | awk -v step=1.2 -f scripts/cap_lights.awk > "$upsample/area_lights.lp"
+"$rfd" capture render scenes/spheres.toml --lights "$upsample/area_lights.lp" "${stage[@]}" \
+  --out "$upsample/truth_area" > /dev/null
+for method in linear upsampled; do
+  field="$upsample/field_256"
+  if [ "$method" = upsampled ]; then field="$upsample/upsampled"; fi
+  "$rfd" relight eval "$field" --reference "$upsample/reference_512" > "$upsample/eval_${method}_directions.txt"
+  point_args=() area_args=()
+  for light in "${point_lights[@]}"; do point_args+=(--light "$light"); done
+  for light in "${area_lights[@]}"; do area_args+=(--light "$light"); done
+  "$rfd" relight eval "$field" --reference "$upsample/truth_points" "${point_args[@]}" \
+    --out "$upsample/$method/point_lights" > "$upsample/eval_${method}_point_lights.txt"
+  "$rfd" relight eval "$field" --reference "$upsample/truth_area" "${area_args[@]}" \
+    --out "$upsample/$method/area_lights" > "$upsample/eval_${method}_area_lights.txt"
+  for kind in directions point_lights area_lights; do
+    echo "$method, $kind: $(grep -m1 PSNR "$upsample/eval_${method}_${kind}.txt" | sed 's/^ *PSNR *//')"
+  done
+done | tee "$upsample/summary.txt"
+
+index_entry capture/study/error_vs_images.png "the bottle's sampling study: error against image count for fixed patterns of 256 to 1025 directions and adaptive sampling (figure 5.5's analogue; study.txt: the table, study/: per-direction error maps)"
+index_entry capture/pattern_256.lp "a near-uniform pattern of 256 light directions for a real light stage (pattern.txt: how even)"
+index_entry implicit/eta/eta_psnr.png "implicit relighting on the snooker scene: PSNR of the held-out lights against eta (figure 7.3's trade-off; eta_sweep.txt: the numbers, eta/light_*.png: truth | eta 0 | best | largest)"
+index_entry implicit/designed_light.png "the scene relit from the trained model under a designed 8-degree light (designed_light_probe.png: the synthetic probe)"
+index_entry upsample/summary.txt "upsampling 256 stage lights of the spheres one level against linear blending: PSNR at 512 other directions, four point lights and four area lights"
+index_entry upsample/upsampled/point_lights "pictures per point light, the upsampled field relit | the stage's truth (linear/: the same for linear blending; area_lights/ under area lights)"
+
+index_end
