@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # make studies: the research reproductions behind docs/results.md, on the bundled scenes:
 # the sampling study (thesis chapters 4-5), implicit relighting's eta trade-off (chapter 7)
-# and feature-guided upsampling against linear blending (chapter 6). About 15 minutes on
+# and feature-guided upsampling against linear blending (chapter 6). About 8 minutes on
 # two cores. Writes OUTPUT_DIR/INDEX.md.
 # Usage: scripts/studies.sh RFD_BINARY OUTPUT_DIR
 set -euo pipefail
