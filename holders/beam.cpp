@@ -148,15 +148,25 @@ Envelope envelope_at(const std::vector<BeamPath>& paths, double z, bool relative
 }
 
 Envelope envelope_over(const std::vector<BeamPath>& paths, double z0, double z1, bool relative_to_cell) {
+    // Along a straight segment |x|, |y| and the radius are convex in z, so their largest
+    // values over the part of the segment inside [z0, z1] lie at its two ends.
     Envelope e;
-    const int steps = std::max(1, static_cast<int>(std::ceil((z1 - z0) / 0.05)));
-    for (int k = 0; k <= steps; ++k) {
-        const Envelope at = envelope_at(paths, z0 + (z1 - z0) * k / steps, relative_to_cell);
-        if (at.empty) continue;
-        e.x = std::max(e.x, at.x);
-        e.y = std::max(e.y, at.y);
-        e.r = std::max(e.r, at.r);
+    const auto include = [&](Eigen::Vector2d p, const BeamPath& path) {
+        if (relative_to_cell) p -= path.cell_centre;
+        e.x = std::max(e.x, std::abs(p.x()));
+        e.y = std::max(e.y, std::abs(p.y()));
+        e.r = std::max(e.r, p.norm());
         e.empty = false;
+    };
+    for (const BeamPath& path : paths) {
+        for (std::size_t k = 0; k + 1 < path.points.size(); ++k) {
+            const Eigen::Vector3d& a = path.points[k];
+            const Eigen::Vector3d& b = path.points[k + 1];
+            if (b.z() <= a.z()) continue;
+            const double lo = std::max(z0, a.z()), hi = std::min(z1, b.z());
+            if (lo > hi) continue;
+            for (const double z : {lo, hi}) include((a + (b - a) * ((z - a.z()) / (b.z() - a.z()))).head<2>(), path);
+        }
     }
     return e;
 }

@@ -47,7 +47,7 @@ struct Envelope {
     bool empty = true;
 };
 Envelope envelope_at(const std::vector<BeamPath>& paths, double z, bool relative_to_cell);
-/// The envelope's maximum over [z0, z1] (sampled every 0.05 mm and at both ends).
+/// The envelope's maximum over [z0, z1], exact: the largest over every z in the interval.
 Envelope envelope_over(const std::vector<BeamPath>& paths, double z0, double z1, bool relative_to_cell);
 
 }  // namespace rfd::holders

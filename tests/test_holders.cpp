@@ -18,6 +18,7 @@
 #include "core/error.hpp"
 #include "holders/mesh_check.hpp"
 #include "holders/checks.hpp"
+#include "holders/beam.hpp"
 #include "holders/coupon.hpp"
 #include "holders/expr.hpp"
 #include "holders/generate.hpp"
@@ -181,6 +182,45 @@ TEST(HolderSeats, LieWhereThePartsFacesMustBe) {
     // band: the vertex plane plus the sag at 2.0 - 0.8 mm from a lenslet's axis.
     const double r = 5.4915, rho = 2.0 - 0.8;
     EXPECT_NEAR(holder.seats[3].z, 65.1466 - 0.05 - 2.0 + (r - std::sqrt(r * r - rho * rho)), 1e-9);
+}
+
+TEST(HolderBeam, EnvelopeOverAnIntervalIsTheLargestAtAnyDepth) {
+    // Two hand-made paths: one crossing the axis (its |x| is largest at the interval's ends,
+    // smallest inside), one in a lenslet centred at x = 1.
+    BeamPath crossing{{{-2, 0, 0}, {2, 1, 4}, {2, 3, 6}}, Eigen::Vector2d::Zero()};
+    BeamPath offset{{{1.5, -0.5, 0}, {0.5, -0.5, 6}}, Eigen::Vector2d(1, 0)};
+    const std::vector<BeamPath> paths{crossing, offset};
+    const Envelope e = envelope_over(paths, 1.0, 5.0, false);
+    EXPECT_DOUBLE_EQ(e.x, 2.0);   // crossing, from z = 4 on
+    EXPECT_DOUBLE_EQ(e.y, 2.0);   // crossing at z = 5: halfway from 1 to 3
+    EXPECT_DOUBLE_EQ(e.r, std::hypot(2.0, 2.0));
+    const Envelope cell = envelope_over(paths, 1.0, 5.0, true);
+    EXPECT_DOUBLE_EQ(cell.x, 2.0);  // the crossing path's cell is the origin's
+    const Envelope only_offset = envelope_over({offset}, 0.0, 3.0, true);
+    EXPECT_DOUBLE_EQ(only_offset.x, 0.5);  // 0.5 right of its centre at z = 0, on it at z = 3
+    EXPECT_TRUE(envelope_over(paths, 7.0, 8.0, false).empty);
+
+    // Design II's traced beam: never below the envelope at any depth inside, equal to the
+    // largest of a fine sampling up to the sampling's own resolution.
+    const optics::Design design = optics::load_design(preset(2));
+    const std::vector<BeamPath> beam = beam_paths(design, {}, -1.0, 30.0, BeamSampling{3, 4});
+    ASSERT_FALSE(beam.empty());
+    const double z0 = 0.0, z1 = 25.0;  // the lenslets to the diffuser
+    const int steps = 5000;
+    // A sampled maximum falls short by at most slope x step / 2; slopes here stay below 4.
+    const double resolution = 2 * (z1 - z0) / steps;
+    const Envelope exact = envelope_over(beam, z0, z1, true);
+    Envelope sampled;
+    for (int k = 0; k <= steps; ++k) {
+        const Envelope at = envelope_at(beam, z0 + (z1 - z0) * k / steps, true);
+        EXPECT_LE(at.x, exact.x + 1e-12);
+        EXPECT_LE(at.y, exact.y + 1e-12);
+        EXPECT_LE(at.r, exact.r + 1e-12);
+        sampled.x = std::max(sampled.x, at.x), sampled.y = std::max(sampled.y, at.y), sampled.r = std::max(sampled.r, at.r);
+    }
+    EXPECT_NEAR(sampled.x, exact.x, resolution);
+    EXPECT_NEAR(sampled.y, exact.y, resolution);
+    EXPECT_NEAR(sampled.r, exact.r, resolution);
 }
 
 TEST(HolderChecks, FailWhenTheHolderIsWrong) {
