@@ -5,6 +5,7 @@
 #include <numbers>
 #include <set>
 
+#include "core/parallel.hpp"
 #include "core/units.hpp"
 #include "optics/analysis.hpp"
 #include "optics/exact.hpp"
@@ -92,20 +93,25 @@ std::vector<BeamPath> beam_paths(const optics::Design& design, const std::vector
             }
     }
 
-    const auto aperture_of = [&](const std::string& plane) -> const ClearAperture* {
+    // The clear aperture each surface must pass, if its plane has one.
+    std::vector<const ClearAperture*> surface_aperture(system.surfaces.size(), nullptr);
+    for (std::size_t s = 0; s < system.surfaces.size(); ++s)
         for (const ClearAperture& a : apertures)
-            if (a.plane == plane) return &a;
-        return nullptr;
-    };
+            if (a.plane == plane_of(system.surfaces[s].label)) surface_aperture[s] = &a;
 
-    std::vector<BeamPath> paths;
-    for (const Eigen::Vector3d& d : directions(design, sampling)) {
-        for (const auto& [entry, cell_centre] : entries) {
+    // Each (direction, entry) in its own slot, traced in parallel, kept in this order.
+    const std::vector<Eigen::Vector3d> travel = directions(design, sampling);
+    std::vector<std::optional<BeamPath>> slots(travel.size() * entries.size());
+    parallel_for_chunks(slots.size(), 64, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t k = begin; k < end; ++k) {
+            const Eigen::Vector3d& d = travel[k / entries.size()];
+            const auto& [entry, cell_centre] = entries[k % entries.size()];
             // Start 1 mm in front of the holder, aimed at the entry point.
             const Eigen::Vector3d target(entry.x(), entry.y(), z_entry);
             optics::Ray ray{target - d * ((z_entry - (z_front - 1.0)) / d.z()), d};
             BeamPath path;
             path.cell_centre = cell_centre;
+            path.points.reserve(system.surfaces.size() + 2);
             path.points.push_back(ray.origin + d * ((z_front - ray.origin.z()) / d.z()));
             bool kept = true;
             for (std::size_t s = 0; s < system.surfaces.size() && kept; ++s) {
@@ -115,16 +121,18 @@ std::vector<BeamPath> beam_paths(const optics::Design& design, const std::vector
                     break;
                 }
                 ray = result.ray;
-                const ClearAperture* aperture = aperture_of(plane_of(system.surfaces[s].label));
-                if (aperture && !aperture->contains(ray.origin.head<2>())) kept = false;
+                if (surface_aperture[s] && !surface_aperture[s]->contains(ray.origin.head<2>())) kept = false;
                 path.points.push_back(ray.origin);
             }
             if (!kept) continue;
             if (z_exit && *z_exit > ray.origin.z() && ray.direction.z() > 0)
                 path.points.push_back(ray.origin + ray.direction * ((*z_exit - ray.origin.z()) / ray.direction.z()));
-            paths.push_back(std::move(path));
+            slots[k] = std::move(path);
         }
-    }
+    });
+    std::vector<BeamPath> paths;
+    for (std::optional<BeamPath>& slot : slots)
+        if (slot) paths.push_back(std::move(*slot));
     return paths;
 }
 
