@@ -116,11 +116,29 @@ void print_environment_line(const std::string& file, const patterns::Environment
                 sampling.directions, sampling.in_front);
 }
 
+namespace {
+
+CLI::Validator lower_bound(const char* name, bool allow_zero) {
+    return CLI::Validator(
+        [allow_zero](std::string& text) -> std::string {
+            double value = 0.0;
+            if (!CLI::detail::lexical_cast(text, value)) return "expected a number, got " + text;
+            if (value > 0.0 || (allow_zero && value == 0.0)) return {};
+            return std::string("expected a number ") + (allow_zero ? ">= 0" : "> 0") + ", got " + text;
+        },
+        name);
+}
+
+}  // namespace
+
+CLI::Validator positive_number() { return lower_bound("POSITIVE", false); }
+CLI::Validator non_negative_number() { return lower_bound("NONNEGATIVE", true); }
+
 void add_print_options(CLI::App& command, PrintOptions& options) {
     command.add_option("--printer", options.printer,
                        "Printer profile (tone mapping); default the Epson's at the design's dpi");
     command.add_option("--brightness", options.brightness, "Tone mapping: transmittance = brightness * value / white")
-        ->check(CLI::PositiveNumber);
+        ->check(positive_number());
     command.add_option("--sheets", options.sheets, "Sheets back to back (1 or 2); default the profile's");
 }
 

@@ -1,6 +1,7 @@
 #pragma once
 // Command-line values several commands share, parsed with messages that name the option.
 
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -19,6 +20,16 @@
 #include "relight/scene.hpp"
 
 namespace rfd::cli {
+
+/// A value for a JSON report, null when there is none.
+inline nlohmann::json json_or_null(const std::optional<double>& value) {
+    return value ? nlohmann::json(*value) : nlohmann::json();
+}
+
+/// Checks of a number option whose messages a user can read (CLI::PositiveNumber's names
+/// its range as 0 to 1.8e308 written out in full).
+CLI::Validator positive_number();
+CLI::Validator non_negative_number();
 
 /// "WIDTHxHEIGHT" (each within [1, 16384]); InputError naming --resolution otherwise.
 std::pair<int, int> parse_resolution(const std::string& text);

@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "core/files.hpp"
 #include "core/plot.hpp"
@@ -247,8 +248,7 @@ void add_chart_command(CLI::App& optics_cmd, const GlobalOptions&) {
             write_line_chart(plot, dir / ("paraxial_error_" + sweep.file));
             summary["sweeps"].push_back(
                 {{"direction", sweep.name},
-                 {"half_pixel_error_angle_deg",
-                  chart.half_pixel_angle_deg ? nlohmann::json(*chart.half_pixel_angle_deg) : nlohmann::json()},
+                 {"half_pixel_error_angle_deg", json_or_null(chart.half_pixel_angle_deg)},
                  {"files", "paraxial_error_" + sweep.file + ".{csv,gp,svg,png}"}});
         }
         write_text_file(dir / "chart.json", summary.dump(2) + "\n");

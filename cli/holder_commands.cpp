@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "core/error.hpp"
 #include "core/files.hpp"
@@ -35,6 +36,25 @@ fs::path part_stl(const fs::path& stl, const std::string& part) {
     return out;
 }
 
+// What the generator made, before any STL: the report of `--json` without `--stl`, and the
+// start of the one with it. Keys are those of check_json's entries for the same things.
+nlohmann::json holder_json(const holders::Holder& holder, const std::string& scad) {
+    nlohmann::json parts = nlohmann::json::array();
+    for (const auto& p : holder.parts)
+        parts.push_back({{"name", p.name},
+                         {"copies", p.copies},
+                         {"print", p.print_note},
+                         {"expected_volume_mm3", holder.part_volume(p)}});
+    nlohmann::json seats = nlohmann::json::array();
+    for (const auto& s : holder.seats) seats.push_back({{"plane", s.plane}, {"face", s.what}, {"expected_z_mm", s.z}});
+    return {{"scad", scad},
+            {"title", holder.title},
+            {"notes", holder.notes},
+            {"field_of_view_half_deg", holder.fov_half_deg},
+            {"parts", parts},
+            {"seats", seats}};
+}
+
 nlohmann::json check_json(const holders::HolderCheck& check, const holders::Holder& holder) {
     nlohmann::json parts = nlohmann::json::array();
     for (const auto& p : check.parts)
@@ -55,7 +75,7 @@ nlohmann::json check_json(const holders::HolderCheck& check, const holders::Hold
                          {"face", s.what},
                          {"part", s.part},
                          {"expected_z_mm", s.expected_z},
-                         {"measured_z_mm", s.measured_z ? nlohmann::json(*s.measured_z) : nlohmann::json()}});
+                         {"measured_z_mm", json_or_null(s.measured_z)}});
     return {{"parts", parts},
             {"seats", seats},
             {"beam_clearance",
@@ -90,30 +110,49 @@ void add_coupon_command(CLI::App& holder_cmd, const GlobalOptions& global) {
         std::string out, stl, profile;
         double diameter = 25.0;
         double square = 24.0;
+        bool json = false;
     };
     auto opt = std::make_shared<Options>();
     auto* cmd = holder_cmd.add_subcommand(
         "coupon", "Fit-test coupon: seat rings (round and square) stepping the clearance, to calibrate a printer");
     cmd->add_option("--out", opt->out, "OpenSCAD file to write")->required();
     cmd->add_option("--stl", opt->stl, "Also build the STL here with openscad, and check it");
-    cmd->add_option("--printer-profile", opt->profile, "Printer profile TOML (holders/profiles/)")->check(CLI::ExistingFile);
+    cmd->add_option("--printer-profile", opt->profile, "Printer profile TOML (holders/profiles/)");
     cmd->add_option("--diameter", opt->diameter, "Diameter of the round part to fit, mm")->check(CLI::Range(2.0, 200.0));
     cmd->add_option("--square", opt->square, "Side of the square part (lenslet array) to fit, mm")->check(CLI::Range(2.0, 200.0));
+    cmd->add_flag("--json", opt->json, "Machine-readable report on stdout");
     cmd->callback([opt, &global] {
         const holders::HolderProfile profile = read_profile(opt->profile);
         const holders::Coupon coupon = holders::make_coupon(opt->diameter, opt->square, profile);
         write_text_file(opt->out, coupon.scad);
-        std::printf("wrote %s: %zu seat rings for a %.2f mm round part and a %.2f mm square part, clearance %.2f to %.2f mm\n",
-                    opt->out.c_str(), coupon.clearances.size(), opt->diameter, opt->square, coupon.clearances.front(),
-                    coupon.clearances.back());
-        if (opt->stl.empty()) return;
+        nlohmann::json report = {{"scad", opt->out},
+                                 {"diameter_mm", opt->diameter},
+                                 {"square_mm", opt->square},
+                                 {"clearances_mm", coupon.clearances},
+                                 {"expected_volume_mm3", coupon.volume}};
+        if (!opt->json)
+            std::printf("wrote %s: %zu seat rings for a %.2f mm round part and a %.2f mm square part, clearance %.2f to %.2f mm\n",
+                        opt->out.c_str(), coupon.clearances.size(), opt->diameter, opt->square, coupon.clearances.front(),
+                        coupon.clearances.back());
+        if (opt->stl.empty()) {
+            if (opt->json) std::printf("%s\n", report.dump(2).c_str());
+            return;
+        }
         if (!global.quiet) std::fprintf(stderr, "building %s with openscad...\n", opt->stl.c_str());
         const holders::StlBuild build = holders::build_stl(opt->out, "coupon", opt->stl);
         const holders::MeshCheck mesh = holders::check_stl(opt->stl);
-        std::printf("wrote %s in %.1f s: volume %.1f mm^3 (closed form %.1f)\n", opt->stl.c_str(), build.seconds,
-                    mesh.volume_mm3, coupon.volume);
         auto problems = mesh.problems();
         if (std::abs(mesh.volume_mm3 / coupon.volume - 1) > 0.005) problems.push_back("volume off the closed form");
+        if (opt->json) {
+            report["stl"] = opt->stl;
+            report["seconds"] = build.seconds;
+            report["volume_mm3"] = mesh.volume_mm3;
+            report["problems"] = problems;
+            std::printf("%s\n", report.dump(2).c_str());
+        } else {
+            std::printf("wrote %s in %.1f s: volume %.1f mm^3 (closed form %.1f)\n", opt->stl.c_str(), build.seconds,
+                        mesh.volume_mm3, coupon.volume);
+        }
         if (!problems.empty()) {
             std::string message = opt->stl + ": the coupon failed its checks:";
             for (const auto& p : problems) message += "\n  " + p;
@@ -132,12 +171,12 @@ void add_holder_commands(CLI::App& app, const GlobalOptions& global) {
     };
     auto opt = std::make_shared<Options>();
     auto* cmd = app.add_subcommand("holder", "3D-printable lens holder for a design: OpenSCAD, STLs and their checks");
-    cmd->add_option("DESIGN", opt->design, "Design TOML file")->check(CLI::ExistingFile);
+    cmd->add_option("DESIGN", opt->design, "Design TOML file");
     cmd->add_option("--out", opt->out, "OpenSCAD file to write");
     cmd->add_option("--stl", opt->stl,
                     "Build the STLs with openscad: STEM.stl gives STEM_base.stl and STEM_lid.stl "
                     "(Design IV: STEM_bottom, STEM_middle, STEM_top); then check them");
-    cmd->add_option("--printer-profile", opt->profile, "Printer profile TOML (holders/profiles/)")->check(CLI::ExistingFile);
+    cmd->add_option("--printer-profile", opt->profile, "Printer profile TOML (holders/profiles/)");
     cmd->add_option("--time-limit", opt->time_limit, "Seconds openscad may take per part")->check(CLI::Range(1.0, 36000.0));
     cmd->add_flag("--json", opt->json, "Machine-readable report on stdout");
     add_coupon_command(*cmd, global);
@@ -153,7 +192,10 @@ void add_holder_commands(CLI::App& app, const GlobalOptions& global) {
             std::printf("wrote %s: %s\n", opt->out.c_str(), holder.title.c_str());
             for (const auto& note : holder.notes) std::printf("  %s\n", note.c_str());
         }
-        if (opt->stl.empty()) return;
+        if (opt->stl.empty()) {
+            if (opt->json) std::printf("%s\n", holder_json(holder, opt->out).dump(2).c_str());
+            return;
+        }
         std::vector<std::pair<holders::PrintedPart, fs::path>> stls;
         nlohmann::json builds = nlohmann::json::array();
         for (const auto& part : holder.parts) {
@@ -171,6 +213,8 @@ void add_holder_commands(CLI::App& app, const GlobalOptions& global) {
         if (opt->json) {
             nlohmann::json out = check_json(check, holder);
             out["scad"] = opt->out;
+            out["title"] = holder.title;
+            out["notes"] = holder.notes;
             out["builds"] = builds;
             std::printf("%s\n", out.dump(2).c_str());
         } else {

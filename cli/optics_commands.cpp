@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "optics/exact.hpp"
 #include "optics/lens_file.hpp"
@@ -94,7 +95,8 @@ void add_optics_commands(CLI::App& app, const GlobalOptions& global) {
         cmd->add_option("--angle", opt->angle_deg, "Field angle in degrees (in the y-z plane)")
             ->check(CLI::Range(-89.9, 89.9));
         cmd->add_option("--pupil", opt->pupil_mm,
-                        "Entrance pupil semi-diameter in mm (default: first surface's)");
+                        "Entrance pupil semi-diameter in mm (default: first surface's)")
+            ->check(positive_number());
         cmd->add_option("--rays", opt->rays, "Rays across the pupil (a square grid clipped to a disc)")
             ->check(CLI::Range(1, 10000000));
         cmd->add_flag("--json", opt->json, "Machine-readable output");
@@ -108,10 +110,10 @@ void add_optics_commands(CLI::App& app, const GlobalOptions& global) {
                     {"pupil_semi_diameter_mm", report.pupil_semi_diameter},
                     {"rays_traced", report.rays_traced},
                     {"focal_plane_z_mm", report.focal_plane_z},
-                    {"chief_height_exact_mm", report.chief_height_exact},
+                    {"chief_height_exact_mm", json_or_null(report.chief_height_exact)},
                     {"chief_height_paraxial_mm", report.chief_height_paraxial},
                     {"chief_status", optics::to_string(report.chief_status)},
-                    {"rms_spot_radius_mm", report.rms_spot_radius}};
+                    {"rms_spot_radius_mm", json_or_null(report.rms_spot_radius)}};
                 for (int s = 0; s < optics::kRayStatusCount; ++s)
                     out["status_counts"][std::string(optics::to_string(static_cast<optics::RayStatus>(s)))] =
                         report.status_counts[static_cast<std::size_t>(s)];
@@ -123,12 +125,20 @@ void add_optics_commands(CLI::App& app, const GlobalOptions& global) {
                         system.name.c_str(), angle_deg, report.pupil_semi_diameter,
                         report.rays_traced);
             std::printf("  paraxial focal plane       z = %.6f mm\n", report.focal_plane_z);
-            std::printf("  chief ray height, exact    %.6f mm\n", report.chief_height_exact);
+            if (report.chief_height_exact)
+                std::printf("  chief ray height, exact    %.6f mm\n", *report.chief_height_exact);
+            else
+                std::printf("  chief ray height, exact    none: the chief ray is %s\n",
+                            std::string(optics::to_string(report.chief_status)).c_str());
             std::printf("  chief ray height, paraxial %.6f mm\n", report.chief_height_paraxial);
-            std::printf("  difference                 %.3f um\n",
-                        1000.0 * (report.chief_height_exact - report.chief_height_paraxial));
-            std::printf("  RMS spot radius            %.3f um (about the centroid)\n",
-                        1000.0 * report.rms_spot_radius);
+            if (report.chief_height_exact)
+                std::printf("  difference                 %.3f um\n",
+                            1000.0 * (*report.chief_height_exact - report.chief_height_paraxial));
+            if (report.rms_spot_radius)
+                std::printf("  RMS spot radius            %.3f um (about the centroid)\n",
+                            1000.0 * *report.rms_spot_radius);
+            else
+                std::printf("  RMS spot radius            none: no ray reached the focal plane\n");
             std::printf("  rays by status:\n");
             for (int s = 0; s < optics::kRayStatusCount; ++s)
                 std::printf("    %-36s %zu\n",

@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "core/error.hpp"
 #include "core/units.hpp"
@@ -49,7 +50,7 @@ void add_pattern_angular_command(CLI::App& group, const GlobalOptions&) {
     cmd->add_option("--procedural", opt->procedural, "Instead of SOURCE: letters (Design III, figure 8.13) or diamonds (Design IV, figure 8.15)")
         ->check(CLI::IsMember({"letters", "diamonds"}));
     cmd->add_option("--text", opt->text, "Characters of the letters field, one per incident bin");
-    cmd->add_option("--dpi", opt->dpi, "Print resolution on both axes (default: the design's printer)")->check(CLI::PositiveNumber);
+    cmd->add_option("--dpi", opt->dpi, "Print resolution on both axes (default: the design's printer)")->check(positive_number());
     cmd->add_option("--bin-samples", opt->bin_samples, "Incident directions per side of each bin")->check(CLI::Range(1, 16));
     cmd->add_option("--table", opt->table, "Optics table nodes per side of a meso cell")->check(CLI::Range(3, 4097));
     cmd->add_option("--region", opt->region, "Fraction of each view image (about its centre) the macro grid covers")

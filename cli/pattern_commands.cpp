@@ -145,6 +145,7 @@ void add_field_command(CLI::App& pattern, const GlobalOptions& global) {
         std::string kind, text = "SIG08", out, resolution = "64x64";
         double spread = 10.0;
         int steps = 5;
+        bool json = false;
     };
     auto opt = std::make_shared<Options>();
     cmd->add_option("KIND", opt->kind, "letters, bars or diamonds")->required();
@@ -153,6 +154,7 @@ void add_field_command(CLI::App& pattern, const GlobalOptions& global) {
     cmd->add_option("--steps", opt->steps, "diamonds: light directions per side of the grid");
     cmd->add_option("--resolution", opt->resolution, "Image size WIDTHxHEIGHT");
     cmd->add_option("--out", opt->out, "Output field folder")->required();
+    cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
     cmd->callback([opt, &global] {
         (void)global;
         patterns::ProceduralOptions options;
@@ -167,8 +169,17 @@ void add_field_command(CLI::App& pattern, const GlobalOptions& global) {
         const relight::ReflectanceField field = patterns::procedural_field(options);
         ensure_directory(opt->out);
         relight::write_field(opt->out, field, opt->kind);
-        std::printf("wrote %s field: %zu light directions of %d x %d into %s\n", opt->kind.c_str(), field.size(),
-                    options.width, options.height, opt->out.c_str());
+        if (opt->json) {
+            const nlohmann::json summary = {{"out", opt->out},
+                                            {"kind", opt->kind},
+                                            {"width", options.width},
+                                            {"height", options.height},
+                                            {"light_directions", field.size()}};
+            std::printf("%s\n", summary.dump(2).c_str());
+        } else {
+            std::printf("wrote %s field: %zu light directions of %d x %d into %s\n", opt->kind.c_str(), field.size(),
+                        options.width, options.height, opt->out.c_str());
+        }
     });
 }
 

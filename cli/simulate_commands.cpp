@@ -59,7 +59,7 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
         ->check(CLI::IsMember({"paraxial", "exact", "auto"}));
     cmd->add_option("--tolerance", opt->tolerance_dots,
                     "auto: largest paraxial error on the pattern plane, in print dots (default 0.25)")
-        ->check(CLI::PositiveNumber);
+        ->check(positive_number());
     add_print_options(*cmd, opt->print);
     cmd->add_option("--rays", opt->rays, "Rays per side of each lenslet's grid (default 8)")->check(CLI::Range(1, 256));
     cmd->add_option("--pixels-per-lenslet", opt->pixels_per_lenslet, "Output pixels per lenslet pitch (default 8)")
@@ -76,7 +76,7 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
                     "Contrast with light on the front too: front illuminance / back irradiance ratios "
                     "(default 0,0.1,0.3,1; 0 is a dark room)")
         ->delimiter(',')
-        ->check(CLI::NonNegativeNumber);
+        ->check(non_negative_number());
     cmd->add_option("--diffuser-transmittance", opt->diffuser.transmittance,
                     "Fraction of the light from behind the diffuser passes to the observer (default 0.47, thesis "
                     "figure 8.7)")

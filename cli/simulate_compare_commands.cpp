@@ -103,7 +103,7 @@ void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& globa
         ->check(CLI::IsMember({"paraxial", "exact", "auto"}));
     cmd->add_option("--tolerance", opt->tolerance_dots,
                     "auto: largest paraxial error on the pattern plane, in print dots (default 0.25)")
-        ->check(CLI::PositiveNumber);
+        ->check(positive_number());
     cmd->add_option("--rays", opt->rays,
                     "Rays per side of each lenslet's grid (default 32 where macro-pixel cores are compared, "
                     "Design II; 8 otherwise)")
@@ -116,7 +116,7 @@ void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& globa
                     "Pixels per lenslet in the side-by-side PNGs (default: about 240 pixels per panel)")
         ->check(CLI::Range(0, 256));
     cmd->add_option("--error-gain", opt->error_gain, "Error panel of the PNGs: |error| times this (default 4)")
-        ->check(CLI::PositiveNumber);
+        ->check(positive_number());
     cmd->add_flag("--chart-accuracy", opt->chart_accuracy,
                   "Also the speed-versus-accuracy chart: each of --models at each of --accuracy-rays against a "
                   "converged exact prediction (--reference-rays), simulation time measured in the same run");

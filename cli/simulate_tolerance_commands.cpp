@@ -118,7 +118,7 @@ void add_simulate_tolerance_command(CLI::App& simulate, const GlobalOptions& glo
         ->check(CLI::IsMember({"paraxial", "exact", "auto"}));
     cmd->add_option("--tolerance", opt->tolerance_dots,
                     "auto: largest paraxial error on the pattern plane, in print dots (default 0.25)")
-        ->check(CLI::PositiveNumber);
+        ->check(positive_number());
     add_print_options(*cmd, opt->print);
     cmd->add_option("--rays", opt->rays, "Rays per side of each lenslet's grid (default 8)")->check(CLI::Range(1, 256));
     cmd->add_flag("--json", opt->json, "Machine-readable summary");

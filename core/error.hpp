@@ -51,6 +51,11 @@ public:
     int exit_code() const override { return 4; }
 };
 
+/// Throws an error of the same kind as `cause`, so with the same exit code, at `where` with
+/// `message`: a file named inside another file that cannot be read stays an I/O error
+/// (exit 3), reported at the line that names it.
+[[noreturn]] void rethrow_at(const Error& cause, const SourceLocation& where, const std::string& message);
+
 [[noreturn]] void check_failed(const char* condition, const char* file, int line,
                                const std::string& message);
 

@@ -54,9 +54,7 @@ SpotReport spot_report(const SequentialSystem& system, double field_angle_deg,
 
     const TraceResult chief = trace(system, ray_through(0.0, 0.0));
     report.chief_status = chief.status;
-    report.chief_height_exact = chief.status == RayStatus::Ok
-                                    ? point_at_z(chief.ray, report.focal_plane_z).y()
-                                    : std::nan("");
+    if (chief.status == RayStatus::Ok) report.chief_height_exact = point_at_z(chief.ray, report.focal_plane_z).y();
     const ParaxialResult paraxial =
         trace_paraxial(system, {0.0, 0.0, 0.0, std::tan(theta)}, z0, 0, last);
     report.chief_height_paraxial =
@@ -68,7 +66,7 @@ SpotReport spot_report(const SequentialSystem& system, double field_angle_deg,
         for (int ix = 0; ix < side; ++ix) {
             const double px = side == 1 ? 0.0 : pupil_semi_diameter * (2.0 * ix / (side - 1) - 1.0);
             const double py = side == 1 ? 0.0 : pupil_semi_diameter * (2.0 * iy / (side - 1) - 1.0);
-            if (px * px + py * py > pupil_semi_diameter * pupil_semi_diameter) continue;
+            if (std::hypot(px, py) > pupil_semi_diameter * (1.0 + kApertureTolerance)) continue;
             const TraceResult result = trace(system, ray_through(px, py));
             ++report.rays_traced;
             ++report.status_counts[static_cast<std::size_t>(result.status)];
@@ -76,9 +74,11 @@ SpotReport spot_report(const SequentialSystem& system, double field_angle_deg,
             landed.push_back(point_at_z(result.ray, report.focal_plane_z).head<2>());
         }
     }
-    const SpotStatistics spot = spot_statistics(landed);
-    report.centroid_y = spot.centroid.y();
-    report.rms_spot_radius = spot.rms_radius;
+    if (!landed.empty()) {
+        const SpotStatistics spot = spot_statistics(landed);
+        report.centroid_y = spot.centroid.y();
+        report.rms_spot_radius = spot.rms_radius;
+    }
     return report;
 }
 

@@ -5,6 +5,7 @@
 #include <array>
 #include <cstddef>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #include "optics/exact.hpp"
@@ -17,16 +18,19 @@ struct SpotReport {
     double pupil_semi_diameter = 0.0;  ///< mm, at the first vertex plane
     std::size_t rays_traced = 0;
     double focal_plane_z = 0.0;        ///< paraxial rear focal plane, mm
-    double chief_height_exact = 0.0;   ///< y of the exact chief ray in that plane, mm
+    /// y of the exact chief ray in that plane, mm; none when the chief ray does not get there.
+    std::optional<double> chief_height_exact;
     double chief_height_paraxial = 0.0;
     RayStatus chief_status = RayStatus::Ok;
-    double rms_spot_radius = 0.0;      ///< mm, about the centroid of rays that arrived
-    double centroid_y = 0.0;           ///< mm
+    /// mm, about the centroid of the rays that arrived; none when no ray arrived.
+    std::optional<double> rms_spot_radius;
+    std::optional<double> centroid_y;  ///< mm
     std::array<std::size_t, kRayStatusCount> status_counts{};
 };
 
-/// Traces a square grid of about `rays` rays clipped to the pupil disc, all at the field
-/// angle (in the y-z plane), from the first vertex plane. `pupil_semi_diameter` <= 0 takes
+/// Traces a square grid of about `rays` rays clipped to the pupil disc (grid points on the
+/// rim, within kApertureTolerance, included, so the grid keeps its symmetry), all at the
+/// field angle (in the y-z plane), from the first vertex plane. `pupil_semi_diameter` <= 0 takes
 /// the first surface's clear aperture. Throws InputError for an afocal system or a first
 /// surface without a circular aperture when no pupil is given.
 SpotReport spot_report(const SequentialSystem& system, double field_angle_deg,

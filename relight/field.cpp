@@ -130,8 +130,7 @@ ReflectanceField read_field(const std::filesystem::path& field_path) {
         try {
             image = read_image(image_path);
         } catch (const Error& error) {
-            throw InputError(at(lp, entry.line), std::string("image '") + entry.file +
-                                                     "': " + error.what());
+            rethrow_at(error, at(lp, entry.line), std::string("image '") + entry.file + "': " + error.what());
         }
         if (!field.images.empty() && !image.same_shape(field.images.front())) {
             const Image& first = field.images.front();

@@ -74,7 +74,7 @@ Albedo read_albedo(ConfigTable& table, const std::filesystem::path& base_dir,
         try {
             image = read_image(path);
         } catch (const Error& error) {
-            table.fail("texture", std::string("cannot read texture: ") + error.what());
+            rethrow_at(error, table.location("texture"), std::string("cannot read texture: ") + error.what());
         }
         for (const float v : image.samples())
             if (v > 1.0f)
@@ -206,7 +206,7 @@ SceneObject read_object(ConfigTable& table, const std::map<std::string, std::siz
         try {
             mesh = read_mesh(resolve(base_dir, file));
         } catch (const Error& error) {
-            table.fail("file", std::string("mesh '") + file + "': " + error.what());
+            rethrow_at(error, table.location("file"), std::string("mesh '") + file + "': " + error.what());
         }
         const double scale = table.has("scale") ? table.positive("scale") : 1.0;
         const bool smooth = table.optional_boolean("smooth").value_or(true);

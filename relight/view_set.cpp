@@ -121,7 +121,7 @@ ViewSet read_view_set(const std::filesystem::path& set_path) {
     for (const ViewEntry& view : set.views) {
         const std::filesystem::path folder = base / view.folder;
         if (!std::filesystem::is_directory(folder))
-            throw InputError(at(set.file, view.line), "view folder '" + folder.string() + "' does not exist");
+            throw IoError(at(set.file, view.line), "view folder '" + folder.string() + "' does not exist");
         ReflectanceField field = read_field(folder);
         if (field.size() == 0)
             throw InputError(at(set.file, view.line), "view '" + view.folder + "' has no images");

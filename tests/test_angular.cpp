@@ -356,11 +356,18 @@ TEST(ViewSet, BadViewFilesAreInputErrorsWithFileAndLine) {
     };
     EXPECT_THAT(message("3\na 0 0 1\na 0 0.1 1\n"), HasSubstr("views.txt:1: the file declares 3 view(s) but lists 2"));
     EXPECT_THAT(message("1\na 0 0 x\n"), HasSubstr("views.txt:2: 'x' is not a number"));
-    EXPECT_THAT(message("# c\n1\nmissing 0 0 1\n"), HasSubstr("views.txt:3: view folder"));
     EXPECT_THAT(message("2\na 0 0 1\nb 0.1 0 1\n"), HasSubstr("views.txt:3: view 'b' has images of 10 x 14 x 3 but view 'a' has 14 x 14 x 3"));
     EXPECT_THAT(message("1\na 0 0 -1\n"), HasSubstr("z > 0"));
     EXPECT_THAT(message("1\na 0 0 1 1 0 0 0 1 0 0 0 2\n"), HasSubstr("not a rotation"));
     EXPECT_THAT(message("1\na 0 0 1 5\n"), HasSubstr("got 4 number(s)"));
+    // A folder the file names that is not there is an I/O error, at the line that names it.
+    write_lines(dir.path() / "views.txt", "# c\n1\nmissing 0 0 1\n");
+    try {
+        relight::read_view_set(dir.path());
+        ADD_FAILURE() << "a missing view folder was accepted";
+    } catch (const IoError& error) {
+        EXPECT_THAT(error.what(), HasSubstr("views.txt:3: view folder"));
+    }
     // Two views cannot be interpolated.
     write_lines(dir.path() / "views.txt", "2\na 0 0 1\na 0.1 0 1\n");
     EXPECT_THROW(ViewSetField(relight::read_view_set(dir.path())), InputError);

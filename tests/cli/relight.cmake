@@ -2,7 +2,7 @@
 #  - render: several lights add up, two runs give byte-identical images, an env map works;
 #  - eval: a field against itself has no error; a sparse one has some, and --out writes the
 #    CSV and the polar map with nothing temporary left; an env map of the wrong shape is an
-#    input error naming the file.
+#    input error naming the file; an image the .lp lists that is not there is an I/O error.
 file(REMOVE_RECURSE ${OUT})
 function(run_rfd expected_code)
   execute_process(COMMAND ${RFD} --quiet ${ARGN} RESULT_VARIABLE code OUTPUT_VARIABLE stdout ERROR_VARIABLE stderr)
@@ -38,6 +38,13 @@ endif()
 run_rfd(2 relight render ${OUT}/dense --envmap ${OUT}/odd/field_0000.exr --out ${OUT}/odd.exr)
 if(NOT stderr MATCHES "odd/field_0000.exr: .*twice as wide as high" OR EXISTS ${OUT}/odd.exr)
   message(FATAL_ERROR "wrong env map shape: ${stderr}")
+endif()
+# An image the .lp lists but that is not there: an I/O error (exit 3) at the .lp's line.
+file(COPY ${OUT}/sparse/ DESTINATION ${OUT}/holed)
+file(REMOVE ${OUT}/holed/field_0002.exr)
+run_rfd(3 relight render ${OUT}/holed --light 30,0 --out ${OUT}/holed.exr)
+if(NOT stderr MATCHES "holed/[^ ]*\\.lp:[0-9]+: image 'field_0002\\.exr': .*cannot open" OR EXISTS ${OUT}/holed.exr)
+  message(FATAL_ERROR "field with a missing image: ${stderr}")
 endif()
 run_rfd(2 relight eval ${OUT}/sparse --reference ${OUT}/odd)
 if(NOT stderr MATCHES "30x20x3")
