@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -31,10 +32,17 @@ nlohmann::json to_json(const optics::CardinalPoints& p) {
             {"abcd", {{p.matrix.a, p.matrix.b}, {p.matrix.c, p.matrix.d}}}};
 }
 
+std::optional<double> image_plane_z(const optics::SequentialSystem& system) {
+    if (optics::last_lens_surface(system) + 1 == system.surfaces.size()) return std::nullopt;
+    return system.surfaces.back().z;
+}
+
 void print_system(const optics::SequentialSystem& system, const optics::CardinalPoints& p) {
     std::printf("%s\n", system.name.c_str());
     std::printf("  surfaces                 %zu (first vertex z = %.4f mm, last z = %.4f mm)\n",
-                system.surfaces.size(), p.first_vertex_z, p.last_vertex_z);
+                optics::last_lens_surface(system) + 1, p.first_vertex_z, p.last_vertex_z);
+    if (const auto image = image_plane_z(system))
+        std::printf("  image plane              z = %.4f mm\n", *image);
     if (p.afocal) {
         std::printf("  afocal system: no finite focal length\n");
     } else {
@@ -70,10 +78,11 @@ void add_optics_commands(CLI::App& app, const GlobalOptions& global) {
         cmd->add_flag("--json", opt->json, "Machine-readable output");
         cmd->callback([opt] {
             const auto system = optics::load_lens_system(opt->file);
-            const auto points = optics::cardinal_points(system);
+            const auto points = optics::cardinal_points(system, 0, optics::last_lens_surface(system));
             if (opt->json) {
                 nlohmann::json out = to_json(points);
                 out["name"] = system.name;
+                out["image_plane_z_mm"] = json_or_null(image_plane_z(system));
                 std::printf("%s\n", out.dump(2).c_str());
             } else {
                 print_system(system, points);

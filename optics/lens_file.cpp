@@ -46,7 +46,7 @@ SequentialSystem build(ConfigTable& root) {
         system.surfaces.push_back(surface);
         if (thickness) z += *thickness;
         if (last && thickness)
-            system.surfaces.push_back(Surface{Flat{}, Unbounded{}, z, surface.index_after, "image"});
+            system.surfaces.push_back(Surface{Flat{}, Unbounded{}, z, surface.index_after, std::string(kImagePlaneLabel)});
     }
     // Neighbouring surfaces must not cut through each other inside their apertures.
     for (std::size_t s = 1; s < system.surfaces.size(); ++s) {
@@ -106,6 +106,12 @@ SequentialSystem load_lens_system(const std::filesystem::path& path) {
 SequentialSystem parse_lens_system(std::string_view toml_text, const std::string& name) {
     auto root = ConfigTable::parse_string(toml_text, name);
     return build(root);
+}
+
+std::size_t last_lens_surface(const SequentialSystem& system) {
+    RFD_CHECK(!system.surfaces.empty());
+    const std::size_t last = system.surfaces.size() - 1;
+    return last > 0 && system.surfaces[last].label == kImagePlaneLabel ? last - 1 : last;
 }
 
 }  // namespace rfd::optics

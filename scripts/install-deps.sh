@@ -5,7 +5,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build pkg-config
-  libeigen3-dev libglm-dev libcgal-dev libtbb-dev
+  libeigen3-dev libcgal-dev libtbb-dev
   libopenimageio-dev openimageio-tools libcairo2-dev
   # The font of procedural letter fields and sheet labels (patterns/glyphs.cpp).
   fonts-dejavu-core

@@ -1,6 +1,7 @@
 // Images and reflectance fields on disk: round trips, colour decoding, and a distinct
 // message for every way a light file can be malformed.
 
+#include <cmath>
 #include <fstream>
 #include <random>
 
@@ -60,7 +61,10 @@ TEST(ImageIo, PngIsSrgbEncodedAndDecodedBack) {
 
 TEST(ImageIo, SrgbCurveIsContinuousAndInvertible) {
     for (float v = 0.0f; v <= 1.0f; v += 0.001f) EXPECT_NEAR(srgb_to_linear(linear_to_srgb(v)), v, 1e-6f);
-    EXPECT_NEAR(srgb_to_linear(0.04045f), linear_to_srgb(0.0031308f) / 12.92f * 0.0f + 0.0031308f, 1e-6f);
+    // Where the linear segment meets the power curve (IEC 61966-2-1): both pieces agree.
+    EXPECT_NEAR(srgb_to_linear(0.04045f), 0.04045 / 12.92, 1e-7);
+    EXPECT_NEAR(srgb_to_linear(0.04045f), std::pow((0.04045 + 0.055) / 1.055, 2.4), 1e-6);
+    EXPECT_NEAR(linear_to_srgb(0.0031308f), 0.04045, 1e-5);
 }
 
 TEST(ImageIo, RefusesToWriteNaN) {

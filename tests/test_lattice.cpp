@@ -76,9 +76,8 @@ TEST(Lattice, CentresAverageToZero) {
 TEST(Lattice, HexagonalGeometry) {
     const Lattice hex = Lattice::hexagonal(2.358, 10, 10);
     EXPECT_NEAR(hex.density_per_mm2(), 2.0 / (std::sqrt(3.0) * 2.358 * 2.358), 1e-12);
-    // The thesis's array: 20.77 lenses per square centimetre.
-    const double pitch = std::sqrt(2.0 / (std::sqrt(3.0) * 0.2077));
-    EXPECT_NEAR(pitch, 2.3578, 1e-4);
+    // The thesis's array, 20.77 lenses per square centimetre, has a 2.3578 mm pitch.
+    EXPECT_NEAR(Lattice::hexagonal(2.3578, 10, 10).density_per_mm2() * 100.0, 20.77, 0.005);
     EXPECT_NEAR(hex.boundary_distance({1, 0}), 2.358 / 2, 1e-12);
     EXPECT_NEAR(hex.boundary_distance({0, 1}), 2.358 / std::sqrt(3.0), 1e-12);
     EXPECT_NEAR(hex.circumradius(), 2.358 / std::sqrt(3.0), 1e-12);

@@ -154,5 +154,28 @@ TEST(LensFile, BundledLensesHaveTheirClosedFormFocalLengths) {
     EXPECT_NEAR(pair.efl / (rb / (nb - 1)), 1 / (2 - (2 * tb / nb) * p1), 1e-12);
 }
 
+TEST(LensFile, BackFocalLengthIsFromTheLensNotTheImagePlane) {
+    // A plano-convex lens, curved side first: f = R / (n - 1), and the rear focal point lies
+    // f - t / n behind its flat back. A last thickness adds an image plane 40 mm behind the
+    // lens; the lens and its back focal length stay the same.
+    const double r = 25.84, t = 5.3, n = 1.5;
+    const auto text = [&](const std::string& last_thickness) {
+        return "name = \"pcx\"\n[[surface]]\nradius_mm = " + std::to_string(r) + "\nthickness_mm = " +
+               std::to_string(t) + "\nindex = 1.5\nsemi_diameter_mm = 12.5\n[[surface]]\nradius = \"flat\"\n" +
+               "material = \"air\"\nsemi_diameter_mm = 12.5\n" + last_thickness;
+    };
+    const SequentialSystem bare = parse_lens_system(text(""), "bare.toml");
+    const SequentialSystem imaged = parse_lens_system(text("thickness_mm = 40\n"), "imaged.toml");
+    ASSERT_EQ(imaged.surfaces.size(), 3u);
+    EXPECT_EQ(last_lens_surface(bare), 1u);
+    EXPECT_EQ(last_lens_surface(imaged), 1u);
+    const double f = r / (n - 1), bfl = f - t / n;
+    for (const SequentialSystem* system : {&bare, &imaged}) {
+        const CardinalPoints points = cardinal_points(*system, 0, last_lens_surface(*system));
+        EXPECT_NEAR(points.bfl, bfl, 1e-9);
+        EXPECT_NEAR(points.last_vertex_z, t, 1e-12);
+    }
+}
+
 }  // namespace
 }  // namespace rfd::optics

@@ -499,7 +499,11 @@ TEST(Upsample, BroadHighlightFollowsItsSamples) {
     const Errors with = score(broad_dome_scene, 256, 1), without = score(broad_dome_scene, 256, 1, no_lobes),
                  wide = score(broad_dome_scene, 256, 1, wide_spread);
     EXPECT_LT(with.upsampled, 0.8 * without.upsampled) << "lobes " << with.upsampled << ", without " << without.upsampled;
-    EXPECT_LT(with.upsampled, 1.3 * with.blended) << "lobes " << with.upsampled << ", blending " << with.blended;
+    // A regression guard, not a property: with the lobes, upsampling stays a little behind
+    // blending here (measured 1.19x); reading off the lobe instead was 1.95x, and the guard
+    // fails well before a return to that.
+    const double regression_guard = 1.3;
+    EXPECT_LT(with.upsampled, regression_guard * with.blended) << "lobes " << with.upsampled << ", blending " << with.blended;
     EXPECT_LT(wide.upsampled, 0.85 * wide.blended) << "spread 40: " << wide.upsampled << ", blending " << wide.blended;
 }
 
@@ -567,7 +571,10 @@ TEST(Upsample, GlintsOnThinMirrorsUnderWideLights) {
     ReflectanceField input = render(fibonacci_hemisphere(100), wires);
     input.kernel_radii.assign(input.size(), radius);
     const Errors e = score(input, wires, 1);
-    EXPECT_LT(e.upsampled, 1.8 * e.blended) << "upsampled " << e.upsampled << ", blended " << e.blended;
+    // A regression guard, not a property: upsampling stays behind blending here (measured
+    // 1.51x); the guard fails well before a return to the smeared warping (2.66x).
+    const double regression_guard = 1.8;
+    EXPECT_LT(e.upsampled, regression_guard * e.blended) << "upsampled " << e.upsampled << ", blended " << e.blended;
 }
 
 TEST(Upsample, NoTextureIsLinearBlending) {
