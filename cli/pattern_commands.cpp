@@ -52,7 +52,7 @@ void add_encode_command(CLI::App& pattern, const GlobalOptions& global) {
         std::string design, field, out, model = "auto", interpolation = "delaunay", fit = "cover", dpi,
             compression = "rle", preview;
         double tilt = 0.0, turn = 0.0, angle_scale = 1.0, margin = 0.0;
-        bool allow_partial = false, json = false;
+        bool allow_partial = false, json = false, single_float = false;
     };
     auto opt = std::make_shared<Options>();
     cmd->add_option("DESIGN", opt->design, "Design file (designs/design1.toml, design2.toml)")->required();
@@ -71,6 +71,7 @@ void add_encode_command(CLI::App& pattern, const GlobalOptions& global) {
     cmd->add_option("--compression", opt->compression, "EXR compression: rle (fast, default), zips (smaller), none")
         ->check(CLI::IsMember({"none", "rle", "zips", "zip", "piz"}));
     cmd->add_option("--preview", opt->preview, "Also write a screen preview (PNG, 1600 px), scaled to the white");
+    cmd->add_flag("--single-float", opt->single_float, "EXR: 32-bit floats instead of half floats (for values above 65504)");
     cmd->add_flag("--allow-partial", opt->allow_partial, "Encode even where the field does not cover the display's range");
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
     cmd->callback([opt, &global] {
@@ -94,6 +95,7 @@ void add_encode_command(CLI::App& pattern, const GlobalOptions& global) {
         const auto prepared = std::chrono::steady_clock::now();
         patterns::WriteOptions write_options;
         write_options.exr_compression = opt->compression;
+        write_options.half_float = !opt->single_float;
         patterns::write_pattern(opt->out, encoder, encoder.attributes(), write_options);
         const auto done = std::chrono::steady_clock::now();
         if (!opt->preview.empty()) patterns::write_preview(opt->out, opt->preview, 1600);

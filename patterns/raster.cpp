@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdio>
 #include <cstdlib>
 #include <array>
 #include <cmath>
@@ -10,6 +11,7 @@
 #include <future>
 #include <limits>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "core/error.hpp"
@@ -53,6 +55,18 @@ int first_non_finite(std::span<const float> row, int channels) {
     if (all_finite) return -1;
     for (std::size_t i = 0; i < row.size(); ++i)
         if (!std::isfinite(row[i])) return static_cast<int>(i / static_cast<std::size_t>(channels));
+    return -1;
+}
+
+// The first sample of `bits` that is an infinite (or NaN) half float, or -1: a finite value
+// too large for a half (65520 and up) becomes infinite in conversion.
+long first_infinite_half(std::span<const std::uint16_t> bits) {
+    constexpr std::uint16_t exponent = 0x7C00;
+    bool all_finite = true;
+    for (const std::uint16_t b : bits) all_finite &= (b & exponent) != exponent;
+    if (all_finite) return -1;
+    for (std::size_t i = 0; i < bits.size(); ++i)
+        if ((bits[i] & exponent) == exponent) return static_cast<long>(i);
     return -1;
 }
 
@@ -127,6 +141,8 @@ void write_pattern(const std::filesystem::path& path, const PatternSource& sourc
     std::array<std::vector<std::byte>, 2> strips;
     for (auto& strip : strips) strip.resize(row_bytes * static_cast<std::size_t>(strip_rows));
     std::vector<int> first_bad(static_cast<std::size_t>(strip_rows));
+    // Per row of a strip: the first sample too large for a half float, and its value.
+    std::vector<std::pair<long, float>> too_large(static_cast<std::size_t>(strip_rows));
     std::future<void> writing;
     Progress progress(options.progress_label, static_cast<std::size_t>(g.height));
     auto finish_writing = [&] {
@@ -145,17 +161,33 @@ void write_pattern(const std::filesystem::path& path, const PatternSource& sourc
                     source.render_row(y0 + static_cast<int>(r), row);
                     first_bad[r] = first_non_finite(row, channels);
                     if (first_bad[r] >= 0) continue;
-                    if (half)
-                        floats_to_half(row, std::span<std::uint16_t>(reinterpret_cast<std::uint16_t*>(destination), row_floats));
-                    else if (srgb)
+                    if (half) {
+                        const std::span<std::uint16_t> bits(reinterpret_cast<std::uint16_t*>(destination), row_floats);
+                        floats_to_half(row, bits);
+                        const long sample = first_infinite_half(bits);
+                        too_large[r] = {sample, sample >= 0 ? row[static_cast<std::size_t>(sample)] : 0.0f};
+                    } else if (srgb) {
                         for (float& v : row) v = linear_to_srgb(std::clamp(v, 0.0f, 1.0f));
+                    }
                 }
             });
-            for (int r = 0; r < y1 - y0; ++r)
-                if (first_bad[static_cast<std::size_t>(r)] >= 0)
+            for (int r = 0; r < y1 - y0; ++r) {
+                const std::size_t row = static_cast<std::size_t>(r);
+                if (first_bad[row] >= 0)
                     throw InputError(SourceLocation{path.string()},
-                                     "refusing to write dot (" + std::to_string(first_bad[static_cast<std::size_t>(r)]) +
-                                         ", " + std::to_string(y0 + r) + "): the pattern value is not a finite number");
+                                     "refusing to write dot (" + std::to_string(first_bad[row]) + ", " +
+                                         std::to_string(y0 + r) + "): the pattern value is not a finite number");
+                if (half && too_large[row].first >= 0) {
+                    char value[32];
+                    std::snprintf(value, sizeof value, "%g", static_cast<double>(too_large[row].second));
+                    throw InputError(SourceLocation{path.string()},
+                                     "refusing to write dot (" + std::to_string(too_large[row].first / channels) + ", " +
+                                         std::to_string(y0 + r) + "): the pattern value " +
+                                         value +
+                                         " is beyond the largest half float, 65504 (a field in camera units?): "
+                                         "scale the field down, or write 32-bit floats (--single-float)");
+                }
+            }
             finish_writing();  // the other strip's write, before this one starts
             writing = std::async(std::launch::async, [&output, &strip, strip_type, y0, y1] {
                 output.write_rows(y0, y1, strip_type, strip.data());

@@ -27,20 +27,23 @@ float expected_value(int x, int y, int c) { return static_cast<float>((x * 7 + y
 
 class Ramp final : public PatternSource {
 public:
-    Ramp(PatternGeometry g, int channels, int bad_row = -1) : g_(g), channels_(channels), bad_row_(bad_row) {}
+    // Row `bad_row`'s dot 5 has `bad_value` in its first channel.
+    Ramp(PatternGeometry g, int channels, int bad_row = -1, float bad_value = std::nanf(""))
+        : g_(g), channels_(channels), bad_row_(bad_row), bad_value_(bad_value) {}
     const PatternGeometry& geometry() const override { return g_; }
     int channels() const override { return channels_; }
     void render_row(int py, std::span<float> out) const override {
         for (int x = 0; x < g_.width; ++x)
             for (int c = 0; c < channels_; ++c)
                 out[static_cast<std::size_t>(x * channels_ + c)] = expected_value(x, py, c);
-        if (py == bad_row_) out[5 * static_cast<std::size_t>(channels_)] = std::nanf("");
+        if (py == bad_row_) out[5 * static_cast<std::size_t>(channels_)] = bad_value_;
     }
 
 private:
     PatternGeometry g_;
     int channels_;
     int bad_row_;
+    float bad_value_;
 };
 
 PatternGeometry small_geometry() {
@@ -120,6 +123,30 @@ TEST(WritePattern, NonFiniteValueLeavesNoFile) {
     EXPECT_THAT(error_of([&] { write_pattern(path, ramp, {}); }),
                 HasSubstr("dot (5, 17): the pattern value is not a finite number"));
     EXPECT_TRUE(std::filesystem::is_empty(dir.path()));
+}
+
+TEST(WritePattern, ValuesBeyondHalfFloatAreRefusedOrWrittenAsFloat) {
+    // Half floats end at 65504; from 65520 on a value rounds to infinity. A field in camera
+    // units reaches that, and an infinite dot must not be written as if it were a pattern.
+    TempDir dir;
+    EXPECT_THAT(error_of([&] { write_pattern(dir / "big.exr", Ramp(small_geometry(), 3, 17, 70000.0f), {}); }),
+                HasSubstr("dot (5, 17): the pattern value 70000 is beyond the largest half float, 65504"));
+    EXPECT_TRUE(std::filesystem::is_empty(dir.path()));
+    EXPECT_THAT(error_of([&] { write_pattern(dir / "big.exr", Ramp(small_geometry(), 3, 17, 65520.0f), {}); }),
+                HasSubstr("value 65520 is beyond"));
+    // The largest values that stay finite are written; as 32-bit floats, any finite value.
+    const auto value_at_bad_dot = [](const std::filesystem::path& path) {
+        PatternReader reader(path);
+        std::vector<float> row(static_cast<std::size_t>(37 * 3));
+        reader.read_rows(17, 18, row);
+        return row[5 * 3];
+    };
+    write_pattern(dir / "largest.exr", Ramp(small_geometry(), 3, 17, 65519.0f), {});
+    EXPECT_EQ(value_at_bad_dot(dir / "largest.exr"), 65504.0f);
+    WriteOptions single;
+    single.half_float = false;
+    write_pattern(dir / "single.exr", Ramp(small_geometry(), 3, 17, 70000.0f), {}, single);
+    EXPECT_EQ(value_at_bad_dot(dir / "single.exr"), 70000.0f);
 }
 
 TEST(WritePattern, UnwritableDirectoryIsAnIoError) {
