@@ -312,6 +312,14 @@ SheetReport write_sheet(const std::filesystem::path& out, const optics::Design& 
                          "expected 1 or 2, got " + std::to_string(options.sheets));
     if (options.bits != 8 && options.bits != 16)
         throw InputError(SourceLocation{"", 0, 0, "--bits"}, "expected 8 or 16, got " + std::to_string(options.bits));
+    const int sheets = options.sheets == 0 ? printer.sheets : options.sheets;
+    // A mirrored page is the back sheet of a stack of two; alone it would show the pattern
+    // flipped.
+    if (options.mirror && sheets != 2)
+        throw InputError(SourceLocation{"", 0, 0, "--mirror"},
+                         "a mirrored page is the back sheet of two, but this print has one sheet (" +
+                             (options.sheets == 0 ? "printer profile '" + printer.name + "'" : std::string("--sheets 1")) +
+                             "): print the front sheet alone, or give --sheets 2");
     patterns::PatternReader reader(pattern_file);
     if (reader.info().channels != 1 && reader.info().channels != 3)
         throw InputError(SourceLocation{pattern_file.string()},
@@ -324,7 +332,7 @@ SheetReport write_sheet(const std::filesystem::path& out, const optics::Design& 
     report.tone.printer = printer;
     report.tone.brightness = options.brightness;
     report.tone.white = attribute_number(reader.info(), "white", pattern_file, 1.0, /*allow_zero=*/false);
-    report.tone.sheets = options.sheets == 0 ? printer.sheets : options.sheets;
+    report.tone.sheets = sheets;
     SheetInfo info;
     info.pattern_name = pattern_file.filename().string();
     info.brightness = options.brightness;

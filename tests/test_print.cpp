@@ -448,6 +448,13 @@ TEST(Sheet, BadOptionsAndAttributes) {
                 HasSubstr("--sheets: expected 1 or 2, got 3"));
     EXPECT_THAT(error_of([&] { write_sheet(dir / "s.png", design, printer, pattern, {}); }),
                 HasSubstr("expected .tif, .tiff or .pdf"));
+    // A mirrored page alone would show the pattern flipped: it is the back of two sheets.
+    SheetOptions mirrored_alone;
+    mirrored_alone.mirror = true;
+    mirrored_alone.sheets = 1;
+    EXPECT_THAT(error_of([&] { write_sheet(dir / "s.tif", design, printer, pattern, mirrored_alone); }),
+                HasSubstr("--mirror: a mirrored page is the back sheet of two, but this print has one sheet (--sheets 1)"));
+    EXPECT_FALSE(std::filesystem::exists(dir / "s.tif"));
     // Design I does not fit the test printer's small paper.
     const optics::Design big = optics::load_design(kDesigns / "design1.toml");
     const PrinterProfile coarse = parse_printer(small_printer_toml(100, 100), "coarse.toml");
