@@ -8,6 +8,7 @@
 
 #include "cli/commands.hpp"
 #include "core/error.hpp"
+#include "core/files.hpp"
 #include "core/progress.hpp"
 
 namespace {
@@ -39,6 +40,7 @@ void require_finite_numbers(CLI::App& command) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    rfd::remove_temporaries_on_signals();
     CLI::App app{"rfd: design, predict, print and build passive reflectance-field displays"};
     app.set_version_flag("--version", std::string("rfd ") + RFD_VERSION);
     app.require_subcommand(1);

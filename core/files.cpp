@@ -1,12 +1,82 @@
 #include "core/files.hpp"
 
+#include <fcntl.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <array>
+#include <atomic>
 #include <cctype>
+#include <climits>
+#include <cstring>
 #include <fstream>
 #include <random>
 
 #include "core/error.hpp"
 
 namespace rfd {
+namespace {
+
+// The temporary files being written, for a signal handler to remove. A handler may only
+// read lock-free memory and call async-signal-safe functions (unlink, _exit), so the paths
+// sit in fixed slots, each claimed and released with an atomic state.
+struct TemporarySlot {
+    enum State : int { free, busy, holding };
+    std::atomic<int> state{free};
+    char path[PATH_MAX];
+};
+static_assert(std::atomic<int>::is_always_lock_free);
+std::array<TemporarySlot, 64> temporaries;
+
+void remember_temporary(const std::filesystem::path& path) {
+    const std::string& text = path.native();
+    if (text.size() >= PATH_MAX) return;
+    for (TemporarySlot& slot : temporaries) {
+        int expected = TemporarySlot::free;
+        if (!slot.state.compare_exchange_strong(expected, TemporarySlot::busy)) continue;
+        std::memcpy(slot.path, text.c_str(), text.size() + 1);
+        slot.state.store(TemporarySlot::holding);
+        return;
+    }
+    // Every slot taken: this file is not removed on a signal. rfd writes a few files at a
+    // time, never 64.
+}
+
+void forget_temporary(const std::filesystem::path& path) {
+    for (TemporarySlot& slot : temporaries) {
+        int expected = TemporarySlot::holding;
+        if (slot.state.load() != TemporarySlot::holding || path.native() != slot.path) continue;
+        if (slot.state.compare_exchange_strong(expected, TemporarySlot::busy)) {
+            slot.state.store(TemporarySlot::free);
+            return;
+        }
+    }
+}
+
+extern "C" void remove_temporaries_and_exit(int signal) {
+    for (TemporarySlot& slot : temporaries)
+        if (slot.state.load() == TemporarySlot::holding) unlink(slot.path);
+    _exit(128 + signal);
+}
+
+}  // namespace
+
+void remove_temporaries_on_signals() {
+    for (const int signal : {SIGINT, SIGTERM, SIGHUP, SIGXFSZ}) {
+        struct sigaction current {};
+        if (sigaction(signal, nullptr, &current) == 0 && current.sa_handler == SIG_IGN) continue;
+        struct sigaction action {};
+        action.sa_handler = remove_temporaries_and_exit;
+        sigemptyset(&action.sa_mask);
+        sigaction(signal, &action, nullptr);
+    }
+}
+
+void remove_temporary(const std::filesystem::path& temporary) {
+    std::error_code ec;
+    std::filesystem::remove(temporary, ec);
+    forget_temporary(temporary);
+}
 
 std::filesystem::path temporary_sibling(const std::filesystem::path& target) {
     namespace fs = std::filesystem;
@@ -19,38 +89,51 @@ std::filesystem::path temporary_sibling(const std::filesystem::path& target) {
     // A random prefix keeps concurrent writers of the same target apart; the name keeps
     // its extension.
     std::random_device entropy;
-    return full.parent_path() /
-           (".tmp" + std::to_string(entropy() % 1000000) + "-" + full.filename().string());
+    fs::path temporary = full.parent_path() / (".tmp" + std::to_string(entropy() % 1000000) + "-" + full.filename().string());
+    remember_temporary(temporary);
+    return temporary;
 }
 
 void move_into_place(const std::filesystem::path& temporary, const std::filesystem::path& target) {
+    // A full disk may only say so when the data is forced out: never rename a file whose
+    // bytes did not all reach the disk.
+    const int fd = open(temporary.c_str(), O_RDONLY | O_CLOEXEC);
+    const bool synced = fd >= 0 && fsync(fd) == 0;
+    if (fd >= 0) close(fd);
+    if (!synced) {
+        remove_temporary(temporary);
+        throw IoError(SourceLocation{target.string()}, "writing failed (disk full?)");
+    }
     std::error_code ec;
     std::filesystem::rename(temporary, target, ec);
     if (ec) {
-        std::filesystem::remove(temporary, ec);
+        remove_temporary(temporary);
         throw IoError(SourceLocation{target.string()}, "cannot move the finished file into place");
     }
+    forget_temporary(temporary);
 }
 
 void write_file_atomically(const std::filesystem::path& path,
                            const std::function<void(std::ostream&)>& write) {
     namespace fs = std::filesystem;
     const fs::path temporary = temporary_sibling(path);
-    std::error_code ec;
     {
         std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-        if (!out) throw IoError(SourceLocation{path.string()}, "cannot write: permission denied");
+        if (!out) {
+            remove_temporary(temporary);
+            throw IoError(SourceLocation{path.string()}, "cannot write: permission denied");
+        }
         try {
             write(out);
         } catch (...) {
             out.close();
-            fs::remove(temporary, ec);
+            remove_temporary(temporary);
             throw;
         }
         out.flush();
         if (!out) {
             out.close();
-            fs::remove(temporary, ec);
+            remove_temporary(temporary);
             throw IoError(SourceLocation{path.string()}, "write failed (disk full?)");
         }
     }
@@ -69,10 +152,7 @@ void ensure_directory(const std::filesystem::path& dir) {
 }
 
 TemporaryFile::~TemporaryFile() {
-    if (!path_.empty()) {
-        std::error_code ec;
-        std::filesystem::remove(path_, ec);
-    }
+    if (!path_.empty()) remove_temporary(path_);
 }
 
 bool is_blank_or_comment(const std::string& line) {

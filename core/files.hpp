@@ -16,11 +16,22 @@ void write_file_atomically(const std::filesystem::path& path,
 
 /// A fresh temporary path beside `target` that keeps its extension (tools that pick a
 /// format from the extension, such as OpenImageIO, write it correctly). Throws IoError when
-/// target's directory does not exist.
+/// target's directory does not exist. The path is remembered until move_into_place() or
+/// remove_temporary(), so that a signal ending the program removes the file
+/// (remove_temporaries_on_signals).
 std::filesystem::path temporary_sibling(const std::filesystem::path& target);
 
-/// Renames a finished temporary file onto `target`; removes it and throws IoError on failure.
+/// Renames a finished temporary file onto `target` once fsync says all of it is on the disk;
+/// removes it and throws IoError on failure.
 void move_into_place(const std::filesystem::path& temporary, const std::filesystem::path& target);
+
+/// Removes an unfinished temporary file (if it exists) and forgets it.
+void remove_temporary(const std::filesystem::path& temporary);
+
+/// From now on SIGINT, SIGTERM, SIGHUP and SIGXFSZ remove every temporary file being
+/// written and end the program with exit code 128 + the signal's number. A signal that was
+/// ignored when the program started (nohup, a shell's background job) stays ignored.
+void remove_temporaries_on_signals();
 
 /// Convenience for whole text contents.
 void write_text_file(const std::filesystem::path& path, const std::string& text);

@@ -80,8 +80,7 @@ ImageFileWriter::ImageFileWriter(const std::filesystem::path& path, const ImageF
     std::string error;
     backend_ = backend().create(temporary_.string(), spec, error);
     if (!backend_) {
-        std::error_code ec;
-        std::filesystem::remove(temporary_, ec);
+        remove_temporary(temporary_);
         throw IoError(SourceLocation{path.string()}, "cannot write " + what + ": " + error);
     }
 }
@@ -89,8 +88,7 @@ ImageFileWriter::ImageFileWriter(const std::filesystem::path& path, const ImageF
 ImageFileWriter::~ImageFileWriter() {
     if (temporary_.empty()) return;  // finished
     backend_.reset();                // closes the file
-    std::error_code ec;
-    std::filesystem::remove(temporary_, ec);
+    remove_temporary(temporary_);
 }
 
 void ImageFileWriter::write_rows(int y0, int y1, SampleType type, const void* rows) {

@@ -1,10 +1,16 @@
 // librfd_imageio.so: rfd's image files (core/image_backend.hpp) on OpenImageIO. Adaptor
 // code only; it links OpenImageIO and nothing of rfd.
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <memory>
+#include <sstream>
 #include <string>
+#include <utility>
 
 #include "core/image_backend.hpp"
 
@@ -88,17 +94,58 @@ private:
     ImageFileSpec spec_;
 };
 
+// Writes through a FILE* of its own (OpenImageIO's IOFile proxy over it; none for TIFF), so
+// that the last buffered bytes are flushed and checked here: OpenImageIO's own close of a
+// PNG, EXR or HDR file does not notice when they fail, and a file cut short would look whole.
 class Output final : public ImageFileWriter::Backend {
 public:
-    explicit Output(std::unique_ptr<OIIO::ImageOutput> output) : output_(std::move(output)) {}
-    bool write_rows(int y0, int y1, SampleType type, const void* rows) override {
-        return output_->write_scanlines(y0, y1, 0, type_desc(type), rows);
+    Output(std::FILE* file, std::unique_ptr<OIIO::Filesystem::IOFile> proxy, std::unique_ptr<OIIO::ImageOutput> output)
+        : file_(file), proxy_(std::move(proxy)), output_(std::move(output)) {}
+    ~Output() override {
+        output_.reset();
+        proxy_.reset();
+        if (file_) std::fclose(file_);
     }
-    bool close() override { return output_->close(); }
-    std::string error() override { return output_->geterror(); }
+    // Some writers (PNG) note a failed write as an error but still return true: ask.
+    bool write_rows(int y0, int y1, SampleType type, const void* rows) override {
+        return output_->write_scanlines(y0, y1, 0, type_desc(type), rows) && !take_errors();
+    }
+    bool close() override {
+        bool ok = output_->close();
+        ok = !take_errors() && ok;
+        output_.reset();
+        proxy_.reset();
+        if (!file_) return ok;
+        const bool flushed = std::fflush(file_) == 0 && !std::ferror(file_);
+        const bool closed = std::fclose(std::exchange(file_, nullptr)) == 0;
+        if (ok && !(flushed && closed)) error_ = "writing failed (disk full?)";
+        return ok && flushed && closed;
+    }
+    std::string error() override {
+        if (output_) take_errors();
+        return error_.empty() ? "unknown error" : error_;
+    }
 
 private:
+    // Moves the writer's errors into error_, the first line only (a failing disk repeats
+    // itself); true if there were any. The TIFF writer reports that it wrote no Exif
+    // directory on every close, although the file is whole: that one is not an error.
+    bool take_errors() {
+        if (!output_->has_error()) return false;
+        std::istringstream lines(output_->geterror());
+        bool any = false;
+        for (std::string line; std::getline(lines, line);) {
+            if (line.empty() || line.find("TIFFWriteCustomDirectory() of the Exif data") != std::string::npos) continue;
+            if (!any) error_ = line;
+            any = true;
+        }
+        return any;
+    }
+
+    std::FILE* file_;  ///< null when the writer opened the file itself
+    std::unique_ptr<OIIO::Filesystem::IOFile> proxy_;
     std::unique_ptr<OIIO::ImageOutput> output_;
+    std::string error_;
 };
 
 class Backend final : public ImageBackend {
@@ -118,11 +165,26 @@ public:
             error = OIIO::geterror();
             return nullptr;
         }
-        if (!output->open(path, oiio_spec(spec))) {
+        // libtiff reports its own write failures, and OpenImageIO's TIFF writer through a
+        // proxy writes a broken file when it adds Exif data: TIFF opens its file itself.
+        std::FILE* file = nullptr;
+        std::unique_ptr<OIIO::Filesystem::IOFile> proxy;
+        if (std::string(output->format_name()) != "tiff") {
+            file = std::fopen(path.c_str(), "wb");
+            if (!file) {
+                error = std::string("cannot create the file: ") + std::strerror(errno);
+                return nullptr;
+            }
+            proxy = std::make_unique<OIIO::Filesystem::IOFile>(file, OIIO::Filesystem::IOProxy::Write);
+        }
+        if ((proxy && !output->set_ioproxy(proxy.get())) || !output->open(path, oiio_spec(spec))) {
             error = output->geterror();
+            output.reset();
+            proxy.reset();
+            if (file) std::fclose(file);
             return nullptr;
         }
-        return std::make_unique<Output>(std::move(output));
+        return std::make_unique<Output>(file, std::move(proxy), std::move(output));
     }
 };
 

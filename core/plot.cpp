@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <functional>
 #include <sstream>
 
@@ -30,6 +31,20 @@ std::string quoted(const std::string& text) {
     return out + "\"";
 }
 
+// Whether a file gnuplot wrote ends as a whole SVG or PNG does: gnuplot does not report a
+// failed write (a full disk), it leaves the file cut short.
+bool ends_whole(const std::filesystem::path& file) {
+    std::ifstream in(file, std::ios::binary | std::ios::ate);
+    if (!in) return false;
+    const std::streamoff size = in.tellg();
+    const std::streamoff tail_size = std::min<std::streamoff>(size, 64);
+    std::string tail(static_cast<std::size_t>(tail_size), '\0');
+    in.seekg(size - tail_size);
+    in.read(tail.data(), tail_size);
+    if (file.extension() == ".png") return tail.size() >= 8 && tail.compare(tail.size() - 8, 8, "IEND\xAE\x42\x60\x82") == 0;
+    return tail.find("</svg>") != std::string::npos;
+}
+
 // Runs gnuplot on `plot_commands` for an SVG and a PNG, each rendered to a temporary file
 // and moved into place. Throws ToolError when gnuplot is missing or fails.
 void render_with_gnuplot(const std::function<void(std::ostream&)>& plot_commands,
@@ -45,24 +60,22 @@ void render_with_gnuplot(const std::function<void(std::ostream&)>& plot_commands
     for (const auto& [target, terminal] :
          {std::pair{svg, "svg size " + size + " dynamic font 'sans,12'"},
           std::pair{png, "pngcairo size " + size + " font 'sans,10'"}}) {
-        const fs::path temporary = fs::path(target).concat(".tmp");
+        TemporaryFile temporary(temporary_sibling(target));
         std::ostringstream commands;
-        commands << "set terminal " << terminal << "\nset output " << quoted(temporary.filename().string())
+        commands << "set terminal " << terminal << "\nset output " << quoted(temporary.path().filename().string())
                  << "\n";
         plot_commands(commands);
-        const fs::path commands_file = fs::path(target).concat(".gp.tmp");
-        write_text_file(commands_file, commands.str());
+        const TemporaryFile commands_file(temporary_sibling(fs::path(target).concat(".gp")));
+        write_text_file(commands_file.path(), commands.str());
         const CommandResult run = run_command("cd " + shell_quoted(fs::absolute(target).parent_path().string()) +
                                               " && " + shell_quoted(gnuplot->string()) + " " +
-                                              shell_quoted(commands_file.filename().string()));
-        std::error_code ec;
-        fs::remove(commands_file, ec);
-        if (run.exit_code != 0 || !fs::exists(temporary)) {
-            fs::remove(temporary, ec);
+                                              shell_quoted(commands_file.path().filename().string()));
+        if (run.exit_code != 0 || !fs::exists(temporary.path()))
             throw ToolError(SourceLocation{target.string()}, "gnuplot failed: " + run.output);
-        }
-        fs::rename(temporary, target, ec);
-        if (ec) throw IoError(SourceLocation{target.string()}, "cannot move the chart into place");
+        if (!ends_whole(temporary.path()))
+            throw IoError(SourceLocation{target.string()}, "gnuplot wrote it cut short (disk full?)");
+        move_into_place(temporary.path(), target);
+        temporary.release();
     }
 }
 

@@ -10,6 +10,7 @@
 
 #include "core/error.hpp"
 #include "core/files.hpp"
+#include "print/pdf_file.hpp"
 
 namespace rfd::print {
 namespace {
@@ -32,11 +33,6 @@ std::string format(const char* format, double value) {
     char text[64];
     std::snprintf(text, sizeof text, format, value);
     return text;
-}
-
-cairo_status_t write_to_stream(void* closure, const unsigned char* data, unsigned int length) {
-    auto* file = static_cast<std::FILE*>(closure);
-    return std::fwrite(data, 1, length, file) == length ? CAIRO_STATUS_SUCCESS : CAIRO_STATUS_WRITE_ERROR;
 }
 
 }  // namespace
@@ -103,24 +99,9 @@ std::vector<MoireBand> write_moire_pdf(const std::filesystem::path& out, const o
     }
 
     constexpr double kPointsPerMm = 72.0 / kMillimetresPerInch;
-    const std::filesystem::path temporary = temporary_sibling(out);
-    struct Remove {
-        std::filesystem::path path;
-        ~Remove() {
-            std::error_code ec;
-            if (!path.empty()) std::filesystem::remove(path, ec);
-        }
-    } cleanup{temporary};
-    std::unique_ptr<std::FILE, decltype(&std::fclose)> file(std::fopen(temporary.c_str(), "wb"), &std::fclose);
-    if (!file) throw IoError(SourceLocation{out.string()}, "cannot write calibration sheet: cannot create a file there");
+    PdfFile pdf(out, paper.width * kPointsPerMm, paper.height * kPointsPerMm, "calibration sheet");
     {
-        std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> surface(
-            cairo_pdf_surface_create_for_stream(write_to_stream, file.get(), paper.width * kPointsPerMm,
-                                                paper.height * kPointsPerMm),
-            &cairo_surface_destroy);
-        cairo_pdf_surface_set_metadata(surface.get(), CAIRO_PDF_METADATA_CREATE_DATE, "1970-01-01T00:00:00Z");
-        cairo_pdf_surface_set_metadata(surface.get(), CAIRO_PDF_METADATA_MOD_DATE, "1970-01-01T00:00:00Z");
-        std::unique_ptr<cairo_t, decltype(&cairo_destroy)> owner(cairo_create(surface.get()), &cairo_destroy);
+        std::unique_ptr<cairo_t, decltype(&cairo_destroy)> owner(cairo_create(pdf.surface()), &cairo_destroy);
         cairo_t* cr = owner.get();
         cairo_scale(cr, kPointsPerMm, kPointsPerMm);
         cairo_select_font_face(cr, "DejaVu Sans", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
@@ -174,16 +155,8 @@ std::vector<MoireBand> write_moire_pdf(const std::filesystem::path& out, const o
             }
             cairo_show_page(cr);
         }
-        owner.reset();
-        cairo_surface_finish(surface.get());
-        if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS)
-            throw IoError(SourceLocation{out.string()}, std::string("cannot write calibration sheet: ") +
-                                                            cairo_status_to_string(cairo_surface_status(surface.get())));
     }
-    if (std::fclose(file.release()) != 0)
-        throw IoError(SourceLocation{out.string()}, "cannot write calibration sheet: closing the file failed");
-    move_into_place(temporary, out);
-    cleanup.path.clear();
+    pdf.finish();
     return bands;
 }
 

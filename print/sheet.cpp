@@ -18,6 +18,7 @@
 #include "core/image_io.hpp"
 #include "core/parallel.hpp"
 #include "core/progress.hpp"
+#include "print/pdf_file.hpp"
 
 namespace rfd::print {
 namespace {
@@ -162,29 +163,15 @@ void write_tiff(const std::filesystem::path& out, const SheetLayout& layout, con
     progress.finish();
 }
 
-cairo_status_t write_to_stream(void* closure, const unsigned char* data, unsigned int length) {
-    auto* file = static_cast<std::FILE*>(closure);
-    return std::fwrite(data, 1, length, file) == length ? CAIRO_STATUS_SUCCESS : CAIRO_STATUS_WRITE_ERROR;
-}
-
 void write_pdf(const std::filesystem::path& out, const SheetLayout& layout, const ToneMap& tone,
                patterns::PatternReader& reader) {
     constexpr double kPointsPerMm = 72.0 / kMillimetresPerInch;
     const int channels = reader.info().channels;
     const patterns::PatternGeometry& g = layout.pattern;
-    TemporaryFile temporary(temporary_sibling(out));
-    std::unique_ptr<std::FILE, decltype(&std::fclose)> file(std::fopen(temporary.path().c_str(), "wb"), &std::fclose);
-    if (!file) throw IoError(SourceLocation{out.string()}, "cannot write sheet: cannot create a file there");
+    PdfFile pdf(out, layout.paper.width * kPointsPerMm, layout.paper.height * kPointsPerMm, "sheet");
     {
-        SurfacePtr surface(cairo_pdf_surface_create_for_stream(write_to_stream, file.get(),
-                                                               layout.paper.width * kPointsPerMm,
-                                                               layout.paper.height * kPointsPerMm),
-                           &cairo_surface_destroy);
-        // Fixed dates: identical inputs give identical files.
-        cairo_pdf_surface_set_metadata(surface.get(), CAIRO_PDF_METADATA_CREATE_DATE, "1970-01-01T00:00:00Z");
-        cairo_pdf_surface_set_metadata(surface.get(), CAIRO_PDF_METADATA_MOD_DATE, "1970-01-01T00:00:00Z");
-        cairo_pdf_surface_set_metadata(surface.get(), CAIRO_PDF_METADATA_TITLE, layout.label.front().c_str());
-        ContextPtr cr(cairo_create(surface.get()), &cairo_destroy);
+        cairo_pdf_surface_set_metadata(pdf.surface(), CAIRO_PDF_METADATA_TITLE, layout.label.front().c_str());
+        ContextPtr cr(cairo_create(pdf.surface()), &cairo_destroy);
         cairo_scale(cr.get(), kPointsPerMm, kPointsPerMm);  // user units: page-frame mm
         if (layout.mirror) {
             cairo_translate(cr.get(), layout.paper.width, 0.0);
@@ -246,16 +233,8 @@ void write_pdf(const std::filesystem::path& out, const SheetLayout& layout, cons
         cairo_set_source_rgb(cr.get(), 0, 0, 0);
         draw_marks(cr.get(), layout);
         cairo_show_page(cr.get());
-        cr.reset();
-        cairo_surface_finish(surface.get());
-        if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS)
-            throw IoError(SourceLocation{out.string()},
-                          std::string("cannot write sheet: ") + cairo_status_to_string(cairo_surface_status(surface.get())));
     }
-    if (std::fclose(file.release()) != 0)
-        throw IoError(SourceLocation{out.string()}, "cannot write sheet: closing the file failed");
-    move_into_place(temporary.path(), out);
-    temporary.release();
+    pdf.finish();
 }
 
 }  // namespace

@@ -1,0 +1,44 @@
+#pragma once
+// A PDF file written through Cairo into a temporary file beside its target, moved into
+// place by finish() only when every byte reached the disk: Cairo's stream status, the
+// stdio buffer's flush and error flag, the close and (in move_into_place) fsync are all
+// checked. Destroyed unfinished, it leaves nothing behind. Dates are fixed, so identical
+// drawings give identical files.
+//
+// Example:
+//   PdfFile pdf(out, width_pt, height_pt, "calibration sheet");
+//   cairo_t* cr = cairo_create(pdf.surface()); ...draw...; cairo_destroy(cr);
+//   pdf.finish();
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include <cairo.h>
+
+#include "core/files.hpp"
+
+namespace rfd::print {
+
+class PdfFile {
+public:
+    /// Throws IoError naming `target` (and `what` it is) when the file cannot be created.
+    PdfFile(const std::filesystem::path& target, double width_pt, double height_pt, std::string what);
+    ~PdfFile();
+    PdfFile(const PdfFile&) = delete;
+    PdfFile& operator=(const PdfFile&) = delete;
+
+    cairo_surface_t* surface() { return surface_; }
+    /// Finishes the document and moves it into place; throws IoError if any write failed.
+    void finish();
+
+private:
+    std::filesystem::path target_;
+    std::string what_;
+    TemporaryFile temporary_;
+    std::FILE* file_ = nullptr;
+    cairo_surface_t* surface_ = nullptr;
+};
+
+}  // namespace rfd::print
