@@ -4,13 +4,16 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <cstddef>
 #include <cstdio>
 #include <cstring>
 #include <memory>
 #include <sstream>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "core/image_backend.hpp"
 
@@ -85,7 +88,22 @@ public:
     explicit Input(std::unique_ptr<OIIO::ImageInput> input) : input_(std::move(input)), spec_(spec_of(input_->spec())) {}
     const ImageFileSpec& spec() const override { return spec_; }
     bool read_rows(int y0, int y1, SampleType type, void* out) override {
-        return input_->read_scanlines(0, 0, y0, y1, 0, 0, spec_.channels, type_desc(type), out);
+        const OIIO::ImageSpec& spec = input_->spec();
+        if (spec.tile_width <= 0) return input_->read_scanlines(0, 0, y0, y1, 0, 0, spec_.channels, type_desc(type), out);
+        // A tiled file (what `oiiotool --tile` and compositing tools write) is read a row of
+        // tiles at a time: read_scanlines on one crashes OpenImageIO 2.4 (SIGFPE).
+        const int tile_height = spec.tile_height;
+        const int first = spec.y + (y0 - spec.y) / tile_height * tile_height;
+        const int last = std::min(spec.y + spec.height, spec.y + (y1 - spec.y + tile_height - 1) / tile_height * tile_height);
+        const std::size_t row_bytes = static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec_.channels) *
+                                      type_desc(type).size();
+        std::vector<std::byte> tiles(row_bytes * static_cast<std::size_t>(last - first));
+        if (!input_->read_tiles(0, 0, spec.x, spec.x + spec.width, first, last, 0, 1, 0, spec_.channels, type_desc(type),
+                                tiles.data()))
+            return false;
+        std::memcpy(out, tiles.data() + row_bytes * static_cast<std::size_t>(y0 - first),
+                    row_bytes * static_cast<std::size_t>(y1 - y0));
+        return true;
     }
     std::string error() override { return input_->geterror(); }
 

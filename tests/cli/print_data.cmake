@@ -11,3 +11,11 @@ execute_process(COMMAND ${OIIOTOOL} --pattern constant:color=0.5 100x80 1 -d hal
 if(NOT code EQUAL 0)
   message(FATAL_ERROR "oiiotool failed")
 endif()
+# The same pattern stored in 16 x 16 tiles (as `oiiotool --tile` and compositing tools
+# write it), under the same file name.
+file(MAKE_DIRECTORY ${OUT}/tiled)
+execute_process(COMMAND ${OIIOTOOL} ${OUT}/design2_720x360.exr --tile 16 16 -o ${OUT}/tiled/design2_720x360.exr
+                RESULT_VARIABLE code)
+if(NOT code EQUAL 0)
+  message(FATAL_ERROR "oiiotool failed")
+endif()

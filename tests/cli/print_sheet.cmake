@@ -1,7 +1,8 @@
 # rfd print sheet end to end: a front TIFF and a mirrored back PDF appear, nothing else is
-# left in the output folder, and a rerun gives identical bytes.
+# left in the output folder, a rerun gives identical bytes, and so does the same pattern
+# stored in tiles (TILED).
 file(REMOVE_RECURSE ${OUT})
-file(MAKE_DIRECTORY ${OUT})
+file(MAKE_DIRECTORY ${OUT} ${OUT}/tiled)
 foreach(name front.tif front_again.tif back.pdf)
   set(extra "")
   if(name STREQUAL "back.pdf")
@@ -14,7 +15,7 @@ foreach(name front.tif front_again.tif back.pdf)
     message(FATAL_ERROR "print sheet ${name} failed (${code}): ${output} ${errors}")
   endif()
 endforeach()
-file(GLOB left RELATIVE ${OUT} ${OUT}/*)
+file(GLOB left LIST_DIRECTORIES false RELATIVE ${OUT} ${OUT}/*)
 list(SORT left)
 if(NOT left STREQUAL "back.pdf;front.tif;front_again.tif")
   message(FATAL_ERROR "unexpected files: ${left}")
@@ -23,4 +24,11 @@ file(SHA256 ${OUT}/front.tif a)
 file(SHA256 ${OUT}/front_again.tif b)
 if(NOT a STREQUAL b)
   message(FATAL_ERROR "reruns differ")
+endif()
+execute_process(COMMAND ${RFD} -q print sheet ${DESIGN} ${TILED} --printer ${PRINTER} --brightness 1.1
+                        --out ${OUT}/tiled/front.tif
+                RESULT_VARIABLE code OUTPUT_VARIABLE output ERROR_VARIABLE errors)
+file(SHA256 ${OUT}/tiled/front.tif c)
+if(NOT code EQUAL 0 OR NOT a STREQUAL c)
+  message(FATAL_ERROR "the tiled pattern's sheet differs (exit ${code}): ${output} ${errors}")
 endif()
