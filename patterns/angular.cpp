@@ -18,6 +18,7 @@ AngularPattern::AngularPattern(const optics::DesignOptics& optics, const Angular
     : optics_(optics), meso_(optics), field_(field), options_(options) {
     const optics::Design& design = optics.design();
     const SourceLocation where{design.file};
+    require_printable_channels(field.channels(), SourceLocation{});
     if (options.bin_samples < 1 || options.bin_samples > 16)
         throw InputError(where, "bin samples per side must be in [1, 16], got " + std::to_string(options.bin_samples));
     if (options.table_size < 3 || options.table_size > 4097)

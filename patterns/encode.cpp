@@ -349,7 +349,12 @@ relight::ReflectanceField load_field_for(const optics::Design& design, const std
     relight::ReflectanceField out;
     for (std::size_t i : needed_field_directions(design, directions, options)) {
         const relight::LightEntry& e = entries[i];
-        Image image = read_image(lp.parent_path() / e.file);
+        Image image;
+        try {
+            image = read_image(lp.parent_path() / e.file);
+        } catch (const Error& error) {
+            rethrow_at(error, SourceLocation{lp.string(), e.line}, "image '" + e.file + "': " + error.what());
+        }
         if (!out.images.empty() && !image.same_shape(out.images.front()))
             throw InputError(SourceLocation{lp.string(), e.line},
                              "image '" + e.file + "' differs in size or channels from the field's first image");
@@ -388,6 +393,7 @@ Encoder::Encoder(const optics::Design& design, const relight::ReflectanceField& 
                          "a field needs at least three light directions with one image each");
     if (!(options.mapping.angle_scale > 0.0))
         throw InputError(SourceLocation{options.field_name, 0, 0, "angle scale"}, "the angle scale must be positive");
+    require_printable_channels(field.channels(), SourceLocation{options.field_name});
     tables_ = std::make_unique<Tables>(design);
     Tables& t = *tables_;
     t.rotation = options.mapping.rotation();

@@ -100,11 +100,18 @@ PatternGeometry pattern_geometry(const optics::Design& design, Dpi dpi_x, Dpi dp
     return g;
 }
 
+void require_printable_channels(int channels, const SourceLocation& where) {
+    if (channels != 1 && channels != 3)
+        throw InputError(where, "the field's images have " + std::to_string(channels) +
+                                    " channels; a pattern is grey (1 channel) or colour (3: R, G, B)");
+}
+
 void write_pattern(const std::filesystem::path& path, const PatternSource& source,
                    const PatternAttributes& attributes, const WriteOptions& options) {
     const PatternGeometry& g = source.geometry();
     const int channels = source.channels();
-    RFD_CHECK(g.width > 0 && g.height > 0 && channels > 0 && options.rows_per_strip > 0);
+    RFD_CHECK(g.width > 0 && g.height > 0 && options.rows_per_strip > 0);
+    require_printable_channels(channels, SourceLocation{path.string()});
     const std::string ext = lower_extension(path);
     ImageFileSpec spec{.width = g.width, .height = g.height, .channels = channels, .dpi_x = g.dpi_x, .dpi_y = g.dpi_y};
     bool srgb = false;

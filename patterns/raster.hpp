@@ -82,12 +82,17 @@ struct WriteOptions {
     std::string progress_label = "pattern rows";
 };
 
+/// Throws InputError at `where` unless `channels` is 1 (grey) or 3 (R, G, B): what a
+/// transparency is printed in, and all a print sheet takes.
+void require_printable_channels(int channels, const SourceLocation& where);
+
 /// Streams `source` into `path` (EXR for linear float; TIFF/PNG through write_image's
 /// encodings), a strip of rows at a time rendered in parallel, so memory stays at a few
 /// strips whatever the raster's size. The resolution (dpi on both axes) and `attributes`
 /// go into the header. Written to a temporary sibling and renamed: an interrupted or failed
 /// write leaves nothing at `path`. Throws IoError when the file cannot be written and
-/// InputError when a rendered sample is not finite (naming the dot).
+/// InputError when a rendered sample is not finite (naming the dot) or the source's
+/// channels are not printable.
 void write_pattern(const std::filesystem::path& path, const PatternSource& source,
                    const PatternAttributes& attributes, const WriteOptions& options = {});
 

@@ -31,6 +31,7 @@ optics::Design preset(int n) {
 void smooth(const Eigen::Vector3d& light, const Eigen::Vector3d& view, int u, int v, std::span<float> out) {
     out[0] = static_cast<float>(0.5 + 2.0 * view.x() - 1.5 * view.y() + 0.8 * light.y() + 0.05 * u + 0.03 * v);
     out[1] = static_cast<float>(0.4 + light.x() * (1.0 + view.y()));
+    out[2] = static_cast<float>(0.3 + 0.5 * light.y() * view.x() + 0.02 * u);
 }
 
 std::vector<float> render(const PatternSource& source) {
@@ -43,7 +44,7 @@ std::vector<float> render(const PatternSource& source) {
 
 TEST(AngularPattern, RoundTripThroughTheFileAtDotsFoundByTheForwardMaps) {
     const optics::DesignOptics optics(preset(3));
-    const FunctionField field(2, smooth);
+    const FunctionField field(3, smooth);
     TempDir dir;
     for (const optics::Model model : {optics::Model::Paraxial, optics::Model::Exact}) {
         AngularOptions options;
@@ -57,7 +58,7 @@ TEST(AngularPattern, RoundTripThroughTheFileAtDotsFoundByTheForwardMaps) {
         write_pattern(path, pattern, pattern.attributes(), write);
         PatternReader reader(path);
         const auto& g = pattern.geometry();
-        std::vector<float> rows(g.dot_count() * 2);
+        std::vector<float> rows(g.dot_count() * 3);
         reader.read_rows(0, g.height, rows);
         EXPECT_EQ(reader.info().attributes.at("kind"), "angular");
         EXPECT_EQ(reader.info().attributes.at("model"), optics::to_string(model));
@@ -79,17 +80,17 @@ TEST(AngularPattern, RoundTripThroughTheFileAtDotsFoundByTheForwardMaps) {
                 const optics::DotRay ray = meso.dot(place->offset, cell, model);
                 ASSERT_EQ(ray.light, optics::DotLight::Lit);
                 EXPECT_LT(angle_between(ray.output, wanted), std::abs(meso.output_gain()) * g.dot_x);
-                std::array<float, 2> expected{0, 0}, one{};
+                std::array<float, 3> expected{0, 0, 0}, one{};
                 const auto bin = meso.bin(cell, model, options.bin_samples);
                 for (const auto& d : bin.samples) {
                     smooth(field_light_of(d), ray.output, 0, 0, one);
-                    expected[0] += one[0] / static_cast<float>(bin.samples.size());
-                    expected[1] += one[1] / static_cast<float>(bin.samples.size());
+                    for (int c = 0; c < 3; ++c)
+                        expected[static_cast<std::size_t>(c)] += one[static_cast<std::size_t>(c)] / static_cast<float>(bin.samples.size());
                 }
                 // Paraxial tables are exact (a linear map); exact ones interpolate to ~1e-5.
                 const double tolerance = model == optics::Model::Paraxial ? 1e-5 : 2e-4;
-                for (int c = 0; c < 2; ++c)
-                    EXPECT_NEAR(rows[(static_cast<std::size_t>(py) * g.width + px) * 2 + c], expected[static_cast<std::size_t>(c)], tolerance)
+                for (int c = 0; c < 3; ++c)
+                    EXPECT_NEAR(rows[(static_cast<std::size_t>(py) * g.width + px) * 3 + c], expected[static_cast<std::size_t>(c)], tolerance)
                         << optics::to_string(model) << " cell " << cell.i << "," << cell.j;
                 ++checked;
             }

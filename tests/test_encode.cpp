@@ -280,6 +280,22 @@ TEST(Encoder, FieldThatMissesTheDisplayRangeIsRefusedWithTheDirections) {
     EXPECT_EQ(error_of([&] { Encoder(design, field, g, options); }), "");
 }
 
+TEST(Encoder, FieldsThatCannotBePrintedAreRefused) {
+    // A transparency is grey or R, G, B: two channels, or five (a multispectral capture),
+    // are an input error naming the field, not an internal check failing mid-encode.
+    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const PatternGeometry g = pattern_geometry(design, Dpi{360}, Dpi{360});
+    EncodeOptions options;
+    options.field_name = "five-channel-field";
+    for (const int channels : {2, 4, 5}) {
+        relight::ReflectanceField field;
+        field.directions = fibonacci_hemisphere(200);
+        for (std::size_t i = 0; i < field.size(); ++i) field.images.emplace_back(4, 4, channels, 0.5f);
+        EXPECT_THAT(error_of([&] { Encoder(design, field, g, options); }),
+                    HasSubstr("five-channel-field: the field's images have " + std::to_string(channels) + " channels"));
+    }
+}
+
 TEST(Encoder, RefusesAngularDesigns) {
     const optics::Design design = optics::load_design(kDesigns / "design3.toml");
     const relight::ReflectanceField field = smooth_field(64, 2, 2);
