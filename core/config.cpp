@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <fstream>
 #include <sstream>
 
 #include <toml++/toml.h>
@@ -103,6 +105,61 @@ std::optional<double> as_number(const toml::node& node) {
     return std::nullopt;
 }
 
+// toml++ parses a dotted key recursively, a level per part, so a key of tens of thousands
+// of parts overflows the stack (SIGSEGV) before any error can be given. rfd's keys have a
+// few parts: refuse a key of more than kMaxKeyParts before parsing. A key is what precedes
+// '=' on a line, or a [table] header; quoted parts, values, comments and the lines of
+// multi-line strings are skipped.
+constexpr int kMaxKeyParts = 64;
+
+void check_key_depth(std::string_view text, const std::string& name) {
+    bool in_multiline = false;
+    std::string_view multiline_quote;
+    int line_number = 0;
+    std::size_t start = 0;
+    while (start <= text.size()) {
+        std::size_t end = text.find('\n', start);
+        if (end == std::string_view::npos) end = text.size();
+        const std::string_view line = text.substr(start, end - start);
+        start = end + 1;
+        ++line_number;
+        std::size_t i = 0;
+        if (in_multiline) {
+            const std::size_t close = line.find(multiline_quote);
+            if (close == std::string_view::npos) continue;
+            in_multiline = false;
+            i = close + 3;
+        }
+        int parts = 1;
+        bool in_key = true;
+        for (; i < line.size(); ++i) {
+            const char c = line[i];
+            if (c == '#') break;
+            if (c == '"' || c == '\'') {
+                const std::string_view triple = c == '"' ? "\"\"\"" : "'''";
+                if (line.substr(i, 3) == triple) {
+                    const std::size_t close = line.find(triple, i + 3);
+                    if (close == std::string_view::npos) {
+                        in_multiline = true;
+                        multiline_quote = triple;
+                        break;
+                    }
+                    i = close + 2;
+                    continue;
+                }
+                // A one-line string: skip to its closing quote (a basic string's \" is no end).
+                for (++i; i < line.size() && line[i] != c; ++i)
+                    if (c == '"' && line[i] == '\\') ++i;
+                continue;
+            }
+            if (c == '=') in_key = false;
+            if (c == '.' && in_key && ++parts > kMaxKeyParts)
+                throw InputError(SourceLocation{name, line_number},
+                                 "TOML key of more than " + std::to_string(kMaxKeyParts) + " dotted parts");
+        }
+    }
+}
+
 }  // namespace
 
 ConfigTable::ConfigTable(std::shared_ptr<const toml::table> root, const toml::table* table,
@@ -117,18 +174,19 @@ ConfigTable ConfigTable::parse_file(const std::filesystem::path& path) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec))
         throw IoError(SourceLocation{path.string()}, "cannot open: no such file");
-    try {
-        auto root = std::make_shared<const toml::table>(toml::parse_file(path.string()));
-        return ConfigTable(root, root.get(), path.string(), "");
-    } catch (const toml::parse_error& error) {
-        const auto& begin = error.source().begin;
-        throw InputError(SourceLocation{path.string(), static_cast<int>(begin.line),
-                                        static_cast<int>(begin.column), ""},
-                         std::string("TOML syntax error: ") + std::string(error.description()));
-    }
+    // rfd's input files are a few kilobytes; a large one is not one of them.
+    constexpr std::uintmax_t kMaxBytes = 16 << 20;
+    if (std::filesystem::file_size(path, ec) > kMaxBytes)
+        throw InputError(SourceLocation{path.string()}, "larger than 16 MB: not an rfd input file");
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream text;
+    text << in.rdbuf();
+    if (!in) throw IoError(SourceLocation{path.string()}, "cannot read");
+    return parse_string(text.str(), path.string());
 }
 
 ConfigTable ConfigTable::parse_string(std::string_view text, const std::string& name) {
+    check_key_depth(text, name);
     try {
         auto root = std::make_shared<const toml::table>(toml::parse(text, name));
         return ConfigTable(root, root.get(), name, "");

@@ -27,6 +27,24 @@ TEST(Config, SyntaxErrorNamesTheLine) {
     EXPECT_THAT(message, HasSubstr("TOML syntax error"));
 }
 
+TEST(Config, KeysOfTensOfThousandsOfPartsAreRefusedBeforeTheParserRecurses) {
+    // toml++ recurses once per dotted part: 40 000 of them overflowed the stack (SIGSEGV).
+    const auto parts = [](int n, const std::string& separator) {
+        std::string key = "a";
+        for (int k = 1; k < n; ++k) key += separator + "a";
+        return key;
+    };
+    EXPECT_THAT(message_of([&] { ConfigTable::parse_string("x = 1\n[" + parts(40000, ".") + "]\n", "deep.toml"); }),
+                HasSubstr("deep.toml:2: TOML key of more than 64 dotted parts"));
+    EXPECT_THAT(message_of([&] { ConfigTable::parse_string(parts(40000, ".") + " = 1\n", "deep.toml"); }),
+                HasSubstr("deep.toml:1: TOML key of more than 64 dotted parts"));
+    // 64 parts parse; dots in values, quoted keys, comments and multi-line strings are no parts.
+    const std::string dots(500, '.');
+    const std::string fine = "[" + parts(64, ".") + "]\n\"" + dots + "\" = \"" + dots + "\"\n" +
+                             "b = 1.5 # " + dots + "\nc = \"\"\"\n" + dots + "\n\"\"\"\nd = \'\'\'" + dots + "\'\'\'\n";
+    EXPECT_EQ(message_of([&] { ConfigTable::parse_string(fine, "fine.toml"); }), "");
+}
+
 TEST(Config, RangesTypesAndUnits) {
     auto table = ConfigTable::parse_string("n = 5\nname = 3\npitch_cm = 0.2\nlist = [1, 2, 3]\n", "f.toml");
     EXPECT_THAT(message_of([&] { table.number("n", 0.0, 1.0); }), HasSubstr("outside the allowed range [0, 1]"));
