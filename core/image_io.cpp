@@ -34,6 +34,15 @@ Image read_image(const std::filesystem::path& path) {
     const int channels = spec.channels;
     if (spec.width <= 0 || spec.height <= 0 || channels <= 0)
         throw InputError(SourceLocation{path.string()}, "image has no pixels");
+    // Held whole in memory, twice while converting: a header declaring more than this is a
+    // broken or hostile file, not a photograph of a light stage.
+    constexpr double kMaxSamples = 1 << 30;
+    const double samples = static_cast<double>(spec.width) * spec.height * channels;
+    if (samples > kMaxSamples)
+        throw InputError(SourceLocation{path.string()},
+                         "the header declares " + std::to_string(spec.width) + " x " + std::to_string(spec.height) +
+                             " pixels of " + std::to_string(channels) + " channel(s), more than the " +
+                             std::to_string(static_cast<long>(kMaxSamples)) + " samples an image may hold");
     std::vector<float> interleaved(static_cast<std::size_t>(spec.width) * spec.height * channels);
     file.read_rows(0, spec.height, interleaved);
     const bool srgb = spec.type == SampleType::uint8 || spec.type == SampleType::uint16;

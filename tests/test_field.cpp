@@ -140,6 +140,14 @@ TEST_F(MalformedLightFile, MissingImage) {
     EXPECT_THAT(read_error("1\nnope.exr 0 0 1\n"), HasSubstr("f.lp:2: image 'nope.exr'"));
     EXPECT_THAT(read_error("1\nnope.exr 0 0 1\n"), HasSubstr("no such image file"));
 }
+TEST_F(MalformedLightFile, ImageDeclaringATrillionPixels) {
+    // A 69-byte PNG whose header declares 1 000 000 x 1 000 000 pixels: an input error naming
+    // the .lp line and the size, not std::bad_alloc.
+    std::filesystem::copy_file(std::filesystem::path(RFD_SOURCE_DIR) / "tests/data/huge_header.png", dir / "huge.png");
+    const std::string message = read_error("1\nhuge.png 0 0 1\n");
+    EXPECT_THAT(message, HasSubstr("f.lp:2: image 'huge.png'"));
+    EXPECT_THAT(message, HasSubstr("declares 1000000 x 1000000 pixels of 3 channel(s)"));
+}
 TEST_F(MalformedLightFile, ZeroLengthDirection) {
     EXPECT_THAT(read_error("1\na.exr 0 0 0\n"), HasSubstr("f.lp:2: light direction (0.000000, 0.000000, 0.000000) has zero length"));
 }
