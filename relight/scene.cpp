@@ -17,6 +17,13 @@ namespace {
 
 constexpr double kHuge = 1e9;  // mm: bounds coordinates to something a float can hold
 
+// A length (or scale) > 0, bounded as coordinates are: Embree aborts on a ray through a
+// 1e30 mm sphere.
+double size(ConfigTable& table, const std::string& key) {
+    table.number(key, -kHuge, kHuge);  // bounded, with the range in the message
+    return table.positive(key);
+}
+
 Eigen::Vector3d vector3(ConfigTable& table, const std::string& key, double min = -kHuge,
                         double max = kHuge) {
     const auto v = table.numbers(key, 3, min, max);
@@ -89,7 +96,7 @@ Albedo read_albedo(ConfigTable& table, const std::filesystem::path& base_dir,
         return albedo;
     }
     CheckerTexture checker;
-    checker.square = table.positive("checker_mm");
+    checker.square = size(table, "checker_mm");
     checker.first = albedo;
     checker.second = optional_colour(table, "checker_albedo", Rgb::Constant(0.1));
     return checker;
@@ -170,13 +177,13 @@ SceneObject read_object(ConfigTable& table, const std::map<std::string, std::siz
     const Material& m = materials[object.material];
 
     if (type == "sphere") {
-        object.shape = SphereShape{vector3(table, "center_mm"), table.positive("radius_mm")};
+        object.shape = SphereShape{vector3(table, "center_mm"), size(table, "radius_mm")};
     } else if (type == "cylinder") {
         CylinderShape cylinder;
         cylinder.base = vector3(table, "base_mm");
         cylinder.axis = direction(table, "axis", Eigen::Vector3d::UnitZ());
-        cylinder.radius = table.positive("radius_mm");
-        cylinder.height = table.positive("height_mm");
+        cylinder.radius = size(table, "radius_mm");
+        cylinder.height = size(table, "height_mm");
         object.shape = cylinder;
     } else if (type == "box") {
         const Eigen::Vector3d centre = vector3(table, "center_mm");
@@ -208,7 +215,7 @@ SceneObject read_object(ConfigTable& table, const std::map<std::string, std::siz
         } catch (const Error& error) {
             rethrow_at(error, table.location("file"), std::string("mesh '") + file + "': " + error.what());
         }
-        const double scale = table.has("scale") ? table.positive("scale") : 1.0;
+        const double scale = table.has("scale") ? size(table, "scale") : 1.0;
         const bool smooth = table.optional_boolean("smooth").value_or(true);
         if (smooth) compute_vertex_normals(mesh);
         transform_mesh(mesh, scale, rotation(table, "rotate_deg"),
