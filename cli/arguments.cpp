@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <sstream>
 #include <vector>
@@ -133,6 +134,17 @@ CLI::Validator lower_bound(const char* name, bool allow_zero) {
 
 CLI::Validator positive_number() { return lower_bound("POSITIVE", false); }
 CLI::Validator non_negative_number() { return lower_bound("NONNEGATIVE", true); }
+
+CLI::Validator finite_number_check() {
+    return CLI::Validator(
+        [](std::string& text) -> std::string {
+            char* end = nullptr;
+            const double value = std::strtod(text.c_str(), &end);
+            if (end != text.c_str() && *end == '\0' && !std::isfinite(value)) return "expected a finite number, got " + text;
+            return {};
+        },
+        "");
+}
 
 void add_print_options(CLI::App& command, PrintOptions& options) {
     command.add_option("--printer", options.printer,

@@ -30,6 +30,9 @@ inline nlohmann::json json_or_null(const std::optional<double>& value) {
 /// its range as 0 to 1.8e308 written out in full).
 CLI::Validator positive_number();
 CLI::Validator non_negative_number();
+/// Text that reads as a number must be a finite one (nan and inf are refused; every
+/// comparison with NaN is false, so CLI11's range checks let it through).
+CLI::Validator finite_number_check();
 
 /// "WIDTHxHEIGHT" (each within [1, 16384]); InputError naming --resolution otherwise.
 std::pair<int, int> parse_resolution(const std::string& text);

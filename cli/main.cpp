@@ -1,11 +1,9 @@
 // rfd: design, predict, print and build passive reflectance-field displays.
 
-#include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <exception>
-#include <string>
 
+#include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "core/error.hpp"
 #include "core/files.hpp"
@@ -13,28 +11,15 @@
 
 namespace {
 
-// --quiet is accepted anywhere on the command line: every subcommand carries it too.
-void add_quiet_flag_everywhere(CLI::App& command, bool& quiet) {
+// What every command shares, added once all exist: --quiet anywhere on the command line,
+// and every number finite (CLI11's range checks let NaN through).
+void add_shared_rules(CLI::App& command, bool& quiet) {
+    for (CLI::Option* option : command.get_options())
+        if (option->get_type_name().starts_with("FLOAT")) option->check(rfd::cli::finite_number_check());
     for (CLI::App* sub : command.get_subcommands({})) {
         sub->add_flag("--quiet,-q", quiet, "No progress output on stderr");
-        add_quiet_flag_everywhere(*sub, quiet);
+        add_shared_rules(*sub, quiet);
     }
-}
-
-// Every number on the command line is finite: CLI11's range checks let NaN through (every
-// comparison with it is false), and no size, angle or count of rfd's is infinite.
-void require_finite_numbers(CLI::App& command) {
-    const CLI::Validator finite(
-        [](std::string& text) -> std::string {
-            char* end = nullptr;
-            const double value = std::strtod(text.c_str(), &end);
-            if (end != text.c_str() && *end == '\0' && !std::isfinite(value)) return "expected a finite number, got " + text;
-            return {};
-        },
-        "");
-    for (CLI::Option* option : command.get_options())
-        if (option->get_type_name().starts_with("FLOAT")) option->check(finite);
-    for (CLI::App* sub : command.get_subcommands({})) require_finite_numbers(*sub);
 }
 
 }  // namespace
@@ -60,8 +45,7 @@ int main(int argc, char** argv) {
     rfd::cli::add_print_commands(app, global);
     rfd::cli::add_simulate_commands(app, global);
     rfd::cli::add_holder_commands(app, global);
-    add_quiet_flag_everywhere(app, global.quiet);
-    require_finite_numbers(app);
+    add_shared_rules(app, global.quiet);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& error) {
