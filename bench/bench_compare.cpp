@@ -10,7 +10,8 @@
 
 #include "core/units.hpp"
 #include "optics/display.hpp"
-#include "patterns/compare.hpp"
+#include "predict/compare.hpp"
+#include "print/printer.hpp"
 #include "patterns/encode.hpp"
 #include "patterns/procedural.hpp"
 
@@ -23,29 +24,32 @@ struct Setup {
     optics::DisplaySimulator simulator{design};
     std::unique_ptr<patterns::Encoder> encoder;
     std::unique_ptr<optics::RasterTransparency> transparency;
-    std::unique_ptr<patterns::DisplayComparison> comparison;
+    std::unique_ptr<predict::DisplayComparison> comparison;
 
     Setup() {
         patterns::ProceduralOptions field_options;
-        field_options.kind = patterns::ProceduralKind::diamonds;
+        field_options.kind = patterns::ProceduralKind::Diamonds;
         field_options.spread_deg = 14.0;
         const relight::ReflectanceField field = patterns::procedural_field(field_options);
         const patterns::PatternGeometry g = patterns::pattern_geometry(design, design.printer.dpi_x, design.printer.dpi_y);
         patterns::EncodeOptions options;
-        options.model = patterns::choose_model(design, g).model;
+        options.model = optics::resolve(optics::ModelChoice::Auto, optics::DesignOptics(design), {g.dot_x, g.dot_y}).model;
         encoder = std::make_unique<patterns::Encoder>(design, field, g, options);
-        const patterns::PrintTone tone{1.0 / encoder->white(), 0.012};
+        print::ToneMap tone;
+        tone.printer = print::load_printer("epson_stylus_pro_4800");
+        tone.white = encoder->white();
+        tone.sheets = 1;
         const std::size_t channels = static_cast<std::size_t>(encoder->channels());
         std::vector<float> values(g.dot_count() * channels);
         for (int py = 0; py < g.height; ++py) {
             const std::span<float> row(values.data() + static_cast<std::size_t>(py) * static_cast<std::size_t>(g.width) * channels,
                                        static_cast<std::size_t>(g.width) * channels);
             encoder->render_row(py, row);
-            for (float& v : row) v = static_cast<float>(tone.transmittance(v));
+            for (float& v : row) v = static_cast<float>(tone.stack_transmittance(v));
         }
         transparency = std::make_unique<optics::RasterTransparency>(g.width, g.height, static_cast<int>(channels), g.dot_x,
                                                                     g.dot_y, std::move(values));
-        comparison = std::make_unique<patterns::DisplayComparison>(simulator, *transparency, *encoder, tone);
+        comparison = std::make_unique<predict::DisplayComparison>(simulator, *transparency, *encoder, tone);
     }
 };
 
@@ -59,7 +63,7 @@ void BM_CompareDirection(benchmark::State& state) {
     const Eigen::Vector3d light =
         setup.encoder->options().mapping.field_direction(optics::incident_direction(degrees_to_radians(8.0), 0.5));
     for (auto _ : state) {
-        const patterns::DirectionComparison r = setup.comparison->compare(light, options);
+        const predict::DirectionComparison r = setup.comparison->compare(light, options);
         benchmark::DoNotOptimize(r.comparison.mse);
     }
     state.SetLabel(std::string(optics::to_string(options.model)) + ", PSNR " +

@@ -45,8 +45,8 @@ void weights_benchmark(benchmark::State& state, Interpolation method) {
         static_cast<double>(state.iterations()) * static_cast<double>(queries.size()), benchmark::Counter::kIsRate);
 }
 
-void BM_WeightsDelaunay(benchmark::State& state) { weights_benchmark(state, Interpolation::delaunay); }
-void BM_WeightsNearest(benchmark::State& state) { weights_benchmark(state, Interpolation::nearest); }
+void BM_WeightsDelaunay(benchmark::State& state) { weights_benchmark(state, Interpolation::Delaunay); }
+void BM_WeightsNearest(benchmark::State& state) { weights_benchmark(state, Interpolation::Nearest); }
 BENCHMARK(BM_WeightsDelaunay)->Arg(256)->Arg(1024)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_WeightsNearest)->Arg(256)->Arg(1024)->Unit(benchmark::kMillisecond);
 

@@ -84,7 +84,7 @@ std::string iterations_csv(const relight::AdaptiveRun& run) {
 
 }  // namespace
 
-void add_adaptive_command(CLI::App& capture, const GlobalOptions&) {
+void add_adaptive_command(CLI::App& capture) {
     auto* cmd = capture.add_subcommand(
         "adaptive", "Adaptive sampling (thesis 5.3): capture where the field changes, optionally two-level (5.4)");
     auto opt = std::make_shared<AdaptiveCommandOptions>();

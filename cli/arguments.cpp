@@ -11,7 +11,7 @@
 #include "core/number.hpp"
 #include "core/sphere.hpp"
 #include "core/units.hpp"
-#include "patterns/display_lights.hpp"
+#include "predict/display_lights.hpp"
 #include "patterns/raster.hpp"
 
 namespace rfd::cli {
@@ -83,10 +83,13 @@ void apply_scene_overrides(relight::Scene& scene, const std::string& resolution,
 }
 
 relight::Interpolation parse_interpolation(const std::string& text) {
-    if (text == "delaunay") return relight::Interpolation::delaunay;
-    if (text == "solid-angle") return relight::Interpolation::solid_angle;
-    if (text == "nearest") return relight::Interpolation::nearest;
-    throw InputError("--interpolation: expected 'delaunay', 'solid-angle' or 'nearest', got '" + text + "'");
+    return value_of(relight::kInterpolationNames, text, SourceLocation{"", 0, 0, "--interpolation"});
+}
+
+CLI::Option* add_model_option(CLI::App& command, optics::ModelChoice& target) {
+    return add_choice(command, "--model", target, optics::kModelChoiceNames,
+                      "Optics: paraxial, exact, or auto (paraxial where it places every dot within the tolerance "
+                      "of the exact trace, a quarter dot unless --tolerance says; exact for Designs III and IV)");
 }
 
 print::PrinterProfile printer_for(const optics::Design& design, const std::string& option) {
@@ -98,7 +101,7 @@ print::PrinterProfile printer_for(const optics::Design& design, const std::strin
     return printer;
 }
 
-nlohmann::json environment_json(const std::string& file, const patterns::EnvironmentSampling& sampling) {
+nlohmann::json environment_json(const std::string& file, const predict::EnvironmentSampling& sampling) {
     return {{"file", file},
             {"size", {sampling.width, sampling.height}},
             {"sampled_size", {sampling.sampled_width, sampling.sampled_height}},
@@ -108,7 +111,7 @@ nlohmann::json environment_json(const std::string& file, const patterns::Environ
             {"directions_in_front", sampling.in_front}};
 }
 
-void print_environment_line(const std::string& file, const patterns::EnvironmentSampling& sampling) {
+void print_environment_line(const std::string& file, const predict::EnvironmentSampling& sampling) {
     std::printf("  envmap       %s: %d x %d", file.c_str(), sampling.width, sampling.height);
     if (sampling.reduction > 1)
         std::printf(", sampled at %d x %d (box filter %d: %s)", sampling.sampled_width, sampling.sampled_height,
@@ -167,7 +170,7 @@ patterns::AngularMapping read_pattern_mapping(const std::string& pattern_file) {
 std::vector<optics::DisplayLight> to_display_lights(const std::vector<std::string>& texts,
                                                  const patterns::AngularMapping& mapping) {
     std::vector<optics::DisplayLight> lights;
-    for (const std::string& text : texts) lights.push_back(patterns::display_light(parse_light(text), mapping));
+    for (const std::string& text : texts) lights.push_back(predict::display_light(parse_light(text), mapping));
     return lights;
 }
 

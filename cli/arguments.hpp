@@ -1,6 +1,8 @@
 #pragma once
 // Command-line values several commands share, parsed with messages that name the option.
 
+#include <array>
+#include <cstddef>
 #include <optional>
 #include <string>
 #include <utility>
@@ -11,7 +13,8 @@
 
 #include "optics/design.hpp"
 #include "optics/display.hpp"
-#include "patterns/display_lights.hpp"
+#include "optics/model.hpp"
+#include "predict/display_lights.hpp"
 #include "patterns/encode.hpp"
 #include "print/printed.hpp"
 #include "print/printer.hpp"
@@ -49,14 +52,31 @@ relight::Light parse_light(const std::string& text);
 /// --interpolation: "delaunay", "solid-angle" or "nearest"; InputError naming it otherwise.
 relight::Interpolation parse_interpolation(const std::string& text);
 
+/// An option that names one enumerator (core/names.hpp): only the names are accepted (a
+/// usage error lists them), `target` keeps its value when the option is absent and shows
+/// it as the default.
+template <class Enum, std::size_t N>
+CLI::Option* add_choice(CLI::App& command, const std::string& name, Enum& target, const std::array<Named<Enum>, N>& names,
+                        const std::string& help) {
+    CLI::Option* option = command.add_option_function<std::string>(
+        name, [&target, &names](const std::string& text) { target = value_of(names, text, SourceLocation{"", 0, 0, ""}); },
+        help);
+    option->check(CLI::IsMember(names_of(names)));
+    option->default_str(std::string(name_of(names, target)));
+    return option;
+}
+
+/// --model: paraxial, exact or auto (the cheapest within --tolerance dots; optics/model.hpp).
+CLI::Option* add_model_option(CLI::App& command, optics::ModelChoice& target);
+
 /// The --printer profile (a file or a bundled name); without one, the thesis's printer's
 /// tone values at the design's own [printer] resolution.
 print::PrinterProfile printer_for(const optics::Design& design, const std::string& option);
 
 /// How `rfd simulate` sampled an environment map: for the --json summary, and the
 /// "envmap" line of the text report (printed to stdout).
-nlohmann::json environment_json(const std::string& file, const patterns::EnvironmentSampling& sampling);
-void print_environment_line(const std::string& file, const patterns::EnvironmentSampling& sampling);
+nlohmann::json environment_json(const std::string& file, const predict::EnvironmentSampling& sampling);
+void print_environment_line(const std::string& file, const predict::EnvironmentSampling& sampling);
 
 /// How a pattern is printed, for `rfd simulate` and its subcommands: --printer,
 /// --brightness, --sheets (added to `command` by add_print_options).

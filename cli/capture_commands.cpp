@@ -44,11 +44,11 @@ relight::LightKernel parse_kernel(const std::string& text, const relight::LightK
     if (degrees == 0.0) return relight::LightKernel::directional();
     const double radius = degrees_to_radians(degrees);
     switch (scene_kernel.profile) {
-        case relight::KernelProfile::smooth: return relight::LightKernel::smooth(radius);
-        case relight::KernelProfile::gaussian: return relight::LightKernel::gaussian(radius / 3.0);
-        case relight::KernelProfile::constant: break;
+        case relight::KernelProfile::Smooth: return relight::LightKernel::smooth(radius);
+        case relight::KernelProfile::Gaussian: return relight::LightKernel::gaussian(radius / 3.0);
+        case relight::KernelProfile::Constant: break;
     }
-    return {relight::KernelProfile::constant, radius, 0.0};
+    return {relight::KernelProfile::Constant, radius, 0.0};
 }
 
 struct Lights {
@@ -139,7 +139,7 @@ void add_pattern_command(CLI::App& capture) {
 
 }  // namespace
 
-void add_capture_commands(CLI::App& capture, const GlobalOptions&) {
+void add_capture_commands(CLI::App& capture) {
     add_pattern_command(capture);
     auto* cmd = capture.add_subcommand(
         "render", "Render a scene under one light at a time into a reflectance field (virtual light stage)");
@@ -183,8 +183,8 @@ void add_capture_commands(CLI::App& capture, const GlobalOptions&) {
             relight::LightKernel k = kernel;
             if (radius > 0.0) {  // a light file's own kernel radius, with the same profile
                 k.radius = radius;
-                if (k.profile == relight::KernelProfile::gaussian) k.sigma = radius / 3.0;
-                if (kernel.is_directional()) k.profile = relight::KernelProfile::constant;
+                if (k.profile == relight::KernelProfile::Gaussian) k.sigma = radius / 3.0;
+                if (kernel.is_directional()) k.profile = relight::KernelProfile::Constant;
             }
             kernels.push_back(k);
         }

@@ -237,7 +237,7 @@ void add_calibrate_command(CLI::App& capture) {
 
 }  // namespace
 
-void add_capture_tool_commands(CLI::App& capture, const GlobalOptions&) {
+void add_capture_tool_commands(CLI::App& capture) {
     add_hdr_command(capture);
     add_calibrate_command(capture);
 }

@@ -8,19 +8,14 @@
 
 namespace rfd::cli {
 
-/// Options every command shares.
-struct GlobalOptions {
-    bool quiet = false;  ///< no progress on stderr
-};
-
-void add_optics_commands(CLI::App& app, const GlobalOptions& global);
-void add_chart_command(CLI::App& optics, const GlobalOptions& global);
-void add_design_commands(CLI::App& app, const GlobalOptions& global);
-void add_capture_commands(CLI::App& capture, const GlobalOptions& global);
-void add_adaptive_command(CLI::App& capture, const GlobalOptions& global);
-void add_study_command(CLI::App& capture, const GlobalOptions& global);
+void add_optics_commands(CLI::App& app);
+void add_chart_command(CLI::App& optics);
+void add_design_commands(CLI::App& app);
+void add_capture_commands(CLI::App& capture);
+void add_adaptive_command(CLI::App& capture);
+void add_study_command(CLI::App& capture);
 /// The `relight` group: render, eval.
-void add_relight_commands(CLI::App& app, const GlobalOptions& global);
+void add_relight_commands(CLI::App& app);
 /// `relight implicit`: train, predict, sweep (thesis chapter 7).
 void add_implicit_commands(CLI::App& relight);
 /// `relight upsample`: feature-guided upsampling (thesis chapter 6).
@@ -28,31 +23,24 @@ void add_upsample_command(CLI::App& relight);
 /// `capture implicit`: training and held-out sets for implicit relighting on the virtual stage.
 void add_capture_implicit_command(CLI::App& capture);
 /// `capture hdr` (exposure brackets) and `capture calibrate` (mirror-sphere light directions).
-void add_capture_tool_commands(CLI::App& capture, const GlobalOptions& global);
+void add_capture_tool_commands(CLI::App& capture);
 
 /// The `pattern` group: encode (Designs I/II), field (procedural test fields).
-void add_pattern_commands(CLI::App& app, const GlobalOptions& global);
+void add_pattern_commands(CLI::App& app);
 /// The `print` group: sheet (pattern sheets for a printer), moire (pitch calibration).
-void add_print_commands(CLI::App& app, const GlobalOptions& global);
+void add_print_commands(CLI::App& app);
 /// `pattern encode-angular` (Designs III/IV), added to the `pattern` group.
-void add_pattern_angular_command(CLI::App& pattern, const GlobalOptions& global);
+void add_pattern_angular_command(CLI::App& pattern);
 
 /// `simulate`: the predicted output of a Design I/II display under lights.
-void add_simulate_commands(CLI::App& app, const GlobalOptions& global);
+void add_simulate_commands(CLI::App& app);
 /// `simulate tolerance`: PSNR against assembly errors (shift, rotation, pitch, spacer).
-void add_simulate_tolerance_command(CLI::App& simulate, const GlobalOptions& global);
-
-/// `simulate` for Designs III and IV (cli/simulate_angular_commands.cpp): their options,
-/// added to the `simulate` command, and the run its callback hands over to.
-struct ObserverVariantOptions;
-std::shared_ptr<ObserverVariantOptions> add_observer_variant_options(CLI::App& simulate);
-void simulate_observer_variant(const CLI::App& simulate, const ObserverVariantOptions& options,
-                               const GlobalOptions& global);
+void add_simulate_tolerance_command(CLI::App& simulate);
 
 /// `simulate compare`: predicted output against the software relighting of the same field.
-void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& global);
+void add_simulate_compare_command(CLI::App& simulate);
 
 /// `holder`: the lens holder as OpenSCAD, its STLs and their checks; `holder coupon`.
-void add_holder_commands(CLI::App& app, const GlobalOptions& global);
+void add_holder_commands(CLI::App& app);
 
 }  // namespace rfd::cli

@@ -133,7 +133,7 @@ std::string summary_text(const optics::DesignSummary& s, bool observer_variant) 
 
 }  // namespace
 
-void add_design_commands(CLI::App& app, const GlobalOptions&) {
+void add_design_commands(CLI::App& app) {
     auto* design_cmd = app.add_subcommand("design", "Display designs (Designs I-IV)");
     design_cmd->require_subcommand(1);
     auto* cmd = design_cmd->add_subcommand(
@@ -160,7 +160,7 @@ void add_design_commands(CLI::App& app, const GlobalOptions&) {
     });
 }
 
-void add_chart_command(CLI::App& optics_cmd, const GlobalOptions&) {
+void add_chart_command(CLI::App& optics_cmd) {
     auto* cmd = optics_cmd.add_subcommand(
         "chart", "Speed-versus-accuracy chart: paraxial error against exact, per incident angle");
     struct Options {

@@ -13,6 +13,7 @@
 #include "cli/commands.hpp"
 #include "core/error.hpp"
 #include "core/files.hpp"
+#include "core/progress.hpp"
 #include "holders/checks.hpp"
 #include "holders/coupon.hpp"
 #include "holders/generate.hpp"
@@ -105,7 +106,7 @@ void print_check(const holders::HolderCheck& check, const holders::Holder& holde
                 check.clearance.closest_part.c_str());
 }
 
-void add_coupon_command(CLI::App& holder_cmd, const GlobalOptions& global) {
+void add_coupon_command(CLI::App& holder_cmd) {
     struct Options {
         std::string out, stl, profile;
         double diameter = 25.0;
@@ -121,7 +122,7 @@ void add_coupon_command(CLI::App& holder_cmd, const GlobalOptions& global) {
     cmd->add_option("--diameter", opt->diameter, "Diameter of the round part to fit, mm")->check(CLI::Range(2.0, 200.0));
     cmd->add_option("--square", opt->square, "Side of the square part (lenslet array) to fit, mm")->check(CLI::Range(2.0, 200.0));
     cmd->add_flag("--json", opt->json, "Machine-readable report on stdout");
-    cmd->callback([opt, &global] {
+    cmd->callback([opt] {
         const holders::HolderProfile profile = read_profile(opt->profile);
         const holders::Coupon coupon = holders::make_coupon(opt->diameter, opt->square, profile);
         write_text_file(opt->out, coupon.scad);
@@ -138,7 +139,7 @@ void add_coupon_command(CLI::App& holder_cmd, const GlobalOptions& global) {
             if (opt->json) std::printf("%s\n", report.dump(2).c_str());
             return;
         }
-        if (!global.quiet) std::fprintf(stderr, "building %s with openscad...\n", opt->stl.c_str());
+        if (Progress::enabled()) std::fprintf(stderr, "building %s with openscad...\n", opt->stl.c_str());
         const holders::StlBuild build = holders::build_stl(opt->out, "coupon", opt->stl);
         const holders::MeshCheck mesh = holders::check_stl(opt->stl);
         auto problems = mesh.problems();
@@ -163,7 +164,7 @@ void add_coupon_command(CLI::App& holder_cmd, const GlobalOptions& global) {
 
 }  // namespace
 
-void add_holder_commands(CLI::App& app, const GlobalOptions& global) {
+void add_holder_commands(CLI::App& app) {
     struct Options {
         std::string design, out, stl, profile;
         double time_limit = 300.0;
@@ -179,8 +180,8 @@ void add_holder_commands(CLI::App& app, const GlobalOptions& global) {
     cmd->add_option("--printer-profile", opt->profile, "Printer profile TOML (holders/profiles/)");
     cmd->add_option("--time-limit", opt->time_limit, "Seconds openscad may take per part")->check(CLI::Range(1.0, 36000.0));
     cmd->add_flag("--json", opt->json, "Machine-readable report on stdout");
-    add_coupon_command(*cmd, global);
-    cmd->callback([opt, cmd, &global] {
+    add_coupon_command(*cmd);
+    cmd->callback([opt, cmd] {
         if (!cmd->get_subcommands().empty()) return;  // the coupon ran
         if (opt->design.empty() || opt->out.empty())
             throw InputError("rfd holder: give a design file and --out FILE.scad (or use `rfd holder coupon`)");
@@ -200,7 +201,7 @@ void add_holder_commands(CLI::App& app, const GlobalOptions& global) {
         nlohmann::json builds = nlohmann::json::array();
         for (const auto& part : holder.parts) {
             const fs::path stl = part_stl(opt->stl, part.name);
-            if (!global.quiet) std::fprintf(stderr, "building %s with openscad...\n", stl.string().c_str());
+            if (Progress::enabled()) std::fprintf(stderr, "building %s with openscad...\n", stl.string().c_str());
             const holders::StlBuild build = holders::build_stl(opt->out, part.name, stl, opt->time_limit);
             builds.push_back({{"part", part.name}, {"stl", stl.string()}, {"seconds", build.seconds},
                               {"slivers_removed", build.slivers}, {"copies", part.copies}});

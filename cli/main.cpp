@@ -29,23 +29,23 @@ int main(int argc, char** argv) {
     CLI::App app{"rfd: design, predict, print and build passive reflectance-field displays"};
     app.set_version_flag("--version", std::string("rfd ") + RFD_VERSION);
     app.require_subcommand(1);
-    rfd::cli::GlobalOptions global;
-    app.add_flag("--quiet,-q", global.quiet, "No progress output on stderr");
-    app.parse_complete_callback([&] { rfd::Progress::set_quiet(global.quiet); });
-    rfd::cli::add_optics_commands(app, global);
-    rfd::cli::add_design_commands(app, global);
+    bool quiet = false;  // every command's --quiet (add_shared_rules) sets it too
+    app.add_flag("--quiet,-q", quiet, "No progress output on stderr");
+    app.parse_complete_callback([&] { rfd::Progress::set_quiet(quiet); });
+    rfd::cli::add_optics_commands(app);
+    rfd::cli::add_design_commands(app);
     CLI::App* capture = app.add_subcommand("capture", "Capture reflectance fields: virtual light stage, HDR assembly, light calibration, sampling patterns")->require_subcommand(1);
-    rfd::cli::add_capture_commands(*capture, global);
-    rfd::cli::add_adaptive_command(*capture, global);
-    rfd::cli::add_study_command(*capture, global);
+    rfd::cli::add_capture_commands(*capture);
+    rfd::cli::add_adaptive_command(*capture);
+    rfd::cli::add_study_command(*capture);
     rfd::cli::add_capture_implicit_command(*capture);
-    rfd::cli::add_relight_commands(app, global);
-    rfd::cli::add_capture_tool_commands(*capture, global);
-    rfd::cli::add_pattern_commands(app, global);
-    rfd::cli::add_print_commands(app, global);
-    rfd::cli::add_simulate_commands(app, global);
-    rfd::cli::add_holder_commands(app, global);
-    add_shared_rules(app, global.quiet);
+    rfd::cli::add_relight_commands(app);
+    rfd::cli::add_capture_tool_commands(*capture);
+    rfd::cli::add_pattern_commands(app);
+    rfd::cli::add_print_commands(app);
+    rfd::cli::add_simulate_commands(app);
+    rfd::cli::add_holder_commands(app);
+    add_shared_rules(app, quiet);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& error) {

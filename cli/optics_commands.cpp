@@ -61,10 +61,10 @@ void print_system(const optics::SequentialSystem& system, const optics::Cardinal
 
 }  // namespace
 
-void add_optics_commands(CLI::App& app, const GlobalOptions& global) {
+void add_optics_commands(CLI::App& app) {
     auto* optics_cmd = app.add_subcommand("optics", "Analyse lens systems and design optics");
     optics_cmd->require_subcommand(1);
-    add_chart_command(*optics_cmd, global);
+    add_chart_command(*optics_cmd);
 
     {
         auto* cmd = optics_cmd->add_subcommand(

@@ -33,11 +33,12 @@ relight::ViewSet read_source(const std::filesystem::path& source) {
 
 }  // namespace
 
-void add_pattern_angular_command(CLI::App& group, const GlobalOptions&) {
+void add_pattern_angular_command(CLI::App& group) {
     auto* cmd = group.add_subcommand(
         "encode-angular", "Encode a Design III/IV pattern: R(incident bin; macro-pixel; output direction)");
     struct Options {
-        std::string design, source, out, model = "paraxial", procedural, text = "0123456789ABCDEFGHIJKLMNOPQRST";
+        std::string design, source, out, procedural, text = "0123456789ABCDEFGHIJKLMNOPQRST";
+        optics::ModelChoice model = optics::ModelChoice::Auto;
         double dpi = 0.0, region = 1.0;
         int bin_samples = 3, table = 129;
         bool json = false, single = false;
@@ -46,7 +47,7 @@ void add_pattern_angular_command(CLI::App& group, const GlobalOptions&) {
     cmd->add_option("DESIGN", opt->design, "Design III or IV file (designs/design3.toml, design4.toml)")->required();
     cmd->add_option("SOURCE", opt->source, "View set (folder with views.txt, or the file) or one field folder");
     cmd->add_option("--out", opt->out, "Pattern file (.exr linear; .tif/.png sRGB)")->required();
-    cmd->add_option("--model", opt->model, "Optics: paraxial or exact")->check(CLI::IsMember({"paraxial", "exact"}));
+    add_model_option(*cmd, opt->model);
     cmd->add_option("--procedural", opt->procedural, "Instead of SOURCE: letters (Design III, figure 8.13) or diamonds (Design IV, figure 8.15)")
         ->check(CLI::IsMember({"letters", "diamonds"}));
     cmd->add_option("--text", opt->text, "Characters of the letters field, one per incident bin");
@@ -64,7 +65,7 @@ void add_pattern_angular_command(CLI::App& group, const GlobalOptions&) {
         const optics::DesignOptics optics(optics::load_design(opt->design));
         const optics::MesoPixelOptics meso(optics);
         patterns::AngularOptions options;
-        options.model = opt->model == "exact" ? optics::Model::Exact : optics::Model::Paraxial;
+        options.model = optics::resolve(opt->model, optics, optics.dot_mm()).model;
         options.bin_samples = opt->bin_samples;
         options.table_size = opt->table;
         options.dpi_x = options.dpi_y = opt->dpi;
@@ -93,7 +94,7 @@ void add_pattern_angular_command(CLI::App& group, const GlobalOptions&) {
             const nlohmann::json summary = {
                 {"out", opt->out},
                 {"design", opt->design},
-                {"model", opt->model},
+                {"model", std::string(optics::to_string(options.model))},
                 {"source", attributes["source"]},
                 {"size", {g.width, g.height}},
                 {"dpi", {g.dpi_x, g.dpi_y}},
@@ -110,7 +111,7 @@ void add_pattern_angular_command(CLI::App& group, const GlobalOptions&) {
             std::printf("wrote %s: %d x %d dots at %g x %g dpi, %d channel(s)\n", opt->out.c_str(), g.width, g.height,
                         g.dpi_x, g.dpi_y, pattern.channels());
             std::printf("  incident bins      %zu (meso cells), macro grid %d x %d, %s optics\n", pattern.bins().size(),
-                        pattern.macro_x(), pattern.macro_y(), opt->model.c_str());
+                        pattern.macro_x(), pattern.macro_y(), std::string(optics::to_string(options.model)).c_str());
             std::printf("  lit dots           %.1f %% of each meso cell (the rest lie outside the main lens's image or cross)\n",
                         100.0 * counts.lit_fraction());
             std::printf("  output             f = %.3f mm, dot blur +-%.2f deg\n", -1.0 / meso.output_gain(),

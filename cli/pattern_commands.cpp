@@ -23,19 +23,6 @@
 namespace rfd::cli {
 namespace {
 
-optics::Model parse_model(const std::string& text) {
-    if (text == "paraxial") return optics::Model::Paraxial;
-    if (text == "exact") return optics::Model::Exact;
-    throw InputError("--model: expected 'paraxial' or 'exact', got '" + text + "'");
-}
-
-patterns::ImageFit parse_fit(const std::string& text) {
-    if (text == "cover") return patterns::ImageFit::cover;
-    if (text == "contain") return patterns::ImageFit::contain;
-    if (text == "stretch") return patterns::ImageFit::stretch;
-    throw InputError("--fit: expected 'cover', 'contain' or 'stretch', got '" + text + "'");
-}
-
 std::pair<double, double> parse_dpi(const std::string& text) {
     double x = 0, y = 0;
     char comma = 0, extra = 0;
@@ -46,11 +33,13 @@ std::pair<double, double> parse_dpi(const std::string& text) {
     return {x, y};
 }
 
-void add_encode_command(CLI::App& pattern, const GlobalOptions& global) {
+void add_encode_command(CLI::App& pattern) {
     auto* cmd = pattern.add_subcommand("encode", "Encode a reflectance field into a print-resolution pattern (Designs I and II)");
     struct Options {
-        std::string design, field, out, model = "auto", interpolation = "delaunay", fit = "cover", dpi,
-            compression = "rle", preview;
+        std::string design, field, out, dpi, compression = "rle", preview;
+        optics::ModelChoice model = optics::ModelChoice::Auto;
+        relight::Interpolation interpolation = relight::Interpolation::Delaunay;
+        patterns::ImageFit fit = patterns::ImageFit::Cover;
         double tilt = 0.0, turn = 0.0, angle_scale = 1.0, margin = 0.0;
         bool allow_partial = false, json = false, single_float = false;
     };
@@ -58,14 +47,16 @@ void add_encode_command(CLI::App& pattern, const GlobalOptions& global) {
     cmd->add_option("DESIGN", opt->design, "Design file (designs/design1.toml, design2.toml)")->required();
     cmd->add_option("FIELD", opt->field, "Reflectance field folder or .lp file")->required();
     cmd->add_option("--out", opt->out, "Pattern file: .exr (linear, half float), .tif (16-bit sRGB) or .png")->required();
-    cmd->add_option("--model", opt->model, "Inverse map: auto (paraxial if within a quarter dot of the exact trace), paraxial or exact");
-    cmd->add_option("--interpolation", opt->interpolation, "Between light directions: delaunay, solid-angle or nearest");
+    add_model_option(*cmd, opt->model);
+    add_choice(*cmd, "--interpolation", opt->interpolation, relight::kInterpolationNames,
+               "Between light directions: delaunay, solid-angle or nearest");
     cmd->add_option("--tilt", opt->tilt, "Rotate the display's axis this many degrees toward the field's up (the thesis used 45)")
         ->check(CLI::Range(-90.0, 90.0));
     cmd->add_option("--turn", opt->turn, "Then rotate about the field's axis, degrees")->check(CLI::Range(-360.0, 360.0));
     cmd->add_option("--angle-scale", opt->angle_scale, "Field polar angle per display polar angle (re-parameterise the range)")
         ->check(CLI::Range(0.05, 20.0));
-    cmd->add_option("--fit", opt->fit, "Field image on the array: cover (crop), contain (letterbox) or stretch");
+    add_choice(*cmd, "--fit", opt->fit, patterns::kImageFitNames,
+               "Field image on the array: cover (crop), contain (letterbox) or stretch");
     cmd->add_option("--dpi", opt->dpi, "Printer resolution XDPIxYDPI (default: the design's [printer])");
     cmd->add_option("--margin", opt->margin, "Blank border around the array, mm")->check(CLI::Range(0.0, 100.0));
     cmd->add_option("--compression", opt->compression, "EXR compression: rle (fast, default), zips (smaller), none")
@@ -74,17 +65,17 @@ void add_encode_command(CLI::App& pattern, const GlobalOptions& global) {
     cmd->add_flag("--single-float", opt->single_float, "EXR: 32-bit floats instead of half floats (for values above 65504)");
     cmd->add_flag("--allow-partial", opt->allow_partial, "Encode even where the field does not cover the display's range");
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
-    cmd->callback([opt, &global] {
-        (void)global;
+    cmd->callback([opt] {
         const optics::Design design = optics::load_design(opt->design);
         patterns::EncodeOptions options;
         double dpi_x = design.printer.dpi_x.value, dpi_y = design.printer.dpi_y.value;
         if (!opt->dpi.empty()) std::tie(dpi_x, dpi_y) = parse_dpi(opt->dpi);
         const patterns::PatternGeometry geometry = patterns::pattern_geometry(design, Dpi{dpi_x}, Dpi{dpi_y}, opt->margin);
-        const patterns::ModelChoice choice = patterns::choose_model(design, geometry);
-        options.model = opt->model == "auto" ? choice.model : parse_model(opt->model);
-        options.interpolation = parse_interpolation(opt->interpolation);
-        options.fit = parse_fit(opt->fit);
+        const optics::ResolvedModel choice =
+            optics::resolve(opt->model, optics::DesignOptics(design), {geometry.dot_x, geometry.dot_y});
+        options.model = choice.model;
+        options.interpolation = opt->interpolation;
+        options.fit = opt->fit;
         options.mapping = {opt->tilt, opt->turn, opt->angle_scale};
         options.allow_partial_coverage = opt->allow_partial;
         options.field_name = opt->field;
@@ -116,7 +107,7 @@ void add_encode_command(CLI::App& pattern, const GlobalOptions& global) {
                 {"field_directions_used", field.size()},
                 {"display_half_angle_deg", radians_to_degrees(encoder.display_range().max_angle_rad)},
                 {"model", std::string(optics::to_string(options.model))},
-                {"paraxial_error_dots", choice.paraxial_error_dots},
+                {"paraxial_error_dots", json_or_null(choice.paraxial_error_dots)},
                 {"exact_table_error_deg", table_error_deg},
                 {"white", encoder.white()},
                 {"prepare_seconds", prepare_s},
@@ -131,7 +122,7 @@ void add_encode_command(CLI::App& pattern, const GlobalOptions& global) {
                     geometry.size_mm().y(), encoder.lattice().count_x() * encoder.lattice().count_y());
         std::printf("  display range      up to %.1f deg from the axis; %s model (paraxial error up to %.2f dots)",
                     radians_to_degrees(encoder.display_range().max_angle_rad),
-                    std::string(optics::to_string(options.model)).c_str(), choice.paraxial_error_dots);
+                    std::string(optics::to_string(options.model)).c_str(), choice.paraxial_error_dots.value_or(0.0));
         if (options.model == optics::Model::Exact) std::printf(" (table error %.2g deg)", table_error_deg);
         std::printf("\n  field              %zu light direction(s) used, tilt %g deg, turn %g deg, angle scale %g\n",
                     field.size(), opt->tilt, opt->turn, opt->angle_scale);
@@ -141,7 +132,7 @@ void add_encode_command(CLI::App& pattern, const GlobalOptions& global) {
     });
 }
 
-void add_field_command(CLI::App& pattern, const GlobalOptions& global) {
+void add_field_command(CLI::App& pattern) {
     auto* cmd = pattern.add_subcommand("field", "Write a procedural test field: letters, bars or diamonds (thesis 8.2.4)");
     struct Options {
         std::string kind, text = "SIG08", out, resolution = "64x64";
@@ -157,12 +148,11 @@ void add_field_command(CLI::App& pattern, const GlobalOptions& global) {
     cmd->add_option("--resolution", opt->resolution, "Image size WIDTHxHEIGHT");
     cmd->add_option("--out", opt->out, "Output field folder")->required();
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
-    cmd->callback([opt, &global] {
-        (void)global;
+    cmd->callback([opt] {
         patterns::ProceduralOptions options;
-        if (opt->kind == "letters") options.kind = patterns::ProceduralKind::letters;
-        else if (opt->kind == "bars") options.kind = patterns::ProceduralKind::bars;
-        else if (opt->kind == "diamonds") options.kind = patterns::ProceduralKind::diamonds;
+        if (opt->kind == "letters") options.kind = patterns::ProceduralKind::Letters;
+        else if (opt->kind == "bars") options.kind = patterns::ProceduralKind::Bars;
+        else if (opt->kind == "diamonds") options.kind = patterns::ProceduralKind::Diamonds;
         else throw InputError("KIND: expected 'letters', 'bars' or 'diamonds', got '" + opt->kind + "'");
         options.text = opt->text;
         options.spread_deg = opt->spread;
@@ -187,12 +177,12 @@ void add_field_command(CLI::App& pattern, const GlobalOptions& global) {
 
 }  // namespace
 
-void add_pattern_commands(CLI::App& app, const GlobalOptions& global) {
+void add_pattern_commands(CLI::App& app) {
     CLI::App* pattern = app.add_subcommand("pattern", "Encode reflectance fields into print-resolution patterns (Designs I-IV)")
                             ->require_subcommand(1);
-    add_encode_command(*pattern, global);
-    add_field_command(*pattern, global);
-    add_pattern_angular_command(*pattern, global);
+    add_encode_command(*pattern);
+    add_field_command(*pattern);
+    add_pattern_angular_command(*pattern);
 }
 
 }  // namespace rfd::cli

@@ -128,7 +128,7 @@ void add_moire_command(CLI::App& print_cmd) {
 
 }  // namespace
 
-void add_print_commands(CLI::App& app, const GlobalOptions&) {
+void add_print_commands(CLI::App& app) {
     auto* print_cmd = app.add_subcommand("print", "Printable sheets: patterns for a printer, pitch calibration");
     print_cmd->require_subcommand(1);
     add_sheet_command(*print_cmd);

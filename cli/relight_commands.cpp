@@ -255,7 +255,7 @@ void add_eval(CLI::App& relight) {
 
 }  // namespace
 
-void add_relight_commands(CLI::App& app, const GlobalOptions&) {
+void add_relight_commands(CLI::App& app) {
     CLI::App* relight = app.add_subcommand("relight", "Relight reflectance fields and measure interpolation error")
                             ->require_subcommand(1);
     add_render(*relight);

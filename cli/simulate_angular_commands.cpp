@@ -1,8 +1,8 @@
 // rfd simulate for Designs III and IV: what leaves an observer-variant display under given
 // lights, seen from chosen viewpoints, predicted from its design and its pattern as printed.
-// The `simulate` command's own arguments (DESIGN, PATTERN, --light, --out, --model, --printer,
-// --brightness, --sheets, --area-samples, --json) are read from it; the options below only
-// matter for these designs.
+// The `simulate` command's own options (SimulateOptions: DESIGN, PATTERN, --light, --out,
+// --model, --printer, --brightness, --sheets, --area-samples, --max-rays, --json) come from
+// it; the options below only matter for these designs.
 
 #include <chrono>
 #include <cmath>
@@ -17,6 +17,7 @@
 
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
+#include "cli/simulate_options.hpp"
 #include "core/error.hpp"
 #include "core/number.hpp"
 #include "core/image_io.hpp"
@@ -24,7 +25,7 @@
 #include "core/units.hpp"
 #include "optics/display_angular.hpp"
 #include "patterns/angular.hpp"
-#include "patterns/display_lights.hpp"
+#include "predict/display_lights.hpp"
 #include "print/printed.hpp"
 
 namespace rfd::cli {
@@ -69,14 +70,6 @@ Image zoomed(const Image& image, int zoom) {
     return out;
 }
 
-// The value of one of `simulate`'s own options; `fallback` (its default there) when not given:
-// CLI11 keeps a default in the bound variable, which lives in simulate_commands.cpp.
-template <typename T>
-T option_value(const CLI::App& app, const std::string& name, T fallback = T{}) {
-    const CLI::Option* option = app.get_option(name);
-    return option->count() > 0 ? option->as<T>() : fallback;
-}
-
 }  // namespace
 
 std::shared_ptr<ObserverVariantOptions> add_observer_variant_options(CLI::App& simulate) {
@@ -117,32 +110,27 @@ std::shared_ptr<ObserverVariantOptions> add_observer_variant_options(CLI::App& s
     return opt;
 }
 
-void simulate_observer_variant(const CLI::App& simulate, const ObserverVariantOptions& opt, const GlobalOptions&) {
+void simulate_observer_variant(const CLI::App& simulate, const SimulateOptions& common, const ObserverVariantOptions& opt) {
     const auto start = std::chrono::steady_clock::now();
-    const auto design_file = option_value<std::string>(simulate, "DESIGN");
-    const auto pattern_file = option_value<std::string>(simulate, "PATTERN");
-    const auto out = option_value<std::string>(simulate, "--out");
-    const auto light_texts = option_value<std::vector<std::string>>(simulate, "--light");
-    const auto model_choice = option_value<std::string>(simulate, "--model", "auto");
-    if (simulate.get_option("--rays")->count() > 0 || simulate.get_option("--lenslets")->count() > 0 ||
-        simulate.get_option("--pixels-per-lenslet")->count() > 0)
+    const std::string& design_file = common.design;
+    const std::string& pattern_file = common.pattern;
+    const std::string& out = common.out;
+    const std::vector<std::string>& light_texts = common.lights;
+    if (simulate.count("--rays") > 0 || simulate.count("--lenslets") > 0 || simulate.count("--pixels-per-lenslet") > 0)
         throw InputError(SourceLocation{design_file, 0, 0, "design.kind"},
                          "--rays, --lenslets and --pixels-per-lenslet are for Designs I and II; Designs III and IV "
                          "take --lens-rays, --view, --eye, --macro and --distribution");
     for (const char* name : {"--front", "--diffuser-transmittance", "--diffuser-reflectance"})
-        if (simulate.get_option(name)->count() > 0)
+        if (simulate.count(name) > 0)
             throw InputError(SourceLocation{design_file, 0, 0, "design.kind"},
                              std::string(name) + " is for Designs I and II (a diffuser shows the picture)");
-    const auto envmap = option_value<std::string>(simulate, "--envmap");
+    const std::string& envmap = common.envmap;
     if (!opt.distributions.empty() && opt.distribution_out.empty())
         throw InputError("--distribution needs --distribution-out FILE");
 
     const optics::Design design = optics::load_design(design_file);
     const optics::AngularDisplaySimulator simulator(design);
-    const print::PrinterProfile printer = printer_for(design, option_value<std::string>(simulate, "--printer"));
-    const print::PrintedTransparency pattern(design, printer, pattern_file,
-                                             option_value<double>(simulate, "--brightness", 1.0),
-                                             option_value<int>(simulate, "--sheets"));
+    const print::PrintedTransparency pattern = printed_pattern(design, pattern_file, common.print);
 
     // Field-frame lights to display lights: the mirror of patterns/angular.hpp's field_light_of.
     std::vector<optics::DisplayLight> lights;
@@ -168,10 +156,10 @@ void simulate_observer_variant(const CLI::App& simulate, const ObserverVariantOp
     // direction traces the whole main lens (--lens-rays squared rays), so the map is
     // box-filtered to at most --max-rays / 16 lit directions (default 256), which still
     // puts many directions in each of the display's few incident bins.
-    patterns::EnvironmentSampling sampling;
+    predict::EnvironmentSampling sampling;
     if (!envmap.empty()) {
-        const std::size_t budget = std::max<std::size_t>(1, option_value<std::size_t>(simulate, "--max-rays", 4096) / 16);
-        const std::vector<optics::DisplayLight> sky = patterns::environment_lights(
+        const std::size_t budget = std::max<std::size_t>(1, common.max_rays / 16);
+        const std::vector<optics::DisplayLight> sky = predict::environment_lights(
             read_image(envmap), envmap, [](const Eigen::Vector3d& field) { return patterns::field_light_of(field); },
             0.0, budget, &sampling);
         lights.insert(lights.end(), sky.begin(), sky.end());
@@ -184,10 +172,12 @@ void simulate_observer_variant(const CLI::App& simulate, const ObserverVariantOp
     optics::AngularSimulationOptions options;
     // auto: exact. The rays are traced once for all macro-pixels, so the exact model costs
     // little, and the paraxial one misplaces the bins' edges off axis.
-    options.model = model_choice == "paraxial" ? optics::Model::Paraxial : optics::Model::Exact;
+    const optics::DesignOptics design_optics(design);
+    const optics::ResolvedModel choice = optics::resolve(common.model, design_optics, design_optics.dot_mm());
+    options.model = choice.model;
     options.rays_per_side = opt.lens_rays;
     options.kernel_spacings = opt.kernel;
-    options.area_samples_per_side = option_value<int>(simulate, "--area-samples", 5);
+    options.area_samples_per_side = common.area_samples;
     options.distribution_pixels = opt.distribution_pixels;
     std::vector<std::string> view_names;
     for (const std::string& text : opt.views) {
@@ -247,7 +237,7 @@ void simulate_observer_variant(const CLI::App& simulate, const ObserverVariantOp
         {"out", written},
         {"design_kind", std::string(optics::to_string(design.kind))},
         {"model", model},
-        {"model_choice", model_choice},
+        {"model_choice", std::string(name_of(optics::kModelChoiceNames, common.model))},
         {"lights", light_texts.size()},
         {"views", view_names},
         {"directions", result.directions},
@@ -266,14 +256,14 @@ void simulate_observer_variant(const CLI::App& simulate, const ObserverVariantOp
         {"seconds", seconds}};
     if (!envmap.empty())
         summary["envmap"] = environment_json(envmap, sampling);
-    if (option_value<bool>(simulate, "--json")) {
+    if (common.json) {
         std::printf("%s\n", summary.dump(2).c_str());
         return;
     }
     std::printf("%s: what '%s' sends toward %zu viewpoint(s), %d x %d meso-pixels (%d x %d macro-pixels)\n",
                 written.front().c_str(), design.name.c_str(), result.views.size(), simulator.macro_x() * lattice_x,
                 simulator.macro_y() * lattice_y, simulator.macro_x(), simulator.macro_y());
-    std::printf("  model        %s (%s)\n", model.c_str(), model_choice == "auto" ? "auto: exact" : "as asked");
+    std::printf("  model        %s (%s)\n", model.c_str(), choice.reason.c_str());
     std::printf("  light        %zu light(s)%s, %zu direction(s) sampled, %zu rays per macro-pixel\n", light_texts.size(),
                 envmap.empty() ? "" : " and an environment map", result.directions, result.rays);
     if (!envmap.empty()) print_environment_line(envmap, sampling);

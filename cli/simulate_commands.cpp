@@ -12,11 +12,12 @@
 
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
+#include "cli/simulate_options.hpp"
 #include "core/error.hpp"
 #include "core/image_io.hpp"
 #include "core/units.hpp"
 #include "optics/display.hpp"
-#include "patterns/display_lights.hpp"
+#include "predict/display_lights.hpp"
 #include "patterns/encode.hpp"
 #include "print/printed.hpp"
 #include "print/sheet.hpp"
@@ -24,24 +25,13 @@
 namespace rfd::cli {
 namespace {
 
-CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
+CLI::App* add_simulate(CLI::App& app) {
     auto* cmd = app.add_subcommand(
         "simulate", "Predict what a display shows under given lights, from its design and its pattern as printed "
                     "(tone mapping, black level, density), before printing: Designs I/II on the diffuser, "
                     "III/IV from viewpoints; or a subcommand");
     cmd->require_subcommand(0, 1);
-    struct Options {
-        std::string design, pattern, out, lenslets, envmap, model = "auto";
-        PrintOptions print;
-        std::vector<std::string> lights;
-        double tolerance_dots = 0.25, pixels_per_lenslet = 8.0;
-        int rays = 8, area_samples = 5;
-        std::size_t max_rays = 4096;
-        std::vector<double> front{0.0, 0.1, 0.3, 1.0};
-        optics::DiffuserScatter diffuser;
-        bool json = false;
-    };
-    auto opt = std::make_shared<Options>();
+    auto opt = std::make_shared<SimulateOptions>();
     const auto observer_variant = add_observer_variant_options(*cmd);
     // Not ->required(): `rfd simulate SUBCOMMAND ...` has none of them (checked in the callback).
     cmd->add_option("DESIGN", opt->design, "Design TOML file");
@@ -55,8 +45,7 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
     cmd->add_option("--out", opt->out, "Predicted diffuser image: .exr (linear) or .png (sRGB)");
     cmd->add_option("--lenslets", opt->lenslets,
                     "Also the picture at the display's resolution: the mean over each lenslet (.exr or .png)");
-    cmd->add_option("--model", opt->model, "paraxial, exact, or auto (paraxial where it is within --tolerance)")
-        ->check(CLI::IsMember({"paraxial", "exact", "auto"}));
+    add_model_option(*cmd, opt->model);
     cmd->add_option("--tolerance", opt->tolerance_dots,
                     "auto: largest paraxial error on the pattern plane, in print dots (default 0.25)")
         ->check(positive_number());
@@ -85,8 +74,7 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
                     "Fraction of the front light the diffuser scatters back to the observer (default 0.5, nominal)")
         ->check(CLI::Range(0.0, 1.0));
     cmd->add_flag("--json", opt->json, "Machine-readable summary");
-    cmd->callback([cmd, opt, observer_variant, &global] {
-        (void)global;
+    cmd->callback([cmd, opt, observer_variant] {
         if (!cmd->get_subcommands().empty()) return;  // a subcommand ran instead
         if (opt->design.empty()) throw CLI::RequiredError("DESIGN");
         if (opt->pattern.empty()) throw CLI::RequiredError("PATTERN");
@@ -95,17 +83,17 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
         const auto start = std::chrono::steady_clock::now();
         const optics::Design design = optics::load_design(opt->design);
         if (design.kind == optics::DesignKind::III || design.kind == optics::DesignKind::IV)
-            return simulate_observer_variant(*cmd, *observer_variant, global);
+            return simulate_observer_variant(*cmd, *opt, *observer_variant);
         const optics::DisplaySimulator simulator(design);
         const print::PrintedTransparency pattern = printed_pattern(design, opt->pattern, opt->print);
 
         const patterns::AngularMapping mapping = read_pattern_mapping(opt->pattern);
         std::vector<optics::DisplayLight> lights = to_display_lights(opt->lights, mapping);
-        patterns::EnvironmentSampling sampling;
+        predict::EnvironmentSampling sampling;
         if (!opt->envmap.empty()) {
-            const std::vector<optics::DisplayLight> sky = patterns::environment_lights(
+            const std::vector<optics::DisplayLight> sky = predict::environment_lights(
                 read_image(opt->envmap), opt->envmap, mapping,
-                patterns::display_resolution_rad(simulator.optics(), mapping), opt->max_rays, &sampling);
+                predict::display_resolution_rad(simulator.optics(), mapping), opt->max_rays, &sampling);
             lights.insert(lights.end(), sky.begin(), sky.end());
         }
         if (lights.empty())
@@ -116,10 +104,10 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
         options.pixels_per_pitch = opt->pixels_per_lenslet;
         options.area_samples_per_side = opt->area_samples;
         options.max_rays_per_lenslet = opt->max_rays;
-        const patterns::ModelChoice choice = patterns::choose_model(design, pattern.geometry(), opt->tolerance_dots);
-        options.model = opt->model == "paraxial" ? optics::Model::Paraxial
-                        : opt->model == "exact"  ? optics::Model::Exact
-                                                 : choice.model;
+        const optics::ResolvedModel choice =
+            optics::resolve(opt->model, simulator.optics(), {pattern.geometry().dot_x, pattern.geometry().dot_y},
+                            opt->tolerance_dots);
+        options.model = choice.model;
         const optics::DiffuserImage result = simulator.simulate(pattern, lights, options);
         write_image(opt->out, result.image);
         const Image picture = simulator.per_lenslet(result);
@@ -131,8 +119,8 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
         nlohmann::json summary = {
             {"out", opt->out},
             {"model", model},
-            {"model_choice", opt->model},
-            {"paraxial_error_dots", choice.paraxial_error_dots},
+            {"model_choice", std::string(name_of(optics::kModelChoiceNames, opt->model))},
+            {"paraxial_error_dots", json_or_null(choice.paraxial_error_dots)},
             {"lights", opt->lights.size()},
             {"directions", result.directions},
             {"rays_per_direction", result.rays_per_direction},
@@ -163,8 +151,8 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
         std::printf("%s: %d x %d pixels of %.4f mm, what '%s' shows\n", opt->out.c_str(), result.image.width(),
                     result.image.height(), result.pixel_mm, design.name.c_str());
         std::printf("  model        %s (%s; paraxial error up to %.2f dots, tolerance %.2f)\n", model.c_str(),
-                    opt->model == "auto" ? "chosen automatically" : "as asked", choice.paraxial_error_dots,
-                    opt->tolerance_dots);
+                    opt->model == optics::ModelChoice::Auto ? "chosen automatically" : "as asked",
+                    choice.paraxial_error_dots.value_or(0.0), opt->tolerance_dots);
         std::printf("  light        %zu light(s)%s, %zu direction(s) sampled, %zu ray(s) per direction and lenslet, "
                     "%zu rays\n",
                     opt->lights.size(), opt->envmap.empty() ? "" : " and an environment map", result.directions,
@@ -194,10 +182,10 @@ CLI::App* add_simulate(CLI::App& app, const GlobalOptions& global) {
 
 }  // namespace
 
-void add_simulate_commands(CLI::App& app, const GlobalOptions& global) {
-    CLI::App* simulate = add_simulate(app, global);
-    add_simulate_tolerance_command(*simulate, global);
-    add_simulate_compare_command(*simulate, global);
+void add_simulate_commands(CLI::App& app) {
+    CLI::App* simulate = add_simulate(app);
+    add_simulate_tolerance_command(*simulate);
+    add_simulate_compare_command(*simulate);
 }
 
 }  // namespace rfd::cli

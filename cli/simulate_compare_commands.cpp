@@ -1,5 +1,5 @@
 // rfd simulate compare: the predicted display output beside the software relighting of the
-// same field at the display's resolution (patterns/compare.hpp), for a sweep of light
+// same field at the display's resolution (predict/compare.hpp), for a sweep of light
 // directions; and the simulator's speed-versus-accuracy chart.
 
 #include <algorithm>
@@ -24,7 +24,7 @@
 #include "core/sphere.hpp"
 #include "core/units.hpp"
 #include "optics/display.hpp"
-#include "patterns/compare.hpp"
+#include "predict/compare.hpp"
 #include "patterns/encode.hpp"
 #include "print/printed.hpp"
 
@@ -75,14 +75,14 @@ std::string format(const char* spec, double value) {
 
 }  // namespace
 
-void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& global) {
+void add_simulate_compare_command(CLI::App& simulate) {
     auto* cmd = simulate.add_subcommand(
         "compare", "Predicted display output beside the software relighting of the same field, at the display's "
                    "resolution, with PSNR and error maps, for a sweep of light directions (Designs I and II)");
     struct Options {
         PrintOptions print;
-        std::string design, pattern, field, out, model = "auto", models = "paraxial,exact,auto",
-                                                        accuracy_rays = "2,4,8,16";
+        std::string design, pattern, field, out, models = "paraxial,exact,auto", accuracy_rays = "2,4,8,16";
+        optics::ModelChoice model = optics::ModelChoice::Auto;
         std::vector<std::string> lights;
         double pixels_per_lenslet = 16.0;
         int sweep = 9, rays = 0, reference_rays = 32, view_pixels = 0;
@@ -99,8 +99,7 @@ void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& globa
     cmd->add_option("--sweep", opt->sweep,
                     "Light directions spread over the display's range, the first on its axis (default 9; 0: only --light)")
         ->check(CLI::Range(0, 1000));
-    cmd->add_option("--model", opt->model, "paraxial, exact, or auto (paraxial where it is within --tolerance)")
-        ->check(CLI::IsMember({"paraxial", "exact", "auto"}));
+    add_model_option(*cmd, opt->model);
     cmd->add_option("--tolerance", opt->tolerance_dots,
                     "auto: largest paraxial error on the pattern plane, in print dots (default 0.25)")
         ->check(positive_number());
@@ -125,27 +124,29 @@ void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& globa
     cmd->add_option("--reference-rays", opt->reference_rays, "Rays per side of the converged prediction (default 32)")
         ->check(CLI::Range(1, 512));
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout (also written to OUT/summary.json)");
-    cmd->callback([opt, &global] {
-        (void)global;
+    cmd->callback([opt] {
         const auto start = std::chrono::steady_clock::now();
         const optics::Design design = optics::load_design(opt->design);
         const optics::DisplaySimulator simulator(design);
         const print::PrintedTransparency pattern = printed_pattern(design, opt->pattern, opt->print);
         const patterns::PatternFileInfo info = patterns::read_pattern_info(opt->pattern);
         if (opt->sweep == 0 && opt->lights.empty()) throw InputError("--sweep 0 needs at least one --light");
-        std::vector<patterns::AccuracyModel> accuracy_models;
+        std::vector<predict::AccuracyModel> accuracy_models;
         std::vector<int> accuracy_rays;
-        const patterns::ModelChoice choice = patterns::choose_model(design, pattern.geometry(), opt->tolerance_dots);
+        const Eigen::Vector2d dot_mm(pattern.geometry().dot_x, pattern.geometry().dot_y);
+        const optics::ResolvedModel choice = optics::resolve(opt->model, simulator.optics(), dot_mm, opt->tolerance_dots);
         if (opt->chart_accuracy) {
             accuracy_rays = parse_ray_counts(opt->accuracy_rays);
             std::stringstream in(opt->models);
             std::string name;
             while (std::getline(in, name, ',')) {
-                if (name == "paraxial") accuracy_models.push_back({name, optics::Model::Paraxial});
-                else if (name == "exact") accuracy_models.push_back({name, optics::Model::Exact});
-                else if (name == "auto")
-                    accuracy_models.push_back({"auto (" + std::string(optics::to_string(choice.model)) + ")", choice.model});
-                else throw InputError("--models: expected paraxial, exact or auto separated by commas, got '" + name + "'");
+                const optics::ModelChoice asked =
+                    value_of(optics::kModelChoiceNames, name, SourceLocation{"", 0, 0, "--models"});
+                const optics::Model model = optics::resolve(asked, simulator.optics(), dot_mm, opt->tolerance_dots).model;
+                accuracy_models.push_back({asked == optics::ModelChoice::Auto
+                                               ? "auto (" + std::string(optics::to_string(model)) + ")"
+                                               : name,
+                                           model});
             }
             if (accuracy_models.empty()) throw InputError("--models: expected at least one model");
         }
@@ -168,9 +169,7 @@ void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& globa
                                  format("%.6g", encoder.white()) + ", the pattern's rfd:white " + format("%.6g", white) +
                                  " (pattern field '" + (info.attributes.count("field") ? info.attributes.at("field") : "?") +
                                  "')");
-        const print::ToneMap& tone = pattern.tone();
-        const patterns::PrintTone print_tone{tone.brightness / tone.white, std::pow(tone.printer.black_level, tone.sheets)};
-        const patterns::DisplayComparison comparison(simulator, pattern, encoder, print_tone);
+        const predict::DisplayComparison comparison(simulator, pattern, encoder, pattern.tone());
 
         std::vector<Eigen::Vector3d> directions = comparison.sweep(opt->sweep);
         for (const std::string& text : opt->lights) {
@@ -186,13 +185,11 @@ void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& globa
         // whole cells are within a dB at 8 (Design I, tests/test_compare.cpp).
         options.rays_per_side = opt->rays > 0 ? opt->rays : comparison.core().fraction < 1.0 ? 32 : 8;
         options.pixels_per_pitch = opt->pixels_per_lenslet;
-        options.model = opt->model == "paraxial" ? optics::Model::Paraxial
-                        : opt->model == "exact"  ? optics::Model::Exact
-                                                 : choice.model;
+        options.model = choice.model;
         const int count_x = encoder.lattice().count_x();
         const int view_pixels = opt->view_pixels > 0 ? opt->view_pixels : std::max(1, 240 / std::max(count_x, 1));
 
-        std::vector<patterns::DirectionComparison> results;
+        std::vector<predict::DirectionComparison> results;
         {
             Progress progress("comparing", directions.size());
             for (const Eigen::Vector3d& v : directions) {
@@ -208,13 +205,13 @@ void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& globa
                           "peak,mse,psnr_db,fitted_gain,psnr_fitted_db,psnr_cell_db\n";
         Stats fov, fov_fitted, fov_cell, clean, clean_cell;
         for (std::size_t k = 0; k < results.size(); ++k) {
-            const patterns::DirectionComparison& r = results[k];
+            const predict::DirectionComparison& r = results[k];
             char stem[32];
             std::snprintf(stem, sizeof stem, "light_%02zu", k);
             write_image(out / (std::string(stem) + "_prediction.exr"), r.prediction);
             write_image(out / (std::string(stem) + "_reference.exr"), r.reference);
             write_image(out / (std::string(stem) + "_error.exr"), r.comparison.error);
-            write_image(out / (std::string(stem) + ".png"), patterns::side_by_side(r, view_pixels, opt->error_gain));
+            write_image(out / (std::string(stem) + ".png"), predict::side_by_side(r, view_pixels, opt->error_gain));
             const SphericalAngles a = angles_of(r.field_direction);
             const double theta = radians_to_degrees(a.theta), phi = radians_to_degrees(a.phi);
             if (r.inside_field_of_view) {
@@ -282,7 +279,7 @@ void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& globa
             if (!series->x.empty()) chart.series.push_back(*series);
 
         nlohmann::json accuracy = nlohmann::json::array();
-        std::vector<patterns::AccuracyPoint> points;
+        std::vector<predict::AccuracyPoint> points;
         std::size_t accuracy_directions = 0;
         if (opt->chart_accuracy) {
             // Inside the field of view, where a model's error matters (all when none is).
@@ -292,7 +289,7 @@ void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& globa
             if (display_directions.empty())
                 for (const auto& r : results) display_directions.push_back(r.display_direction);
             accuracy_directions = display_directions.size();
-            points = patterns::accuracy_sweep(simulator, pattern, display_directions, accuracy_models, accuracy_rays,
+            points = predict::accuracy_sweep(simulator, pattern, display_directions, accuracy_models, accuracy_rays,
                                               opt->reference_rays, options);
         }
         // Charts last: a missing gnuplot still leaves every number on disk.
@@ -302,7 +299,7 @@ void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& globa
                      format("%.5f", p.seconds) + "," + format("%.6g", p.mse) + "," + format("%.4f", p.psnr_db) + "," +
                      format("%.4f", p.worst_psnr_db) + "," + format("%.4f", p.fitted_psnr_db) + "\n";
             nlohmann::json per_direction = nlohmann::json::array();
-            std::vector<const patterns::DirectionComparison*> used;
+            std::vector<const predict::DirectionComparison*> used;
             for (const auto& r : results)
                 if (r.inside_field_of_view || accuracy_directions == results.size()) used.push_back(&r);
             for (std::size_t k = 0; k < p.psnr_per_direction_db.size(); ++k)
@@ -328,8 +325,8 @@ void add_simulate_compare_command(CLI::App& simulate, const GlobalOptions& globa
             {"field", opt->field},
             {"out", opt->out},
             {"model", std::string(optics::to_string(options.model))},
-            {"model_choice", opt->model},
-            {"paraxial_error_dots", choice.paraxial_error_dots},
+            {"model_choice", std::string(name_of(optics::kModelChoiceNames, opt->model))},
+            {"paraxial_error_dots", json_or_null(choice.paraxial_error_dots)},
             {"rays_per_side", options.rays_per_side},
             {"lenslets", {count_x, encoder.lattice().count_y()}},
             {"display_range_deg", radians_to_degrees(encoder.display_range().max_angle_rad)},

@@ -76,14 +76,15 @@ std::string format(double value) {
 
 }  // namespace
 
-void add_simulate_tolerance_command(CLI::App& simulate, const GlobalOptions& global) {
+void add_simulate_tolerance_command(CLI::App& simulate) {
     auto* cmd = simulate.add_subcommand(
         "tolerance", "How precisely to assemble a Design I/II display: PSNR of the predicted picture (one value per "
                      "lenslet) against pattern shift, rotation, pitch error and spacer error, and the largest error "
                      "of each that keeps it above a threshold");
     struct Options {
         PrintOptions print;
-        std::string design, pattern, out, model = "paraxial", pitch_error;
+        std::string design, pattern, out, pitch_error;
+        optics::ModelChoice model = optics::ModelChoice::Paraxial;
         std::vector<std::string> lights;
         std::optional<double> shift_mm, rotation_deg, spacer_mm;
         double threshold = 30.0, tolerance_dots = 0.25;
@@ -113,17 +114,14 @@ void add_simulate_tolerance_command(CLI::App& simulate, const GlobalOptions& glo
     cmd->add_option("--threshold", opt->threshold, "PSNR threshold, dB (default 30)");
     // Paraxial by default: a tolerance compares two predictions of one model, so the
     // model's own error (a few print dots for Design I) largely cancels, at a fifth of the time.
-    cmd->add_option("--model", opt->model,
-                    "paraxial (default), exact, or auto (paraxial where it is within --tolerance)")
-        ->check(CLI::IsMember({"paraxial", "exact", "auto"}));
+    add_model_option(*cmd, opt->model);
     cmd->add_option("--tolerance", opt->tolerance_dots,
                     "auto: largest paraxial error on the pattern plane, in print dots (default 0.25)")
         ->check(positive_number());
     add_print_options(*cmd, opt->print);
     cmd->add_option("--rays", opt->rays, "Rays per side of each lenslet's grid (default 8)")->check(CLI::Range(1, 256));
     cmd->add_flag("--json", opt->json, "Machine-readable summary");
-    cmd->callback([opt, &global] {
-        (void)global;
+    cmd->callback([opt] {
         const auto start = std::chrono::steady_clock::now();
         const optics::Design design = optics::load_design(opt->design);
         const optics::DisplaySimulator simulator(design);
@@ -138,10 +136,9 @@ void add_simulate_tolerance_command(CLI::App& simulate, const GlobalOptions& glo
         options.refinements = opt->refinements;
         options.threshold_db = opt->threshold;
         options.simulation.rays_per_side = opt->rays;
-        const patterns::ModelChoice choice = patterns::choose_model(design, pattern.geometry(), opt->tolerance_dots);
-        options.simulation.model = opt->model == "paraxial" ? optics::Model::Paraxial
-                                   : opt->model == "exact"  ? optics::Model::Exact
-                                                            : choice.model;
+        options.simulation.model = optics::resolve(opt->model, simulator.optics(),
+                                                   {pattern.geometry().dot_x, pattern.geometry().dot_y}, opt->tolerance_dots)
+                                       .model;
         const std::vector<optics::DisplayLight> lights =
             opt->lights.empty() ? optics::default_tolerance_lights(simulator.optics(), options.simulation.model)
                                 : to_display_lights(opt->lights, read_pattern_mapping(opt->pattern));

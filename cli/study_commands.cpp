@@ -120,7 +120,7 @@ nlohmann::json summary_of(const relight::SamplingStudy& study, const StudyComman
 
 }  // namespace
 
-void add_study_command(CLI::App& capture, const GlobalOptions&) {
+void add_study_command(CLI::App& capture) {
     auto* cmd = capture.add_subcommand(
         "study", "Sampling study on a scene (thesis 5.3-5.4): fixed vs adaptive sampling, narrow vs wide kernels");
     auto opt = std::make_shared<StudyCommandOptions>();

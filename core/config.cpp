@@ -1,4 +1,5 @@
 #include "core/config.hpp"
+#include "core/text.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -79,12 +80,6 @@ std::string wrong_unit_message(std::string_view wanted, std::string_view found) 
     return "wrong unit: expected '" + std::string(wanted) + "' in " +
            std::string(unit_meaning(wanted)) + ", found '" + std::string(found) + "' (" +
            std::string(unit_meaning(found)) + ")";
-}
-
-std::string format_number(double value) {
-    std::ostringstream out;
-    out << value;
-    return out.str();
 }
 
 std::string type_name(const toml::node& node) {

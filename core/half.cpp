@@ -43,7 +43,7 @@ bool cpu_has_f16c() {
 void floats_to_half(std::span<const float> in, std::span<std::uint16_t> out, HalfConversion conversion) {
     RFD_CHECK(in.size() == out.size());
 #ifdef RFD_HAVE_F16C_PATH
-    if (conversion == HalfConversion::fastest && cpu_has_f16c()) {
+    if (conversion == HalfConversion::Fastest && cpu_has_f16c()) {
         convert_f16c(in.data(), out.data(), in.size());
         return;
     }

@@ -15,10 +15,10 @@
 
 namespace rfd {
 
-enum class HalfConversion { fastest, portable };
+enum class HalfConversion { Fastest, Portable };
 
 /// out[i] = the half-precision bits of in[i]. Precondition: in.size() == out.size().
 void floats_to_half(std::span<const float> in, std::span<std::uint16_t> out,
-                    HalfConversion conversion = HalfConversion::fastest);
+                    HalfConversion conversion = HalfConversion::Fastest);
 
 }  // namespace rfd

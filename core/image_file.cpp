@@ -23,20 +23,20 @@ std::size_t row_samples(const ImageFileSpec& spec) {
 
 std::size_t sample_size(SampleType type) {
     switch (type) {
-        case SampleType::uint8: return 1;
-        case SampleType::uint16:
-        case SampleType::half: return 2;
-        case SampleType::float32: return 4;
+        case SampleType::UInt8: return 1;
+        case SampleType::UInt16:
+        case SampleType::Half: return 2;
+        case SampleType::Float32: return 4;
     }
     RFD_CHECK(false);
 }
 
 const char* sample_type_name(SampleType type) {
     switch (type) {
-        case SampleType::uint8: return "uint8";
-        case SampleType::uint16: return "uint16";
-        case SampleType::half: return "half";
-        case SampleType::float32: return "float";
+        case SampleType::UInt8: return "uint8";
+        case SampleType::UInt16: return "uint16";
+        case SampleType::Half: return "half";
+        case SampleType::Float32: return "float";
     }
     RFD_CHECK(false);
 }
@@ -66,12 +66,12 @@ void ImageFileReader::read_rows(int y0, int y1, SampleType type, void* out) {
 
 void ImageFileReader::read_rows(int y0, int y1, std::span<float> out) {
     RFD_CHECK(out.size() >= row_samples(spec_) * static_cast<std::size_t>(y1 - y0));
-    read_rows(y0, y1, SampleType::float32, out.data());
+    read_rows(y0, y1, SampleType::Float32, out.data());
 }
 
 void ImageFileReader::read_rows(int y0, int y1, std::span<std::uint8_t> out) {
     RFD_CHECK(out.size() >= row_samples(spec_) * static_cast<std::size_t>(y1 - y0));
-    read_rows(y0, y1, SampleType::uint8, out.data());
+    read_rows(y0, y1, SampleType::UInt8, out.data());
 }
 
 ImageFileWriter::ImageFileWriter(const std::filesystem::path& path, const ImageFileSpec& spec, const std::string& what)
@@ -99,7 +99,7 @@ void ImageFileWriter::write_rows(int y0, int y1, SampleType type, const void* ro
 
 void ImageFileWriter::write_rows(int y0, int y1, std::span<const float> rows) {
     RFD_CHECK(rows.size() >= row_samples(spec_) * static_cast<std::size_t>(y1 - y0));
-    write_rows(y0, y1, SampleType::float32, rows.data());
+    write_rows(y0, y1, SampleType::Float32, rows.data());
 }
 
 void ImageFileWriter::finish() {

@@ -23,7 +23,7 @@
 namespace rfd {
 
 /// How a file stores its samples, or how a caller hands them over.
-enum class SampleType { uint8, uint16, half, float32 };
+enum class SampleType { UInt8, UInt16, Half, Float32 };
 
 /// Bytes per sample of `type`.
 std::size_t sample_size(SampleType type);
@@ -36,7 +36,7 @@ struct ImageFileSpec {
     int width = 0;
     int height = 0;
     int channels = 0;                       ///< colour channels; a file's alpha is dropped on reading
-    SampleType type = SampleType::float32;  ///< as stored in the file
+    SampleType type = SampleType::Float32;  ///< as stored in the file
     double dpi_x = 0.0;                     ///< print resolution, dots per inch; 0 when unknown
     double dpi_y = 0.0;
     std::string description;                ///< the ImageDescription text (TIFF, PNG), "" when none

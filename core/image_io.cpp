@@ -45,7 +45,7 @@ Image read_image(const std::filesystem::path& path) {
                              std::to_string(static_cast<long>(kMaxSamples)) + " samples an image may hold");
     std::vector<float> interleaved(static_cast<std::size_t>(spec.width) * spec.height * channels);
     file.read_rows(0, spec.height, interleaved);
-    const bool srgb = spec.type == SampleType::uint8 || spec.type == SampleType::uint16;
+    const bool srgb = spec.type == SampleType::UInt8 || spec.type == SampleType::UInt16;
     Image image(spec.width, spec.height, channels);
     std::size_t k = 0;
     for (int y = 0; y < spec.height; ++y)
@@ -68,10 +68,10 @@ void write_image(const std::filesystem::path& path, const Image& image) {
     ImageFileSpec spec{.width = image.width(), .height = image.height(), .channels = image.channels()};
     bool srgb = false;
     if (ext == ".png" || ext == ".jpg" || ext == ".jpeg") {
-        spec.type = SampleType::uint8;
+        spec.type = SampleType::UInt8;
         srgb = true;
     } else if (ext == ".tif" || ext == ".tiff") {
-        spec.type = SampleType::uint16;
+        spec.type = SampleType::UInt16;
         srgb = true;
     } else if (ext == ".exr") {
         spec.compression = "zip";

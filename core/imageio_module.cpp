@@ -25,20 +25,20 @@ constexpr double kCentimetresPerInch = 2.54;
 
 OIIO::TypeDesc type_desc(SampleType type) {
     switch (type) {
-        case SampleType::uint8: return OIIO::TypeDesc::UINT8;
-        case SampleType::uint16: return OIIO::TypeDesc::UINT16;
-        case SampleType::half: return OIIO::TypeDesc::HALF;
-        case SampleType::float32: return OIIO::TypeDesc::FLOAT;
+        case SampleType::UInt8: return OIIO::TypeDesc::UINT8;
+        case SampleType::UInt16: return OIIO::TypeDesc::UINT16;
+        case SampleType::Half: return OIIO::TypeDesc::HALF;
+        case SampleType::Float32: return OIIO::TypeDesc::FLOAT;
     }
     return OIIO::TypeDesc::FLOAT;
 }
 
 // Files of other integer or float types are read as the nearest of rfd's four.
 SampleType sample_type(OIIO::TypeDesc desc) {
-    if (desc == OIIO::TypeDesc::UINT8) return SampleType::uint8;
-    if (desc == OIIO::TypeDesc::HALF) return SampleType::half;
-    if (desc.is_floating_point()) return SampleType::float32;
-    return SampleType::uint16;
+    if (desc == OIIO::TypeDesc::UINT8) return SampleType::UInt8;
+    if (desc == OIIO::TypeDesc::HALF) return SampleType::Half;
+    if (desc.is_floating_point()) return SampleType::Float32;
+    return SampleType::UInt16;
 }
 
 ImageFileSpec spec_of(const OIIO::ImageSpec& spec) {

@@ -12,10 +12,6 @@
 
 namespace rfd::optics {
 
-std::string_view to_string(Model model) {
-    return model == Model::Paraxial ? "paraxial" : "exact";
-}
-
 Eigen::Vector3d incident_direction(double theta, double phi) {
     return {std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)};
 }

@@ -24,12 +24,11 @@
 
 #include "optics/design.hpp"
 #include "optics/exact.hpp"
+#include "optics/model.hpp"
 #include "optics/paraxial.hpp"
 
 namespace rfd::optics {
 
-enum class Model { Paraxial, Exact };
-std::string_view to_string(Model model);
 
 /// Unit direction of travel for incident angles theta (from the axis) and phi (azimuth).
 Eigen::Vector3d incident_direction(double theta_rad, double phi_rad);

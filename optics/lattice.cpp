@@ -1,10 +1,12 @@
 #include "optics/lattice.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
 #include "core/error.hpp"
+#include "core/units.hpp"
 
 namespace rfd::optics {
 namespace {
@@ -93,6 +95,22 @@ Eigen::Vector2d Lattice::half_extent() const {
     const double right = origin_.x() + (count_x_ - 1) * pitch_x_ + row_shift(count_y_ > 1 ? 1 : 0) +
                          0.5 * pitch_x_;
     return {std::max(left, right), 0.5 * (count_y_ - 1) * pitch_y_ + circumradius()};
+}
+
+std::vector<Eigen::Vector2d> probe_offsets(const Lattice& lattice) {
+    constexpr int kProbeAzimuths = 96;
+    constexpr std::array<double, 5> kProbeRadii = {0.0, 0.35, 0.7, 0.9, 1.0};
+    std::vector<Eigen::Vector2d> offsets;
+    offsets.emplace_back(0.0, 0.0);
+    for (int a = 0; a < kProbeAzimuths; ++a) {
+        const double phi = 2.0 * kPi * (a + 0.5) / kProbeAzimuths;
+        const Eigen::Vector2d dir(std::cos(phi), std::sin(phi));
+        const double reach = lattice.boundary_distance(dir);
+        for (double r : kProbeRadii)
+            if (r > 0.0) offsets.push_back(r * reach * dir);
+    }
+    for (const Eigen::Vector2d& corner : lattice.cell_corners()) offsets.push_back(corner);
+    return offsets;
 }
 
 }  // namespace rfd::optics

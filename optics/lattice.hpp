@@ -194,4 +194,9 @@ private:
     Eigen::Vector2d origin_;  // centre of cell (0, 0)
 };
 
+/// Offsets (mm from a cell's centre) that sample one cell for a worst case: the centre,
+/// rings at 0.35, 0.7, 0.9 of the way to the boundary and the boundary itself along 96
+/// azimuths, and the corners.
+std::vector<Eigen::Vector2d> probe_offsets(const Lattice& lattice);
+
 }  // namespace rfd::optics

@@ -9,17 +9,10 @@
 #include "core/sphere.hpp"
 #include "core/units.hpp"
 #include "patterns/glyphs.hpp"
+#include "core/text.hpp"
 
 namespace rfd::patterns {
 namespace {
-
-std::string angles_text(const Eigen::Vector3d& d) {
-    const SphericalAngles a = angles_of(d);
-    char text[64];
-    std::snprintf(text, sizeof text, "(theta %.2f, phi %.2f deg)", radians_to_degrees(a.theta),
-                  radians_to_degrees(a.phi));
-    return text;
-}
 
 // ----- view sets -----
 
@@ -181,7 +174,7 @@ std::unique_ptr<AngularLookup> ViewSetField::bind(const std::vector<LightBin>& b
             std::vector<double> weights(field.size(), 0.0);
             for (const auto& light : bins[b]) {
                 if (!lights.covers(light)) {
-                    missing.push_back("bin " + std::to_string(b) + " " + angles_text(light));
+                    missing.push_back("bin " + std::to_string(b) + " (" + format_direction(light) + ")");
                     continue;
                 }
                 const relight::InterpolationWeights w = lights.weights(light);

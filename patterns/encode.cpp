@@ -11,6 +11,7 @@
 #include "core/image_io.hpp"
 #include "core/parallel.hpp"
 #include "core/sphere.hpp"
+#include "core/text.hpp"
 
 namespace rfd::patterns {
 namespace {
@@ -20,19 +21,6 @@ using optics::LatticeKind;
 
 // Offsets probed per cell to find the display's range: azimuths around the cell and
 // fractions of the way from the centre to the boundary.
-constexpr int kProbeAzimuths = 96;
-constexpr std::array<double, 5> kProbeRadii = {0.0, 0.35, 0.7, 0.9, 1.0};
-
-std::string format_angle(double radians) {
-    char text[32];
-    std::snprintf(text, sizeof text, "%.1f", radians_to_degrees(radians));
-    return text;
-}
-
-std::string describe(const Eigen::Vector3d& direction) {
-    const SphericalAngles a = angles_of(direction);
-    return "theta " + format_angle(a.theta) + ", phi " + format_angle(a.phi);
-}
 
 const optics::Plane& check_design(const optics::Design& design) {
     if (design.kind != optics::DesignKind::I && design.kind != optics::DesignKind::II)
@@ -49,24 +37,6 @@ Eigen::Vector3d from_slopes(const Eigen::Vector2d& slopes) {
 }
 
 }  // namespace
-
-std::string_view to_string(ImageFit fit) {
-    switch (fit) {
-        case ImageFit::cover: return "cover";
-        case ImageFit::contain: return "contain";
-        case ImageFit::stretch: return "stretch";
-    }
-    return "cover";
-}
-
-std::string_view interpolation_name(relight::Interpolation method) {
-    switch (method) {
-        case relight::Interpolation::delaunay: return "delaunay";
-        case relight::Interpolation::solid_angle: return "solid-angle";
-        case relight::Interpolation::nearest: return "nearest";
-    }
-    return "delaunay";
-}
 
 Eigen::Matrix3d AngularMapping::rotation() const {
     return (Eigen::AngleAxisd(degrees_to_radians(turn_deg), Eigen::Vector3d::UnitZ()) *
@@ -205,27 +175,12 @@ void tabulate_exact(Encoder::Tables& t, const optics::Lattice& lattice, int node
     }
 }
 
-// Offsets probed over one cell: centre, rings toward the boundary, the boundary itself.
-std::vector<Eigen::Vector2d> probe_offsets(const optics::Lattice& lattice) {
-    std::vector<Eigen::Vector2d> offsets;
-    offsets.emplace_back(0.0, 0.0);
-    for (int a = 0; a < kProbeAzimuths; ++a) {
-        const double phi = 2.0 * kPi * (a + 0.5) / kProbeAzimuths;
-        const Eigen::Vector2d dir(std::cos(phi), std::sin(phi));
-        const double reach = lattice.boundary_distance(dir);
-        for (double r : kProbeRadii)
-            if (r > 0.0) offsets.push_back(r * reach * dir);
-    }
-    for (const Eigen::Vector2d& corner : lattice.cell_corners()) offsets.push_back(corner);
-    return offsets;
-}
-
 // The paraxial part of a design's inverse map, for needed_field_directions before any
 // table exists: it only needs a bound, and the exact map stays within a few percent of it
 // inside a cell.
 double paraxial_max_angle(const optics::DesignOptics& optics) {
     double largest = 0.0;
-    for (const Eigen::Vector2d& offset : probe_offsets(optics.lattice()))
+    for (const Eigen::Vector2d& offset : optics::probe_offsets(optics.lattice()))
         largest = std::max(largest, std::atan(offset.norm() / std::abs(optics.paraxial_b())));
     return largest;
 }
@@ -274,9 +229,9 @@ ImageFitTransform fit_image(const Eigen::Vector2d& half_extent, int width, int h
     t.height = height;
     const double sx = 2.0 * half_extent.x() / width, sy = 2.0 * half_extent.y() / height;
     switch (fit) {
-        case ImageFit::cover: t.mm_per_px_x = t.mm_per_px_y = std::max(sx, sy); break;
-        case ImageFit::contain: t.mm_per_px_x = t.mm_per_px_y = std::min(sx, sy); break;
-        case ImageFit::stretch: t.mm_per_px_x = sx; t.mm_per_px_y = sy; break;
+        case ImageFit::Cover: t.mm_per_px_x = t.mm_per_px_y = std::max(sx, sy); break;
+        case ImageFit::Contain: t.mm_per_px_x = t.mm_per_px_y = std::min(sx, sy); break;
+        case ImageFit::Stretch: t.mm_per_px_x = sx; t.mm_per_px_y = sy; break;
     }
     return t;
 }
@@ -366,24 +321,6 @@ relight::ReflectanceField load_field_for(const optics::Design& design, const std
     return out;
 }
 
-ModelChoice choose_model(const optics::Design& design, const PatternGeometry& geometry, double tolerance_dots) {
-    check_design(design);
-    const optics::DesignOptics optics(design);
-    const CellIndex centre = optics.centre_cell();
-    ModelChoice choice;
-    for (const Eigen::Vector2d& offset : probe_offsets(optics.lattice())) {
-        // Where the direction the paraxial map assigns to this dot really lands.
-        const Eigen::Vector3d d = from_slopes(offset / optics.paraxial_b());
-        const optics::DesignOptics::Landing landing = optics.land(d, centre, optics::Model::Exact);
-        if (landing.status != optics::RayStatus::Ok) continue;
-        const Eigen::Vector2d error = landing.offset - offset;
-        choice.paraxial_error_dots = std::max(
-            {choice.paraxial_error_dots, std::abs(error.x()) / geometry.dot_x, std::abs(error.y()) / geometry.dot_y});
-    }
-    choice.model = choice.paraxial_error_dots <= tolerance_dots ? optics::Model::Paraxial : optics::Model::Exact;
-    return choice;
-}
-
 Encoder::Encoder(const optics::Design& design, const relight::ReflectanceField& field,
                  const PatternGeometry& geometry, const EncodeOptions& options)
     : geometry_(geometry), options_(options) {
@@ -405,7 +342,7 @@ Encoder::Encoder(const optics::Design& design, const relight::ReflectanceField& 
     if (options.model == optics::Model::Exact) tabulate_exact(t, lattice, options.exact_table_nodes);
 
     // The display's range: probes over one cell.
-    for (const Eigen::Vector2d& offset : probe_offsets(lattice)) {
+    for (const Eigen::Vector2d& offset : optics::probe_offsets(lattice)) {
         const Eigen::Vector3d d = incident_direction(offset);
         range_.probes.push_back(d);
         range_.max_angle_rad = std::max(range_.max_angle_rad, std::acos(std::clamp(d.z(), -1.0, 1.0)));
@@ -420,7 +357,7 @@ Encoder::Encoder(const optics::Design& design, const relight::ReflectanceField& 
         highest_needed_theta = std::max(highest_needed_theta, angles_of(v).theta);
         if (t.interpolator->covers(v)) continue;
         ++missing_count;
-        if (missing.size() < 4) missing.push_back("display " + describe(d) + " -> field " + describe(v));
+        if (missing.size() < 4) missing.push_back("display " + format_direction(d) + " -> field " + format_direction(v));
     }
     if (missing_count > 0 && !options.allow_partial_coverage) {
         double field_highest = 0.0;
@@ -430,10 +367,10 @@ Encoder::Encoder(const optics::Design& design, const relight::ReflectanceField& 
         throw InputError(SourceLocation{options.field_name},
                          "the field does not cover the display's angular range: " + std::to_string(missing_count) +
                              " of " + std::to_string(range_.probes.size()) +
-                             " probed incident directions (up to " + format_angle(range_.max_angle_rad) +
-                             " deg from the display axis; field theta up to " + format_angle(highest_needed_theta) +
+                             " probed incident directions (up to " + format_number(radians_to_degrees(range_.max_angle_rad), 3) +
+                             " deg from the display axis; field theta up to " + format_number(radians_to_degrees(highest_needed_theta), 3) +
                              " deg) fall outside the field's light directions (theta up to " +
-                             format_angle(field_highest) + " deg), e.g.:" + list +
+                             format_number(radians_to_degrees(field_highest), 3) + " deg), e.g.:" + list +
                              "\n  capture those directions, change --tilt/--angle-scale, or pass --allow-partial");
     }
 
@@ -583,7 +520,7 @@ void render_run(const Encoder::Tables& t, relight::Interpolation method, std::si
     RFD_CHECK(channels <= std::size(kZeroSample));
     std::size_t triangle = start_triangle;
     const relight::SphericalInterpolator& interpolator = *t.interpolator;
-    const bool delaunay = method == relight::Interpolation::delaunay;
+    const bool delaunay = method == relight::Interpolation::Delaunay;
     // Plain doubles (zeroed): Eigen members here trip GCC 12's maybe-uninitialized.
     double planes[3][3] = {};
     std::array<const float*, 3> sample{};
@@ -742,24 +679,12 @@ void Encoder::render_row_of(int py, std::span<float> out) const {
 
 PatternAttributes Encoder::attributes() const {
     const optics::Design& design = tables_->optics.design();
-    char white[32];
-    std::snprintf(white, sizeof white, "%.9g", white_);
-    auto number = [](double v) {
-        char text[32];
-        std::snprintf(text, sizeof text, "%.6g", v);
-        return std::string(text);
-    };
-    return {{"design", design.name},
-            {"design_file", design.file},
-            {"kind", std::string(optics::to_string(design.kind))},
-            {"model", std::string(optics::to_string(options_.model))},
-            {"field", options_.field_name},
-            {"tilt_deg", number(options_.mapping.tilt_deg)},
-            {"turn_deg", number(options_.mapping.turn_deg)},
-            {"angle_scale", number(options_.mapping.angle_scale)},
-            {"interpolation", std::string(interpolation_name(options_.interpolation))},
-            {"fit", std::string(to_string(options_.fit))},
-            {"white", white}};
+    PatternAttributes attributes = encode_attributes(options_);
+    attributes["design"] = design.name;
+    attributes["design_file"] = design.file;
+    attributes["kind"] = std::string(optics::to_string(design.kind));
+    attributes["white"] = format_number(white_, 9);
+    return attributes;
 }
 
 DecodeComparison decode_and_compare(const Encoder& encoder, const std::vector<float>& pattern_rows,
@@ -828,10 +753,35 @@ AngularMapping mapping_of(const PatternFileInfo& info, const std::string& file) 
     AngularMapping mapping;
     mapping.tilt_deg = number_attribute(info, "tilt_deg", file, 0.0);
     mapping.turn_deg = number_attribute(info, "turn_deg", file, 0.0);
-    mapping.angle_scale = number_attribute(info, "angle_scale", file, 1.0);
-    if (!(mapping.angle_scale > 0.0))
-        throw InputError(SourceLocation{file, 0, 0, "rfd:angle_scale"}, "expected a positive number");
+    mapping.angle_scale = number_attribute(info, "angle_scale", file, 1.0, NumberRange::Positive);
     return mapping;
+}
+
+PatternAttributes encode_attributes(const EncodeOptions& options) {
+    const auto number = [](double v) { return format_number(v, 6); };
+    return {{"model", std::string(optics::to_string(options.model))},
+            {"field", options.field_name},
+            {"tilt_deg", number(options.mapping.tilt_deg)},
+            {"turn_deg", number(options.mapping.turn_deg)},
+            {"angle_scale", number(options.mapping.angle_scale)},
+            {"interpolation", std::string(name_of(relight::kInterpolationNames, options.interpolation))},
+            {"fit", std::string(name_of(kImageFitNames, options.fit))}};
+}
+
+EncodeOptions encode_options_of(const PatternFileInfo& info, const std::string& file) {
+    const auto text = [&](const std::string& key, const std::string& fallback) {
+        const auto it = info.attributes.find(key);
+        return it == info.attributes.end() ? fallback : it->second;
+    };
+    const auto where = [&](const std::string& key) { return SourceLocation{file, 0, 0, "rfd:" + key}; };
+    EncodeOptions options;
+    options.field_name = text("field", file);
+    options.model = value_of(optics::kModelNames, text("model", "paraxial"), where("model"));
+    options.mapping = mapping_of(info, file);
+    options.interpolation = value_of(relight::kInterpolationNames, text("interpolation", "delaunay"), where("interpolation"));
+    options.fit = value_of(kImageFitNames, text("fit", "cover"), where("fit"));
+    options.allow_partial_coverage = true;
+    return options;
 }
 
 }  // namespace rfd::patterns

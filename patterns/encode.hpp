@@ -71,17 +71,16 @@ struct AngularMapping {
 /// attributes (0, 0, 1 when absent). InputError naming `file` and the attribute otherwise.
 AngularMapping mapping_of(const PatternFileInfo& info, const std::string& file);
 
-enum class ImageFit { cover, contain, stretch };
-
-/// Names as the CLI spells them and the pattern's rfd: attributes record them.
-std::string_view to_string(ImageFit fit);
-std::string_view interpolation_name(relight::Interpolation method);
+enum class ImageFit { Cover, Contain, Stretch };
+/// As the command line and a pattern's rfd:fit attribute spell them.
+inline constexpr std::array kImageFitNames{Named{ImageFit::Cover, "cover"}, Named{ImageFit::Contain, "contain"},
+                                           Named{ImageFit::Stretch, "stretch"}};
 
 struct EncodeOptions {
     optics::Model model = optics::Model::Paraxial;
-    relight::Interpolation interpolation = relight::Interpolation::delaunay;
+    relight::Interpolation interpolation = relight::Interpolation::Delaunay;
     AngularMapping mapping;
-    ImageFit fit = ImageFit::cover;
+    ImageFit fit = ImageFit::Cover;
     /// Nodes per side of the exact model's inverse-map table over one cell.
     int exact_table_nodes = 257;
     /// Encode even where the field does not cover the display's range (the interpolation
@@ -89,6 +88,15 @@ struct EncodeOptions {
     bool allow_partial_coverage = false;
     std::string field_name = "field";  ///< for messages
 };
+
+/// The encoder's options as a pattern file's rfd: attributes record them, and back: model,
+/// field, tilt_deg, turn_deg, angle_scale, interpolation, fit. Numbers keep 6 significant
+/// digits. Reading: absent attributes take the defaults of files written before they were
+/// recorded (paraxial, no mapping, delaunay, cover); InputError naming `file` and the
+/// attribute for a value it cannot read. The options read back allow partial coverage: a
+/// reader needs every direction the pattern could show.
+PatternAttributes encode_attributes(const EncodeOptions& options);
+EncodeOptions encode_options_of(const PatternFileInfo& info, const std::string& file);
 
 /// The display incident directions a design needs: those whose chief ray lands inside a
 /// lenslet cell. `max_angle_rad` bounds them (from the cell's corners and edges).
@@ -107,16 +115,6 @@ std::vector<std::size_t> needed_field_directions(const optics::Design& design,
 relight::ReflectanceField load_field_for(const optics::Design& design,
                                          const std::filesystem::path& field,
                                          const EncodeOptions& options);
-
-/// The cheapest model that places every dot within `tolerance_dots` (along x or y) of where
-/// the exact optics send its direction: paraxial when its landing error over the whole cell
-/// (probed at its boundary and inside) stays below the tolerance, exact otherwise. Also
-/// returns that largest paraxial error, in dots.
-struct ModelChoice {
-    optics::Model model = optics::Model::Paraxial;
-    double paraxial_error_dots = 0.0;
-};
-ModelChoice choose_model(const optics::Design& design, const PatternGeometry& geometry, double tolerance_dots = 0.25);
 
 class Encoder final : public PatternSource {
 public:

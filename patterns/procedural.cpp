@@ -70,7 +70,7 @@ relight::ReflectanceField procedural_field(const ProceduralOptions& options) {
     relight::ReflectanceField field;
     double spacing = spread;  // angle between neighbouring picture directions
     switch (options.kind) {
-        case ProceduralKind::letters: {
+        case ProceduralKind::Letters: {
             if (options.text.empty()) throw InputError("--text: the letters field needs at least one character");
             const std::size_t n = options.text.size();
             if (n > 1) spacing = 2.0 * spread / static_cast<double>(n - 1);
@@ -83,14 +83,14 @@ relight::ReflectanceField procedural_field(const ProceduralOptions& options) {
             }
             break;
         }
-        case ProceduralKind::bars:
+        case ProceduralKind::Bars:
             field.directions.push_back(direction_from_angles(spread, kPi));  // from the left
             field.images.push_back(bars(options.width, options.height, true));
             field.directions.push_back(direction_from_angles(spread, 0.0));  // from the right
             field.images.push_back(bars(options.width, options.height, false));
             spacing = spread;
             break;
-        case ProceduralKind::diamonds: {
+        case ProceduralKind::Diamonds: {
             const int steps = options.diamond_steps;
             if (steps < 2) throw InputError("--steps: the diamonds field needs at least 2 directions per side");
             spacing = 2.0 * spread / (steps - 1);

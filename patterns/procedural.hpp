@@ -16,7 +16,7 @@
 // least one picture spacing from every picture direction): between a picture direction and
 // its guards the picture fades to black, as the interpolation between captured lights does.
 //
-// Example: ReflectanceField f = procedural_field({.kind = ProceduralKind::letters, .text = "SIG08"});
+// Example: ReflectanceField f = procedural_field({.kind = ProceduralKind::Letters, .text = "SIG08"});
 
 #include <string>
 
@@ -24,10 +24,10 @@
 
 namespace rfd::patterns {
 
-enum class ProceduralKind { letters, bars, diamonds };
+enum class ProceduralKind { Letters, Bars, Diamonds };
 
 struct ProceduralOptions {
-    ProceduralKind kind = ProceduralKind::letters;
+    ProceduralKind kind = ProceduralKind::Letters;
     std::string text = "SIG08";  ///< letters: one character per light direction
     double spread_deg = 10.0;    ///< largest angle of a picture direction from the zenith
     int width = 64, height = 64;

@@ -116,11 +116,11 @@ void write_pattern(const std::filesystem::path& path, const PatternSource& sourc
     ImageFileSpec spec{.width = g.width, .height = g.height, .channels = channels, .dpi_x = g.dpi_x, .dpi_y = g.dpi_y};
     bool srgb = false;
     if (ext == ".exr") {
-        spec.type = options.half_float ? SampleType::half : SampleType::float32;
+        spec.type = options.half_float ? SampleType::Half : SampleType::Float32;
         spec.compression = options.exr_compression;
         for (const auto& [key, value] : attributes) spec.attributes[key] = value;
     } else if (ext == ".tif" || ext == ".tiff" || ext == ".png") {
-        spec.type = ext == ".png" ? SampleType::uint8 : SampleType::uint16;
+        spec.type = ext == ".png" ? SampleType::UInt8 : SampleType::UInt16;
         if (ext != ".png") spec.compression = "zip";
         srgb = true;
         // TIFF and PNG keep no custom attributes: one "rfd:key=value" line each in the
@@ -140,8 +140,8 @@ void write_pattern(const std::filesystem::path& path, const PatternSource& sourc
     // Half-float EXR rows are converted by the rendering threads (F16C, in parallel), so the
     // writer thread is left with compression and disk; other formats go as float to
     // OpenImageIO, which converts them.
-    const bool half = spec.type == SampleType::half;
-    const SampleType strip_type = half ? SampleType::half : SampleType::float32;
+    const bool half = spec.type == SampleType::Half;
+    const SampleType strip_type = half ? SampleType::Half : SampleType::Float32;
     const std::size_t row_bytes = row_floats * sample_size(strip_type);
     // Two strips: one is written (on its own thread: compression and disk) while the next
     // is rendered in parallel.
@@ -248,7 +248,7 @@ void PatternReader::read_rows(int y0, int y1, std::span<float> out) {
     RFD_CHECK(out.size() >= row_floats * static_cast<std::size_t>(y1 - y0));
     if (y0 == y1) return;
     file_->read_rows(y0, y1, out);
-    const bool srgb = file_->spec().type == SampleType::uint8 || file_->spec().type == SampleType::uint16;
+    const bool srgb = file_->spec().type == SampleType::UInt8 || file_->spec().type == SampleType::UInt16;
     const std::size_t count = row_floats * static_cast<std::size_t>(y1 - y0);
     for (std::size_t k = 0; k < count; ++k) {
         float& v = out[k];
@@ -316,13 +316,20 @@ void write_preview(const std::filesystem::path& pattern, const std::filesystem::
     write_image(preview, image);
 }
 
-double number_attribute(const PatternFileInfo& info, const std::string& key, const std::string& file,
-                        double fallback) {
+double number_attribute(const PatternFileInfo& info, const std::string& key, const std::filesystem::path& file,
+                        double fallback, NumberRange range) {
     const auto it = info.attributes.find(key);
     if (it == info.attributes.end()) return fallback;
     const std::optional<double> value = finite_number(it->second);
-    if (!value)
-        throw InputError(SourceLocation{file, 0, 0, "rfd:" + key}, "expected a number, got '" + it->second + "'");
+    const bool in_range = value && (range == NumberRange::Any || (range == NumberRange::NonNegative && *value >= 0.0) ||
+                                    (range == NumberRange::Positive && *value > 0.0));
+    if (!in_range) {
+        const char* expected = range == NumberRange::Positive      ? "a positive number"
+                               : range == NumberRange::NonNegative ? "a non-negative number"
+                                                                   : "a number";
+        throw InputError(SourceLocation{file.string(), 0, 0, "rfd:" + key},
+                         std::string("expected ") + expected + ", got '" + it->second + "'");
+    }
     return *value;
 }
 

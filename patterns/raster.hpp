@@ -105,9 +105,10 @@ struct PatternFileInfo {
 PatternFileInfo read_pattern_info(const std::filesystem::path& path);
 
 /// The number in rfd: attribute `key`, or `fallback` when the file has none. InputError
-/// naming `file` and the attribute when it is not one finite number.
-double number_attribute(const PatternFileInfo& info, const std::string& key, const std::string& file,
-                        double fallback);
+/// naming `file` and the attribute when it is not one finite number in `range`.
+enum class NumberRange { Any, NonNegative, Positive };
+double number_attribute(const PatternFileInfo& info, const std::string& key, const std::filesystem::path& file,
+                        double fallback, NumberRange range = NumberRange::Any);
 
 /// Reads an image file a strip of rows at a time, for files too large to load: linear
 /// floats, interleaved, integer formats decoded from sRGB as read_image does, alpha dropped.

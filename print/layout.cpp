@@ -8,6 +8,7 @@
 
 #include "core/error.hpp"
 #include "optics/analysis.hpp"
+#include "core/text.hpp"
 
 namespace rfd::print {
 namespace {
@@ -18,12 +19,6 @@ constexpr double kCropGap = 1.0;        // mm between the pattern and a crop mar
 constexpr double kCropLength = 4.5;     // mm
 constexpr double kLabelFont = 2.4;      // mm, the label's font size
 constexpr double kRulerFont = 1.8;      // mm
-
-std::string format_number(double value) {
-    char text[64];
-    std::snprintf(text, sizeof text, "%g", value);
-    return text;
-}
 
 // The lattice whose corner lenslets carry markers, if the design has one.
 std::optional<optics::Lattice> marker_lattice(const optics::Design& design) {

@@ -8,27 +8,65 @@
 
 #include "core/error.hpp"
 #include "core/parallel.hpp"
-#include "print/sheet.hpp"
+#include "core/text.hpp"
 
 namespace rfd::print {
+
+patterns::PatternGeometry check_pattern(const optics::Design& design, const PrinterProfile& printer,
+                                        const std::filesystem::path& pattern_file,
+                                        const patterns::PatternFileInfo& info) {
+    const double margin = patterns::number_attribute(info, "margin_mm", pattern_file, 0.0, patterns::NumberRange::NonNegative);
+    const patterns::PatternGeometry expected =
+        patterns::pattern_geometry(design, printer.dpi_x, printer.dpi_y, margin);
+    const auto dpi_differs = [](double file_dpi, Dpi dpi) {
+        return file_dpi > 0.0 && std::abs(file_dpi - dpi.value) > 1e-3 * dpi.value;
+    };
+    if (info.width != expected.width || info.height != expected.height ||
+        dpi_differs(info.dpi_x, printer.dpi_x) || dpi_differs(info.dpi_y, printer.dpi_y)) {
+        std::string file_size = std::to_string(info.width) + " x " + std::to_string(info.height) + " dots";
+        if (info.dpi_x > 0.0)
+            file_size += " at " + format_number(info.dpi_x) + " x " + format_number(info.dpi_y) + " dpi";
+        throw InputError(SourceLocation{pattern_file.string()},
+                         "the pattern is " + file_size + ", but '" + design.name + "' at " +
+                             format_number(printer.dpi_x.value) + " x " + format_number(printer.dpi_y.value) +
+                             " dpi (printer '" + printer.name + "') needs " + std::to_string(expected.width) +
+                             " x " + std::to_string(expected.height) +
+                             " dots: encode the pattern at the printer's resolution");
+    }
+    return expected;
+}
+
+void check_tone_options(double brightness, int sheets) {
+    if (!(brightness > 0.0) || !std::isfinite(brightness))
+        throw InputError(SourceLocation{"", 0, 0, "--brightness"}, "expected a positive number, got " + format_number(brightness));
+    if (sheets != 0 && sheets != 1 && sheets != 2)
+        throw InputError(SourceLocation{"", 0, 0, "--sheets"}, "expected 1 or 2, got " + std::to_string(sheets));
+}
+
+PrintSetup check_print(const optics::Design& design, const PrinterProfile& printer,
+                       const std::filesystem::path& pattern_file, const patterns::PatternFileInfo& info,
+                       double brightness, int sheets) {
+    check_tone_options(brightness, sheets);
+    if (info.channels != 1 && info.channels != 3)
+        throw InputError(SourceLocation{pattern_file.string()},
+                         "expected a pattern with 1 (grey) or 3 (RGB) channels, got " + std::to_string(info.channels));
+    PrintSetup setup;
+    setup.geometry = check_pattern(design, printer, pattern_file, info);
+    setup.channels = info.channels;
+    setup.tone.printer = printer;
+    setup.tone.brightness = brightness;
+    setup.tone.white = patterns::number_attribute(info, "white", pattern_file, 1.0, patterns::NumberRange::Positive);
+    setup.tone.sheets = sheets == 0 ? printer.sheets : sheets;
+    return setup;
+}
 
 PrintedTransparency::PrintedTransparency(const optics::Design& design, const PrinterProfile& printer,
                                          std::filesystem::path pattern_file, double brightness, int sheets)
     : file_(std::move(pattern_file)) {
-    if (!(brightness > 0.0) || !std::isfinite(brightness))
-        throw InputError(SourceLocation{"", 0, 0, "--brightness"}, "expected a positive number");
-    if (sheets != 0 && sheets != 1 && sheets != 2)
-        throw InputError(SourceLocation{"", 0, 0, "--sheets"}, "expected 1 or 2, got " + std::to_string(sheets));
-    const patterns::PatternFileInfo info = patterns::read_pattern_info(file_);
-    if (info.channels != 1 && info.channels != 3)
-        throw InputError(SourceLocation{file_.string()},
-                         "expected a pattern with 1 (grey) or 3 (RGB) channels, got " + std::to_string(info.channels));
-    geometry_ = check_pattern(design, printer, file_, info);
-    channels_ = info.channels;
-    tone_.printer = printer;
-    tone_.brightness = brightness;
-    tone_.white = attribute_number(info, "white", file_, 1.0, /*allow_zero=*/false);
-    tone_.sheets = sheets == 0 ? printer.sheets : sheets;
+    const PrintSetup setup = check_print(design, printer, file_, patterns::read_pattern_info(file_), brightness, sheets);
+    geometry_ = setup.geometry;
+    tone_ = setup.tone;
+    channels_ = setup.channels;
 }
 
 void PrintedTransparency::sample(std::span<const Eigen::Vector2d> points, std::span<float> out) const {

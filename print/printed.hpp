@@ -18,6 +18,29 @@
 
 namespace rfd::print {
 
+/// Checks that `pattern_file` is `design`'s raster at the printer's dpi (size and, when the
+/// file has one, resolution; with the file's rfd:margin_mm if any) and returns that raster.
+/// Throws InputError naming the file and both sizes otherwise.
+patterns::PatternGeometry check_pattern(const optics::Design& design, const PrinterProfile& printer,
+                                        const std::filesystem::path& pattern_file,
+                                        const patterns::PatternFileInfo& info);
+
+/// --brightness (positive, finite) and --sheets (1, 2, or 0 for the profile's): InputError
+/// naming the option otherwise.
+void check_tone_options(double brightness, int sheets);
+
+/// A pattern file as it will be printed: its raster (check_pattern), channels (1 or 3)
+/// and tone mapping (the printer's, the file's rfd:white, `brightness`, `sheets`; 0 sheets
+/// means the profile's).
+struct PrintSetup {
+    patterns::PatternGeometry geometry;
+    ToneMap tone;
+    int channels = 0;
+};
+PrintSetup check_print(const optics::Design& design, const PrinterProfile& printer,
+                       const std::filesystem::path& pattern_file, const patterns::PatternFileInfo& info,
+                       double brightness, int sheets);
+
 class PrintedTransparency final : public optics::Transparency {
 public:
     /// Checks the pattern against the design at the printer's dpi (check_pattern: size and

@@ -18,7 +18,9 @@
 #include "core/image_io.hpp"
 #include "core/parallel.hpp"
 #include "core/progress.hpp"
+#include "core/text.hpp"
 #include "print/pdf_file.hpp"
+#include "print/printed.hpp"
 
 namespace rfd::print {
 namespace {
@@ -27,12 +29,6 @@ using SurfacePtr = std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_dest
 using ContextPtr = std::unique_ptr<cairo_t, decltype(&cairo_destroy)>;
 
 constexpr int kMaskChunk = 8192;  // columns of one Cairo mask surface (Cairo stops at 32767)
-
-std::string format_number(double value) {
-    char text[64];
-    std::snprintf(text, sizeof text, "%g", value);
-    return text;
-}
 
 // Printer codes (1 - v, three channels) of one pattern row of `channels` channels.
 void tone_row(const float* pattern, int width, int channels, const ToneMap& tone, float* codes) {
@@ -106,7 +102,7 @@ void write_tiff(const std::filesystem::path& out, const SheetLayout& layout, con
     const int channels = reader.info().channels;
     const patterns::PatternGeometry& g = layout.pattern;
     ImageFileSpec spec{.width = W, .height = H, .channels = 3,
-                       .type = options.bits == 16 ? SampleType::uint16 : SampleType::uint8,
+                       .type = options.bits == 16 ? SampleType::UInt16 : SampleType::UInt8,
                        .dpi_x = layout.dpi_x, .dpi_y = layout.dpi_y, .compression = "zip"};
     for (const std::string& line : layout.label) spec.description += line + "\n";
     ImageFileWriter output(out, spec, "sheet");
@@ -239,42 +235,6 @@ void write_pdf(const std::filesystem::path& out, const SheetLayout& layout, cons
 
 }  // namespace
 
-double attribute_number(const patterns::PatternFileInfo& info, const std::string& key,
-                        const std::filesystem::path& file, double fallback, bool allow_zero) {
-    const auto it = info.attributes.find(key);
-    if (it == info.attributes.end()) return fallback;
-    const double value = finite_number(it->second).value_or(-1.0);
-    if (value < 0.0 || (!allow_zero && value == 0.0))
-        throw InputError(SourceLocation{file.string(), 0, 0, "rfd:" + key},
-                         "expected a " + std::string(allow_zero ? "non-negative" : "positive") +
-                             " number, got '" + it->second + "'");
-    return value;
-}
-
-patterns::PatternGeometry check_pattern(const optics::Design& design, const PrinterProfile& printer,
-                                        const std::filesystem::path& pattern_file,
-                                        const patterns::PatternFileInfo& info) {
-    const double margin = attribute_number(info, "margin_mm", pattern_file, 0.0, /*allow_zero=*/true);
-    const patterns::PatternGeometry expected =
-        patterns::pattern_geometry(design, printer.dpi_x, printer.dpi_y, margin);
-    const auto dpi_differs = [](double file_dpi, Dpi dpi) {
-        return file_dpi > 0.0 && std::abs(file_dpi - dpi.value) > 1e-3 * dpi.value;
-    };
-    if (info.width != expected.width || info.height != expected.height ||
-        dpi_differs(info.dpi_x, printer.dpi_x) || dpi_differs(info.dpi_y, printer.dpi_y)) {
-        std::string file_size = std::to_string(info.width) + " x " + std::to_string(info.height) + " dots";
-        if (info.dpi_x > 0.0)
-            file_size += " at " + format_number(info.dpi_x) + " x " + format_number(info.dpi_y) + " dpi";
-        throw InputError(SourceLocation{pattern_file.string()},
-                         "the pattern is " + file_size + ", but '" + design.name + "' at " +
-                             format_number(printer.dpi_x.value) + " x " + format_number(printer.dpi_y.value) +
-                             " dpi (printer '" + printer.name + "') needs " + std::to_string(expected.width) +
-                             " x " + std::to_string(expected.height) +
-                             " dots: encode the pattern at the printer's resolution");
-    }
-    return expected;
-}
-
 SheetReport write_sheet(const std::filesystem::path& out, const optics::Design& design,
                         const PrinterProfile& printer, const std::filesystem::path& pattern_file,
                         const SheetOptions& options) {
@@ -283,12 +243,7 @@ SheetReport write_sheet(const std::filesystem::path& out, const optics::Design& 
     if (!pdf && ext != ".tif" && ext != ".tiff")
         throw InputError(SourceLocation{out.string(), 0, 0, "--out"},
                          "unknown sheet extension '" + ext + "' (expected .tif, .tiff or .pdf)");
-    if (!(options.brightness > 0.0) || !std::isfinite(options.brightness))
-        throw InputError(SourceLocation{"", 0, 0, "--brightness"},
-                         "expected a positive number, got " + format_number(options.brightness));
-    if (options.sheets != 0 && options.sheets != 1 && options.sheets != 2)
-        throw InputError(SourceLocation{"", 0, 0, "--sheets"},
-                         "expected 1 or 2, got " + std::to_string(options.sheets));
+    check_tone_options(options.brightness, options.sheets);
     if (options.bits != 8 && options.bits != 16)
         throw InputError(SourceLocation{"", 0, 0, "--bits"}, "expected 8 or 16, got " + std::to_string(options.bits));
     const int sheets = options.sheets == 0 ? printer.sheets : options.sheets;
@@ -300,18 +255,12 @@ SheetReport write_sheet(const std::filesystem::path& out, const optics::Design& 
                              (options.sheets == 0 ? "printer profile '" + printer.name + "'" : std::string("--sheets 1")) +
                              "): print the front sheet alone, or give --sheets 2");
     patterns::PatternReader reader(pattern_file);
-    if (reader.info().channels != 1 && reader.info().channels != 3)
-        throw InputError(SourceLocation{pattern_file.string()},
-                         "expected a pattern with 1 (grey) or 3 (RGB) channels, got " +
-                             std::to_string(reader.info().channels));
-    const patterns::PatternGeometry geometry = check_pattern(design, printer, pattern_file, reader.info());
+    const PrintSetup setup = check_print(design, printer, pattern_file, reader.info(), options.brightness, sheets);
+    const patterns::PatternGeometry& geometry = setup.geometry;
 
     SheetReport report;
-    report.pattern_channels = reader.info().channels;
-    report.tone.printer = printer;
-    report.tone.brightness = options.brightness;
-    report.tone.white = attribute_number(reader.info(), "white", pattern_file, 1.0, /*allow_zero=*/false);
-    report.tone.sheets = sheets;
+    report.pattern_channels = setup.channels;
+    report.tone = setup.tone;
     SheetInfo info;
     info.pattern_name = pattern_file.filename().string();
     info.brightness = options.brightness;

@@ -45,18 +45,6 @@ struct SheetReport {
     int pattern_channels = 0;
 };
 
-/// A number from a pattern's rfd: attribute `key` (>= 0, or > 0 unless allow_zero), or
-/// `fallback` when the file has none. InputError naming the file and attribute otherwise.
-double attribute_number(const patterns::PatternFileInfo& info, const std::string& key,
-                        const std::filesystem::path& file, double fallback, bool allow_zero);
-
-/// Checks that `pattern_file` is `design`'s raster at the printer's dpi (size and, when the
-/// file has one, resolution; with the file's rfd:margin_mm if any) and returns that raster.
-/// Throws InputError naming the file and both sizes otherwise.
-patterns::PatternGeometry check_pattern(const optics::Design& design, const PrinterProfile& printer,
-                                        const std::filesystem::path& pattern_file,
-                                        const patterns::PatternFileInfo& info);
-
 /// Writes the sheet; the format follows `out`'s extension (.tif/.tiff or .pdf). Throws
 /// InputError for bad options, a pattern that does not match the design at the printer's
 /// dpi or does not fit the paper, IoError when a file cannot be read or written.

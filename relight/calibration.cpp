@@ -11,6 +11,7 @@
 #include "core/error.hpp"
 #include "core/image_io.hpp"
 #include "relight/vision.hpp"
+#include "core/text.hpp"
 
 namespace rfd::relight {
 namespace {
@@ -18,12 +19,6 @@ namespace {
 // A highlight is a small spot; a blob over a quarter of the sphere is the sphere lit (or
 // clipped) all over, where a centroid means nothing.
 constexpr double kMaxCoverage = 0.25;
-
-std::string number(double value) {
-    char text[32];
-    std::snprintf(text, sizeof text, "%g", value);
-    return text;
-}
 
 }  // namespace
 
@@ -105,12 +100,12 @@ Highlight find_highlight(const Image& image, const MirrorSphere& sphere) {
     const auto lit_pixels = std::count_if(above.begin(), above.end(), [](std::uint8_t v) { return v != 0; });
     result.coverage = static_cast<double>(lit_pixels) / static_cast<double>(values.size());
     if (result.blobs > 1) {
-        result.status = HighlightStatus::multiple;
+        result.status = HighlightStatus::Multiple;
         return result;
     }
     RFD_CHECK(result.blobs == 1);  // the peak pixel itself lies above the threshold
     if (result.coverage > kMaxCoverage) {
-        result.status = HighlightStatus::overexposed;
+        result.status = HighlightStatus::Overexposed;
         return result;
     }
     result.pixels = static_cast<int>(lit_pixels);
@@ -139,10 +134,10 @@ Highlight find_highlight(const Image& image, const MirrorSphere& sphere) {
     RFD_CHECK(weight_sum > 0.0);
     if (direction_sum.norm() < 1e-12 * weight_sum) {
         // Reflections cancel: a ring around the outline (light straight behind the sphere).
-        result.status = HighlightStatus::overexposed;
+        result.status = HighlightStatus::Overexposed;
         return result;
     }
-    result.status = HighlightStatus::found;
+    result.status = HighlightStatus::Found;
     result.direction = direction_sum.normalized();
     const Eigen::Vector3d half = result.direction + Eigen::Vector3d::UnitZ();
     result.normal = half.norm() > 1e-12 ? Eigen::Vector3d(half.normalized()) : Eigen::Vector3d::UnitX();
@@ -155,30 +150,30 @@ std::vector<CalibratedLight> calibrate_lights(const std::vector<std::filesystem:
     if (!(std::isfinite(sphere.centre_x) && std::isfinite(sphere.centre_y) && std::isfinite(sphere.radius) &&
           sphere.radius > 0.0))
         throw InputError("mirror sphere: expected a finite centre and a positive radius in pixels, got (" +
-                         number(sphere.centre_x) + ", " + number(sphere.centre_y) +
-                         ") radius " + number(sphere.radius));
+                         format_number(sphere.centre_x) + ", " + format_number(sphere.centre_y) +
+                         ") radius " + format_number(sphere.radius));
     std::vector<CalibratedLight> lights;
     for (const auto& path : mirror_images) {
         const Image image = read_image(path);
         const SourceLocation where{path.string()};
         if (sphere.centre_x - sphere.radius < 0.0 || sphere.centre_y - sphere.radius < 0.0 ||
             sphere.centre_x + sphere.radius > image.width() || sphere.centre_y + sphere.radius > image.height())
-            throw InputError(where, "the mirror sphere (centre " + number(sphere.centre_x) + ", " +
-                                        number(sphere.centre_y) + ", radius " +
-                                        number(sphere.radius) + " px) does not fit inside this " +
+            throw InputError(where, "the mirror sphere (centre " + format_number(sphere.centre_x) + ", " +
+                                        format_number(sphere.centre_y) + ", radius " +
+                                        format_number(sphere.radius) + " px) does not fit inside this " +
                                         std::to_string(image.width()) + "x" + std::to_string(image.height()) +
                                         " image");
         const Highlight h = find_highlight(image, sphere);
         switch (h.status) {
-            case HighlightStatus::found: break;
-            case HighlightStatus::none:
+            case HighlightStatus::Found: break;
+            case HighlightStatus::None:
                 throw InputError(where, "no highlight on the mirror sphere: it shows no contrast (brightest " +
-                                            number(h.peak) + ", median " + number(h.background) +
+                                            format_number(h.peak) + ", median " + format_number(h.background) +
                                             "): black, uniform or saturated everywhere");
-            case HighlightStatus::multiple:
+            case HighlightStatus::Multiple:
                 throw InputError(where, std::to_string(h.blobs) +
                                             " separate highlights on the mirror sphere; expected one light per image");
-            case HighlightStatus::overexposed:
+            case HighlightStatus::Overexposed:
                 throw InputError(where, "the highlight covers " + std::to_string(static_cast<int>(h.coverage * 100.0 + 0.5)) +
                                             "% of the mirror sphere: overexposed or not a mirror sphere "
                                             "(expected a small spot)");

@@ -28,7 +28,7 @@
 // Example:
 //     MirrorSphere sphere{320.5, 240.5, 200.0};
 //     Highlight h = find_highlight(read_image("ball_000.png"), sphere);
-//     if (h.status == HighlightStatus::found) use(h.direction);
+//     if (h.status == HighlightStatus::Found) use(h.direction);
 
 #include <filesystem>
 #include <string>
@@ -61,14 +61,14 @@ Eigen::Vector2d highlight_point(const MirrorSphere& sphere, const Eigen::Vector3
 
 /// What the search for a highlight found: outcomes of the photograph, not errors.
 enum class HighlightStatus {
-    found,        ///< one blob; the fields below describe it
-    none,         ///< the sphere shows no contrast (black, uniform, or saturated everywhere)
-    multiple,     ///< more than one blob above the threshold (several lights, reflections)
-    overexposed,  ///< the blob covers more than a quarter of the sphere
+    Found,        ///< one blob; the fields below describe it
+    None,         ///< the sphere shows no contrast (black, uniform, or saturated everywhere)
+    Multiple,     ///< more than one blob above the threshold (several lights, reflections)
+    Overexposed,  ///< the blob covers more than a quarter of the sphere
 };
 
 struct Highlight {
-    HighlightStatus status = HighlightStatus::none;
+    HighlightStatus status = HighlightStatus::None;
     Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();  ///< unit, toward the light, field frame
     Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();     ///< unit sphere normal halfway to it
     Eigen::Vector2d centroid = Eigen::Vector2d::Zero();    ///< weighted image centroid, pixels

@@ -10,15 +10,10 @@
 #include "core/image_io.hpp"
 #include "core/sphere.hpp"
 #include "core/units.hpp"
+#include "core/text.hpp"
 
 namespace rfd::relight {
 namespace {
-
-std::string number(double v) {
-    char buffer[32];
-    std::snprintf(buffer, sizeof buffer, "%.9g", v);
-    return buffer;
-}
 
 void replace_all(std::string& text, const std::string& key, const std::string& value) {
     for (std::size_t at = text.find(key); at != std::string::npos; at = text.find(key, at + value.size()))
@@ -44,11 +39,11 @@ std::string CommandCaptureDevice::command_for(const Eigen::Vector3d& direction, 
                                               const std::filesystem::path& out) const {
     const SphericalAngles angles = angles_of(direction);
     std::string command = template_;
-    replace_all(command, "{x}", number(direction.x()));
-    replace_all(command, "{y}", number(direction.y()));
-    replace_all(command, "{z}", number(direction.z()));
-    replace_all(command, "{theta}", number(radians_to_degrees(angles.theta)));
-    replace_all(command, "{phi}", number(radians_to_degrees(angles.phi)));
+    replace_all(command, "{x}", format_number(direction.x(), 9));
+    replace_all(command, "{y}", format_number(direction.y(), 9));
+    replace_all(command, "{z}", format_number(direction.z(), 9));
+    replace_all(command, "{theta}", format_number(radians_to_degrees(angles.theta), 9));
+    replace_all(command, "{phi}", format_number(radians_to_degrees(angles.phi), 9));
     replace_all(command, "{kernel}", kernel == KernelChoice::Narrow ? "narrow" : "wide");
     replace_all(command, "{out}", shell_quoted(out.string()));
     return command;

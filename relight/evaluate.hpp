@@ -35,7 +35,7 @@ struct Evaluation {
 /// Throws InputError when the fields' images differ in shape or a field is empty, and what
 /// SphericalInterpolator throws for the sparse field's directions.
 Evaluation evaluate(const ReflectanceField& sparse, const ReflectanceField& reference,
-                    Interpolation method = Interpolation::delaunay);
+                    Interpolation method = Interpolation::Delaunay);
 
 /// The same score under each of `lights` instead of every reference direction: both fields
 /// relit (render()) and compared, one entry of per_direction per light; peak = the largest
@@ -49,7 +49,7 @@ struct LightEvaluation {
 
 /// InputError as evaluate(), and for no lights or a light check_light() rejects.
 LightEvaluation evaluate_under_lights(const ReflectanceField& sparse, const ReflectanceField& reference,
-                                      const std::vector<Light>& lights, Interpolation method = Interpolation::delaunay);
+                                      const std::vector<Light>& lights, Interpolation method = Interpolation::Delaunay);
 
 /// Sum of (w0 a + w1 b + w2 c - reference)^2 over every sample (weights of images a, b, c;
 /// pass the same image with weight 0 for unused slots). Fixed order, vectorisable.

@@ -117,7 +117,7 @@ SourceLocation at(const std::filesystem::path& path, int line) {
 CodeImage read_code_image(const std::filesystem::path& path) {
     ImageFileReader file(path);
     const ImageFileSpec& spec = file.spec();
-    if (spec.type != SampleType::uint8)
+    if (spec.type != SampleType::UInt8)
         throw InputError(SourceLocation{path.string()},
                          "expected an 8-bit camera image (code values 0..255), got " +
                              std::string(sample_type_name(spec.type)) + " samples");

@@ -274,8 +274,8 @@ Image crop_probe(const Image& image, const ProbeBox& box, int size) {
                        static_cast<std::size_t>(x - x0)] = image.at(x, y, c);
         if (sigma_x > 0.0 || sigma_y > 0.0)
             vision().gaussian_blur(region_size, region, region, 0, std::max(sigma_x, 1e-3), std::max(sigma_y, 1e-3),
-                                   Border::replicate);
-        vision().warp_affine(region_size, region, to_source, {size, size}, out.plane(c), Border::replicate);
+                                   Border::Replicate);
+        vision().warp_affine(region_size, region, to_source, {size, size}, out.plane(c), Border::Replicate);
     }
     std::vector<char> inside(static_cast<std::size_t>(size * size), 0);
     for (const int i : probe_mask(size)) inside[static_cast<std::size_t>(i)] = 1;

@@ -16,6 +16,7 @@
 #include "core/parallel.hpp"
 #include "core/sphere.hpp"
 #include "core/units.hpp"
+#include "core/text.hpp"
 
 namespace rfd::relight {
 namespace {
@@ -33,14 +34,6 @@ double det(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vect
     return a.dot(b.cross(c));
 }
 
-std::string angles_text(const Eigen::Vector3d& d) {
-    const SphericalAngles a = angles_of(d);
-    char text[64];
-    std::snprintf(text, sizeof text, "theta %.4g deg, phi %.4g deg", radians_to_degrees(a.theta),
-                  radians_to_degrees(a.phi));
-    return text;
-}
-
 std::vector<Eigen::Vector3d> checked_directions(std::vector<Eigen::Vector3d> directions) {
     if (directions.size() < 3)
         throw InputError("spherical interpolation needs at least 3 light directions, got " +
@@ -53,7 +46,7 @@ std::vector<Eigen::Vector3d> checked_directions(std::vector<Eigen::Vector3d> dir
             throw InputError("light direction " + std::to_string(i) + " is zero or not finite");
         d /= norm;
         if (d.z() < lowest_z)
-            throw InputError("light direction " + std::to_string(i) + " (" + angles_text(d) +
+            throw InputError("light direction " + std::to_string(i) + " (" + format_direction(d) +
                              ") lies more than 5 degrees below the horizon; fields cover the "
                              "upper hemisphere z > 0");
     }
@@ -72,7 +65,7 @@ std::vector<Eigen::Vector3d> checked_directions(std::vector<Eigen::Vector3d> dir
                 const std::size_t i = std::min(order[p], order[q]), j = std::max(order[p], order[q]);
                 throw InputError("light directions " + std::to_string(i) + " and " +
                                  std::to_string(j) + " are the same direction (" +
-                                 angles_text(directions[i]) + "); each image needs its own");
+                                 format_direction(directions[i]) + "); each image needs its own");
             }
         }
     return directions;
@@ -324,7 +317,7 @@ InterpolationWeights SphericalInterpolator::weights(const Eigen::Vector3d& direc
     // The hinted triangle first: its three plane tests spare the grid cell's angles (and,
     // being tests of sign and ratio, do not need a unit vector).
     bool hinted = false;
-    if (method != Interpolation::nearest && hint < triangles_.size()) {
+    if (method != Interpolation::Nearest && hint < triangles_.size()) {
         // Walk from the hinted triangle toward the direction, across the edge it lies
         // beyond, for a few steps: coherent queries land in the same or an adjacent one.
         std::size_t t = hint;
@@ -350,7 +343,7 @@ InterpolationWeights SphericalInterpolator::weights(const Eigen::Vector3d& direc
     if (!hinted) {
         const Eigen::Vector3d unit = direction.normalized();
         const std::size_t cell = grid_->cell_of(unit);
-        if (method == Interpolation::nearest) return nearest_weights(unit, cell);
+        if (method == Interpolation::Nearest) return nearest_weights(unit, cell);
         if (!locate(unit, cell, out, &hint)) {
             hint = kNoTriangle;
             return arc_weights(unit);
@@ -359,7 +352,7 @@ InterpolationWeights SphericalInterpolator::weights(const Eigen::Vector3d& direc
     // At a measured direction the coordinates are exactly (1, 0, 0); the solid angles of its
     // degenerate sub-triangles are zero only up to rounding, so keep them.
     const bool at_vertex = out.weight[0] == 1.0 || out.weight[1] == 1.0 || out.weight[2] == 1.0;
-    if (method == Interpolation::solid_angle && out.count == 3 && !at_vertex) {
+    if (method == Interpolation::SolidAngle && out.count == 3 && !at_vertex) {
         const Eigen::Vector3d direction_unit = direction.normalized();
         const Eigen::Vector3d& a = directions_[out.index[0]];
         const Eigen::Vector3d& b = directions_[out.index[1]];

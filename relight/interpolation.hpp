@@ -49,6 +49,8 @@
 
 #include <Eigen/Core>
 
+#include "core/names.hpp"
+
 #include "relight/adaptive.hpp"
 
 namespace rfd::relight {
@@ -56,7 +58,11 @@ namespace rfd::relight {
 /// delaunay: the barycentric coordinates above (continuous); solid_angle: eq. 4.6 as the
 /// thesis writes it, l_a = Omega(d, b, c) / (Omega(d, b, c) + Omega(a, d, c) + Omega(a, b, d)),
 /// same triangles and horizon band (tiny jumps across edges); nearest: the baseline.
-enum class Interpolation { delaunay, solid_angle, nearest };
+enum class Interpolation { Delaunay, SolidAngle, Nearest };
+/// As the command line and a pattern's rfd:interpolation attribute spell them.
+inline constexpr std::array kInterpolationNames{Named{Interpolation::Delaunay, "delaunay"},
+                                                Named{Interpolation::SolidAngle, "solid-angle"},
+                                                Named{Interpolation::Nearest, "nearest"}};
 
 /// Weights of at most three directions; entries past `count` are unused (index 0, weight 0).
 struct InterpolationWeights {
@@ -81,7 +87,7 @@ public:
 
     /// l_i(direction) for a unit `direction` anywhere on the sphere. Thread-safe.
     InterpolationWeights weights(const Eigen::Vector3d& direction,
-                                 Interpolation method = Interpolation::delaunay) const;
+                                 Interpolation method = Interpolation::Delaunay) const;
     /// The same, trying triangle `hint` first (then walking to its neighbours for a few
     /// steps) and leaving in it the triangle found
     /// (kNoTriangle outside T): coherent queries, such as neighbouring print dots, then
@@ -94,7 +100,7 @@ public:
     /// True when `direction` lies in a triangle of T: the interpolation there blends measured
     /// lights rather than extrapolating along the horizon band's arcs.
     bool covers(const Eigen::Vector3d& direction) const {
-        return weights(direction, Interpolation::delaunay).count == 3;
+        return weights(direction, Interpolation::Delaunay).count == 3;
     }
     std::size_t size() const { return directions_.size(); }
     const std::vector<Eigen::Vector3d>& directions() const { return directions_; }

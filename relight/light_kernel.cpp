@@ -17,12 +17,12 @@ constexpr int kTableSize = 4096;
 double profile_value(const LightKernel& kernel, double a) {
     if (a > kernel.radius) return 0.0;
     switch (kernel.profile) {
-        case KernelProfile::constant: return 1.0;
-        case KernelProfile::smooth: {
+        case KernelProfile::Constant: return 1.0;
+        case KernelProfile::Smooth: {
             const double c = std::cos(0.5 * kPi * a / kernel.radius);
             return c * c;
         }
-        case KernelProfile::gaussian: return std::exp(-0.5 * a * a / (kernel.sigma * kernel.sigma));
+        case KernelProfile::Gaussian: return std::exp(-0.5 * a * a / (kernel.sigma * kernel.sigma));
     }
     return 0.0;
 }
@@ -31,21 +31,21 @@ double profile_value(const LightKernel& kernel, double a) {
 
 std::string to_string(KernelProfile profile) {
     switch (profile) {
-        case KernelProfile::constant: return "constant";
-        case KernelProfile::smooth: return "smooth";
-        case KernelProfile::gaussian: return "gaussian";
+        case KernelProfile::Constant: return "constant";
+        case KernelProfile::Smooth: return "smooth";
+        case KernelProfile::Gaussian: return "gaussian";
     }
     return "?";
 }
 
-LightKernel LightKernel::narrow() { return {KernelProfile::constant, degrees_to_radians(2.0), 0.0}; }
+LightKernel LightKernel::narrow() { return {KernelProfile::Constant, degrees_to_radians(2.0), 0.0}; }
 
 LightKernel LightKernel::wide() { return smooth(degrees_to_radians(15.0)); }
 
-LightKernel LightKernel::smooth(double radius) { return {KernelProfile::smooth, radius, 0.0}; }
+LightKernel LightKernel::smooth(double radius) { return {KernelProfile::Smooth, radius, 0.0}; }
 
 LightKernel LightKernel::gaussian(double sigma) {
-    return {KernelProfile::gaussian, 3.0 * sigma, sigma};
+    return {KernelProfile::Gaussian, 3.0 * sigma, sigma};
 }
 
 void orthonormal_basis(const Eigen::Vector3d& n, Eigen::Vector3d& b1, Eigen::Vector3d& b2) {
@@ -59,8 +59,8 @@ void orthonormal_basis(const Eigen::Vector3d& n, Eigen::Vector3d& b1, Eigen::Vec
 KernelSampler::KernelSampler(const LightKernel& kernel) : kernel_(kernel) {
     if (kernel_.is_directional()) return;
     RFD_CHECK(kernel_.radius < kPi);
-    RFD_CHECK(kernel_.profile != KernelProfile::gaussian || kernel_.sigma > 0.0);
-    if (kernel_.profile == KernelProfile::constant) {
+    RFD_CHECK(kernel_.profile != KernelProfile::Gaussian || kernel_.sigma > 0.0);
+    if (kernel_.profile == KernelProfile::Constant) {
         // Solid angle of a cap: 2 pi (1 - cos r) = 4 pi sin^2(r / 2), accurate for tiny r.
         const double s = std::sin(0.5 * kernel_.radius);
         normaliser_ = 1.0 / (4.0 * kPi * s * s);
@@ -98,7 +98,7 @@ double KernelSampler::radiance(const Eigen::Vector3d& w, const Eigen::Vector3d& 
 double KernelSampler::quantile_angle(double u) const {
     if (kernel_.is_directional()) return 0.0;
     u = std::clamp(u, 0.0, 1.0);
-    if (kernel_.profile == KernelProfile::constant)
+    if (kernel_.profile == KernelProfile::Constant)
         return 2.0 * std::asin(std::min(1.0, std::sqrt(u) * std::sin(0.5 * kernel_.radius)));
     const auto it = std::upper_bound(cdf_.begin(), cdf_.end(), u);
     if (it == cdf_.end()) return kernel_.radius;

@@ -27,12 +27,12 @@
 
 namespace rfd::relight {
 
-enum class KernelProfile { constant, smooth, gaussian };
+enum class KernelProfile { Constant, Smooth, Gaussian };
 
 std::string to_string(KernelProfile profile);
 
 struct LightKernel {
-    KernelProfile profile = KernelProfile::constant;
+    KernelProfile profile = KernelProfile::Constant;
     double radius = 0.0;  ///< angular radius of the support, radians; 0 = directional light
     double sigma = 0.0;   ///< width of the gaussian profile, radians (gaussian only)
 

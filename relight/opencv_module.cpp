@@ -29,9 +29,9 @@ cv::Mat view(PlaneSize size, std::span<std::uint8_t> plane, int channels = 1) {
 
 int border_of(Border border) {
     switch (border) {
-        case Border::zero: return cv::BORDER_CONSTANT;
-        case Border::replicate: return cv::BORDER_REPLICATE;
-        case Border::reflect: return cv::BORDER_REFLECT_101;
+        case Border::Zero: return cv::BORDER_CONSTANT;
+        case Border::Replicate: return cv::BORDER_REPLICATE;
+        case Border::Reflect: return cv::BORDER_REFLECT_101;
     }
     return cv::BORDER_REFLECT_101;
 }

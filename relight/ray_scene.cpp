@@ -21,9 +21,9 @@ bool is_glass(const Scene& scene, const SceneObject& object) {
 
 bool passes(const Scene& scene, const SceneObject& object, ObjectFilter filter) {
     switch (filter) {
-        case ObjectFilter::all: return true;
-        case ObjectFilter::opaque: return !is_glass(scene, object);
-        case ObjectFilter::glass: return is_glass(scene, object);
+        case ObjectFilter::All: return true;
+        case ObjectFilter::Opaque: return !is_glass(scene, object);
+        case ObjectFilter::Glass: return is_glass(scene, object);
     }
     return false;
 }

@@ -8,7 +8,7 @@
 // leave the surface they start on.
 // Frame: the scene's world frame, millimetres; directions unit length.
 //
-// Example: RayScene rays(scene, ObjectFilter::all);
+// Example: RayScene rays(scene, ObjectFilter::All);
 //          if (auto hit = rays.intersect(origin, direction, 0.0, kInfinity)) hit->object;
 
 #include <cstdint>
@@ -33,9 +33,9 @@ struct RayHit {
 
 /// Which objects a RayScene holds, by their material.
 enum class ObjectFilter {
-    all,     ///< everything (camera paths)
-    opaque,  ///< diffuse, glossy and mirror objects (shadow rays)
-    glass,   ///< glass objects only (attenuation of shadow rays)
+    All,     ///< everything (camera paths)
+    Opaque,  ///< diffuse, glossy and mirror objects (shadow rays)
+    Glass,   ///< glass objects only (attenuation of shadow rays)
 };
 
 class RayScene {

@@ -82,7 +82,7 @@ LightCoefficients coefficients_from(Eigen::MatrixX3d k);
 /// Sum of the lights' k_i. Throws InputError for an environment map without 1 or 3
 /// channels or with a negative sample, a disk radius outside (0, pi/2], non-finite values.
 LightCoefficients light_coefficients(const SphericalInterpolator& interpolator, const std::vector<Light>& lights,
-                                     Interpolation method = Interpolation::delaunay);
+                                     Interpolation method = Interpolation::Delaunay);
 
 /// out = sum_i k_i R_i in one pass over the images, skipping zero k_i; parallel over pixel
 /// blocks, each pixel summed in image order (deterministic). `field` must have as many
@@ -94,6 +94,6 @@ Image relight(const std::vector<Image>& images, const LightCoefficients& coeffic
 
 /// light_coefficients() of the field's own interpolator, then relight().
 Image render(const ReflectanceField& field, const std::vector<Light>& lights,
-             Interpolation method = Interpolation::delaunay);
+             Interpolation method = Interpolation::Delaunay);
 
 }  // namespace rfd::relight

@@ -155,7 +155,7 @@ LightKernel read_kernel(ConfigTable& table) {
     if (profile == "gaussian") return LightKernel::gaussian(degrees_to_radians(table.number("sigma_deg", 1e-3, 30.0)));
     const double radius = degrees_to_radians(table.number("radius_deg", 1e-3, 90.0));
     if (profile == "smooth") return LightKernel::smooth(radius);
-    return {KernelProfile::constant, radius, 0.0};
+    return {KernelProfile::Constant, radius, 0.0};
 }
 
 SceneObject read_object(ConfigTable& table, const std::map<std::string, std::size_t>& material_index,

@@ -117,8 +117,8 @@ Rgb beer_lambert(const Rgb& absorption, double distance) { return (-absorption *
 
 struct LightStage::Cache {
     Cache(const Scene& scene)
-        : all(scene, ObjectFilter::all), opaque(scene, ObjectFilter::opaque),
-          glass(scene, ObjectFilter::glass) {}
+        : all(scene, ObjectFilter::All), opaque(scene, ObjectFilter::Opaque),
+          glass(scene, ObjectFilter::Glass) {}
     RayScene all, opaque, glass;
     std::vector<RowCache> rows;
     Eigen::Matrix3d field_to_world;   // first camera's field frame

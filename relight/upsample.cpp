@@ -87,7 +87,7 @@ Image warp_along(const Image& image, std::span<const float> flow, float fraction
     const auto [map_x, map_y] = flow_sampling_maps(size_of(image), flow, fraction);
     Image out(image.width(), image.height(), image.channels());
     for (int c = 0; c < image.channels(); ++c)
-        vision().remap(size_of(image), image.plane(c), map_x, map_y, out.plane(c), Border::zero);
+        vision().remap(size_of(image), image.plane(c), map_x, map_y, out.plane(c), Border::Zero);
     return out;
 }
 
@@ -831,7 +831,7 @@ ShadowMap halfway_shadow_map(const ShadowMap& first, const ShadowMap& second, in
     const auto warp = [&](const std::vector<float>& phi, const std::vector<float>& flow) {
         const auto [map_x, map_y] = flow_sampling_maps(size, flow);
         std::vector<float> out(phi.size());
-        vision().remap(size, phi, map_x, map_y, out, Border::replicate);
+        vision().remap(size, phi, map_x, map_y, out, Border::Replicate);
         return out;
     };
     const std::vector<float> a = warp(phi_a, dense_flow(size, ga, gb)), b = warp(phi_b, dense_flow(size, gb, ga));
@@ -860,7 +860,7 @@ UpsampledField upsample_field(const ReflectanceField& field, int levels, const U
             luminances[i] = luminance(field.images[i]);
             prefiltered[i] = luminances[i];
             vision().gaussian_blur(size_of(luminances[i]), luminances[i].plane(0), prefiltered[i].plane(0), 3, 0.0, 0.0,
-                                   Border::replicate);
+                                   Border::Replicate);
         }
     });
     const Image percentile = percentile_image(prefiltered, options.percentile);

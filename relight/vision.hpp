@@ -25,9 +25,9 @@ struct PlaneSize {
 
 /// What lies beyond a plane's edge for filters and warps.
 enum class Border {
-    zero,       ///< zeros (OpenCV's BORDER_CONSTANT)
-    replicate,  ///< the edge sample repeated
-    reflect     ///< mirrored about the edge sample (OpenCV's default, BORDER_REFLECT_101)
+    Zero,       ///< zeros (OpenCV's BORDER_CONSTANT)
+    Replicate,  ///< the edge sample repeated
+    Reflect     ///< mirrored about the edge sample (OpenCV's default, BORDER_REFLECT_101)
 };
 
 /// Farneback's optical flow options (OpenCV's calcOpticalFlowFarneback).

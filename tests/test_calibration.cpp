@@ -92,7 +92,7 @@ TEST(Calibration, RecoversDirectionsOverTheUpperHemisphere) {
         for (const double phi : {0.0, 37.0, 100.0, 200.0, 290.0}) {
             const Eigen::Vector3d truth = direction_from_angles(degrees_to_radians(theta), degrees_to_radians(phi));
             const Highlight h = find_highlight(render(kSize, kSize, kSphere, {{truth}}), kSphere);
-            ASSERT_EQ(h.status, HighlightStatus::found) << theta << " " << phi;
+            ASSERT_EQ(h.status, HighlightStatus::Found) << theta << " " << phi;
             EXPECT_EQ(h.blobs, 1);
             EXPECT_FALSE(h.touches_rim);
             EXPECT_LT((h.centroid - highlight_point(kSphere, truth)).norm(), 0.1) << theta << " " << phi;
@@ -115,7 +115,7 @@ TEST(Calibration, NearTheRimAccuracyDegradesAsStated) {
         for (const double phi : {20.0, 135.0, 250.0}) {
             const Eigen::Vector3d truth = direction_from_angles(degrees_to_radians(c.theta_deg), degrees_to_radians(phi));
             const Highlight h = find_highlight(render(kSize, kSize, kSphere, {{truth}}), kSphere);
-            ASSERT_EQ(h.status, HighlightStatus::found) << c.theta_deg << " " << phi;
+            ASSERT_EQ(h.status, HighlightStatus::Found) << c.theta_deg << " " << phi;
             EXPECT_LT(error_degrees(h, truth), c.bound_deg)
                 << "theta " << c.theta_deg << " phi " << phi << ": " << error_degrees(h, truth) << " deg";
         }
@@ -132,7 +132,7 @@ TEST(Calibration, ClippedHighlightsStillCentre) {
     for (const double theta : {5.0, 45.0, 80.0}) {
         const Eigen::Vector3d truth = direction_from_angles(degrees_to_radians(theta), degrees_to_radians(60.0));
         const Highlight h = find_highlight(render(kSize, kSize, kSphere, {{truth}}, 0.05f, 6, 1.0f), kSphere);
-        ASSERT_EQ(h.status, HighlightStatus::found);
+        ASSERT_EQ(h.status, HighlightStatus::Found);
         EXPECT_LT(error_degrees(h, truth), 0.5) << theta;
     }
 }
@@ -140,24 +140,24 @@ TEST(Calibration, ClippedHighlightsStillCentre) {
 TEST(Calibration, ReportsPhotographsWithoutOneUsableHighlight) {
     const Eigen::Vector3d a = direction_from_angles(degrees_to_radians(30.0), 0.0);
     const Eigen::Vector3d b = direction_from_angles(degrees_to_radians(50.0), degrees_to_radians(180.0));
-    EXPECT_EQ(find_highlight(Image(kSize, kSize, 3, 0.0f), kSphere).status, HighlightStatus::none);
+    EXPECT_EQ(find_highlight(Image(kSize, kSize, 3, 0.0f), kSphere).status, HighlightStatus::None);
     // Outlines off the image or meaningless find nothing (and must not overflow or crash).
     const Image lit = render(kSize, kSize, kSphere, {{a}});
-    EXPECT_EQ(find_highlight(lit, MirrorSphere{1e300, -1e300, 1e300}).status, HighlightStatus::none);
-    EXPECT_EQ(find_highlight(lit, MirrorSphere{NAN, 64, 60}).status, HighlightStatus::none);
-    EXPECT_EQ(find_highlight(lit, MirrorSphere{-500, 64, 60}).status, HighlightStatus::none);
-    EXPECT_EQ(find_highlight(Image(kSize, kSize, 3, 1.0f), kSphere).status, HighlightStatus::none);  // all clipped
+    EXPECT_EQ(find_highlight(lit, MirrorSphere{1e300, -1e300, 1e300}).status, HighlightStatus::None);
+    EXPECT_EQ(find_highlight(lit, MirrorSphere{NAN, 64, 60}).status, HighlightStatus::None);
+    EXPECT_EQ(find_highlight(lit, MirrorSphere{-500, 64, 60}).status, HighlightStatus::None);
+    EXPECT_EQ(find_highlight(Image(kSize, kSize, 3, 1.0f), kSphere).status, HighlightStatus::None);  // all clipped
     const Highlight two = find_highlight(render(kSize, kSize, kSphere, {{a}, {b}}), kSphere);
-    EXPECT_EQ(two.status, HighlightStatus::multiple);
+    EXPECT_EQ(two.status, HighlightStatus::Multiple);
     EXPECT_EQ(two.blobs, 2);
     // A light of 70 degrees radius floods the sphere; clipped, it is flat over half of it.
     const Highlight flooded = find_highlight(
         render(kSize, kSize, kSphere, {{a, degrees_to_radians(70.0)}}, 0.05f, 2, 1.0f), kSphere);
-    EXPECT_EQ(flooded.status, HighlightStatus::overexposed);
+    EXPECT_EQ(flooded.status, HighlightStatus::Overexposed);
     EXPECT_GT(flooded.coverage, 0.25);
     // A dimmer second light below half the peak is environment, not a second highlight.
     const Highlight dim = find_highlight(render(kSize, kSize, kSphere, {{a}, {b, degrees_to_radians(3.0), 5.0f}}), kSphere);
-    EXPECT_EQ(dim.status, HighlightStatus::found);
+    EXPECT_EQ(dim.status, HighlightStatus::Found);
     EXPECT_LT(error_degrees(dim, a), 0.25);
 }
 

@@ -16,14 +16,16 @@
 #include "core/sphere.hpp"
 #include "core/units.hpp"
 #include "optics/display.hpp"
-#include "patterns/compare.hpp"
+#include "predict/compare.hpp"
 #include "patterns/encode.hpp"
 #include "patterns/procedural.hpp"
 #include "print/printer.hpp"
 #include "tests/support/error_of.hpp"
 
-namespace rfd::patterns {
+namespace rfd::predict {
 namespace {
+
+using namespace rfd::patterns;
 
 using ::testing::HasSubstr;
 using rfd::testing::error_of;
@@ -44,21 +46,23 @@ optics::Design small_design1(int count_x, int count_y) {
 struct Printed {
     std::unique_ptr<Encoder> encoder;
     std::unique_ptr<optics::RasterTransparency> transparency;
-    PrintTone tone;
+    print::ToneMap tone;
 };
 
-// The encoder's model is the one `rfd pattern encode` picks by default (choose_model: exact
-// for both presets at their 2880 x 1440 dpi).
+// The encoder's model is the one `rfd pattern encode` picks by default (auto: exact for
+// both presets at their 2880 x 1440 dpi).
 Printed print_field(const optics::Design& design, const relight::ReflectanceField& field, EncodeOptions options,
                     int shift_dots = 0) {
     Printed p;
     const PatternGeometry geometry = pattern_geometry(design, design.printer.dpi_x, design.printer.dpi_y);
-    options.model = choose_model(design, geometry).model;
+    options.model = optics::resolve(optics::ModelChoice::Auto, optics::DesignOptics(design), {geometry.dot_x, geometry.dot_y}).model;
     p.encoder = std::make_unique<Encoder>(design, field, geometry, options);
-    p.tone = PrintTone{1.0 / p.encoder->white(), 0.01};  // the Epson's black level, one sheet
+    p.tone.printer = print::load_printer("epson_stylus_pro_4800");
+    p.tone.white = p.encoder->white();
+    p.tone.sheets = 1;
     const std::size_t channels = static_cast<std::size_t>(p.encoder->channels());
     const std::size_t row = static_cast<std::size_t>(geometry.width) * channels;
-    std::vector<float> values(geometry.dot_count() * channels, static_cast<float>(p.tone.black));
+    std::vector<float> values(geometry.dot_count() * channels, static_cast<float>(p.tone.stack_transmittance(0.0)));
     std::vector<float> buffer(row);
     for (int py = 0; py < geometry.height; ++py) {
         p.encoder->render_row(py, buffer);
@@ -67,7 +71,7 @@ Printed print_field(const optics::Design& design, const relight::ReflectanceFiel
             if (to < 0 || to >= geometry.width) continue;
             for (std::size_t c = 0; c < channels; ++c)
                 values[static_cast<std::size_t>(py) * row + static_cast<std::size_t>(to) * channels + c] =
-                    static_cast<float>(p.tone.transmittance(buffer[static_cast<std::size_t>(px) * channels + c]));
+                    static_cast<float>(p.tone.stack_transmittance(buffer[static_cast<std::size_t>(px) * channels + c]));
         }
     }
     p.transparency = std::make_unique<optics::RasterTransparency>(geometry.width, geometry.height,
@@ -81,7 +85,7 @@ Printed print_field(const optics::Design& design, const relight::ReflectanceFiel
 // 16.6), blended by the Delaunay interpolation.
 relight::ReflectanceField diamonds_field() {
     ProceduralOptions options;
-    options.kind = ProceduralKind::diamonds;
+    options.kind = ProceduralKind::Diamonds;
     options.spread_deg = 14.0;
     options.width = 48;
     options.height = 40;
@@ -111,19 +115,6 @@ double pearson(const Image& a, const Image& b) {
     return sxy / std::sqrt(sxx * syy);
 }
 
-TEST(PrintTone, IsThePrintersStackTransmittance) {
-    print::ToneMap tone;
-    tone.printer = print::load_printer("epson_stylus_pro_4800");
-    tone.brightness = 1.3;
-    tone.white = 0.7;
-    for (int sheets : {1, 2}) {
-        tone.sheets = sheets;
-        const PrintTone ours{tone.brightness / tone.white, std::pow(tone.printer.black_level, sheets)};
-        for (double p : {0.0, 0.1, 0.3, 0.5, 0.538, 0.9, 2.0})
-            EXPECT_NEAR(ours.transmittance(p), tone.stack_transmittance(p), 1e-12) << "p " << p << " sheets " << sheets;
-    }
-}
-
 TEST(CompareImages, KnownAnswers) {
     Image reference(3, 2, 3), prediction(3, 2, 3);
     for (std::size_t k = 0; k < reference.samples().size(); ++k) {
@@ -148,8 +139,8 @@ TEST(EncodeOptionsOf, RoundTripsTheEncodersAttributes) {
     EncodeOptions options;
     options.model = optics::Model::Exact;
     options.exact_table_nodes = 9;
-    options.interpolation = relight::Interpolation::nearest;
-    options.fit = ImageFit::contain;
+    options.interpolation = relight::Interpolation::Nearest;
+    options.fit = ImageFit::Contain;
     options.mapping = {12.5, -30.0, 1.25};
     const PatternGeometry geometry = pattern_geometry(design, Dpi{360}, Dpi{360});
     const Encoder encoder(design, diamonds_field(), geometry, options);
@@ -167,8 +158,8 @@ TEST(EncodeOptionsOf, RoundTripsTheEncodersAttributes) {
     PatternFileInfo older = info;
     older.attributes.erase("interpolation");
     older.attributes.erase("fit");
-    EXPECT_EQ(encode_options_of(older, "p.exr").interpolation, relight::Interpolation::delaunay);
-    EXPECT_EQ(encode_options_of(older, "p.exr").fit, ImageFit::cover);
+    EXPECT_EQ(encode_options_of(older, "p.exr").interpolation, relight::Interpolation::Delaunay);
+    EXPECT_EQ(encode_options_of(older, "p.exr").fit, ImageFit::Cover);
 
     info.attributes["interpolation"] = "cubic";
     EXPECT_THAT(error_of([&] { encode_options_of(info, "p.exr"); }),
@@ -367,7 +358,7 @@ TEST(DisplayComparison, Sig08LettersAppearEachUnderItsOwnLightOnly) {
     letters.height = 40;
     const relight::ReflectanceField field = procedural_field(letters);
     EncodeOptions options;
-    options.interpolation = relight::Interpolation::nearest;
+    options.interpolation = relight::Interpolation::Nearest;
     const Printed p = print_field(design, field, options);
     const optics::DisplaySimulator simulator(design);
     const DisplayComparison comparison(simulator, *p.transparency, *p.encoder, p.tone);
@@ -427,4 +418,4 @@ TEST(AccuracySweep, ExactAtTheReferenceRaysIsTheReference) {
 }
 
 }  // namespace
-}  // namespace rfd::patterns
+}  // namespace rfd::predict

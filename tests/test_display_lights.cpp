@@ -1,4 +1,4 @@
-// Lights named in the field's frame as the display meets them (patterns/display_lights.hpp):
+// Lights named in the field's frame as the display meets them (predict/display_lights.hpp):
 // environment maps become one light per lit pixel carrying its power, from inside the
 // pixel; maps finer than the display resolves (or than the ray budget) are box-filtered
 // without losing power; light that meets the display from the front is dropped and
@@ -12,12 +12,13 @@
 
 #include "core/sphere.hpp"
 #include "core/units.hpp"
-#include "patterns/display_lights.hpp"
+#include "predict/display_lights.hpp"
 #include "tests/support/error_of.hpp"
 
-namespace rfd::patterns {
+namespace rfd::predict {
 namespace {
 
+using namespace rfd::patterns;
 using ::testing::HasSubstr;
 using rfd::testing::error_of;
 
@@ -118,4 +119,4 @@ TEST(EnvironmentLights, BadMapsAreRefusedNamingThePixel) {
 }
 
 }  // namespace
-}  // namespace rfd::patterns
+}  // namespace rfd::predict

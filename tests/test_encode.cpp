@@ -128,7 +128,7 @@ TEST(Encoder, LensletSamplesAreTheFieldPixelsWhenTheyAlign) {
         field.images.push_back(std::move(image));
     }
     EncodeOptions options;
-    options.fit = ImageFit::stretch;
+    options.fit = ImageFit::Stretch;
     const Encoder encoder(design, field, pattern_geometry(design, Dpi{360}, Dpi{360}), options);
     int checked = 0;
     for (std::size_t i = 0; i < field.size(); ++i) {
@@ -238,13 +238,13 @@ TEST_P(RenderRow, EveryDotIsThePerDotBlendOfItsLenslet) {
 
 INSTANTIATE_TEST_SUITE_P(
     Mappings, RenderRow,
-    ::testing::Values(PerDotCase{"hex_paraxial", true, optics::Model::Paraxial, 0.0, 1.0, relight::Interpolation::delaunay},
-                      PerDotCase{"hex_exact_tilted", true, optics::Model::Exact, 45.0, 1.0, relight::Interpolation::delaunay},
-                      PerDotCase{"hex_paraxial_scaled", true, optics::Model::Paraxial, 20.0, 1.6, relight::Interpolation::delaunay},
-                      PerDotCase{"hex_exact_nearest", true, optics::Model::Exact, 10.0, 1.0, relight::Interpolation::nearest},
-                      PerDotCase{"rect_exact_tilted", false, optics::Model::Exact, 45.0, 1.0, relight::Interpolation::delaunay},
+    ::testing::Values(PerDotCase{"hex_paraxial", true, optics::Model::Paraxial, 0.0, 1.0, relight::Interpolation::Delaunay},
+                      PerDotCase{"hex_exact_tilted", true, optics::Model::Exact, 45.0, 1.0, relight::Interpolation::Delaunay},
+                      PerDotCase{"hex_paraxial_scaled", true, optics::Model::Paraxial, 20.0, 1.6, relight::Interpolation::Delaunay},
+                      PerDotCase{"hex_exact_nearest", true, optics::Model::Exact, 10.0, 1.0, relight::Interpolation::Nearest},
+                      PerDotCase{"rect_exact_tilted", false, optics::Model::Exact, 45.0, 1.0, relight::Interpolation::Delaunay},
                       PerDotCase{"rect_paraxial_solid_angle", false, optics::Model::Paraxial, 0.0, 1.0,
-                                 relight::Interpolation::solid_angle}),
+                                 relight::Interpolation::SolidAngle}),
     [](const auto& test) { return std::string(test.param.name); });
 
 TEST(Encoder, ExactTableMatchesDirectNewtonSolves) {
@@ -325,16 +325,63 @@ TEST(Encoder, NeededDirectionsAreEnoughForAnIdenticalPattern) {
 namespace rfd::patterns {
 namespace {
 
-TEST(ChooseModel, ParaxialOnlyWhereItIsWithinAQuarterDot) {
+optics::ResolvedModel resolve_at(const optics::Design& design, double dpi, optics::ModelChoice choice) {
+    const PatternGeometry g = pattern_geometry(design, Dpi{dpi}, Dpi{dpi});
+    return optics::resolve(choice, optics::DesignOptics(design), {g.dot_x, g.dot_y});
+}
+
+TEST(ResolveModel, AutoIsParaxialOnlyWhereItIsWithinAQuarterDot) {
     const optics::Design design = optics::load_design(kDesigns / "design2.toml");
-    const ModelChoice fine = choose_model(design, pattern_geometry(design, Dpi{2880}, Dpi{2880}));
-    const ModelChoice coarse = choose_model(design, pattern_geometry(design, Dpi{20}, Dpi{20}));
+    const optics::ResolvedModel fine = resolve_at(design, 2880, optics::ModelChoice::Auto);
+    const optics::ResolvedModel coarse = resolve_at(design, 20, optics::ModelChoice::Auto);
     EXPECT_EQ(fine.model, optics::Model::Exact);
     EXPECT_EQ(coarse.model, optics::Model::Paraxial);
+    ASSERT_TRUE(fine.paraxial_error_dots && coarse.paraxial_error_dots);
     // The same error in millimetres, counted in dots of two sizes.
-    EXPECT_NEAR(fine.paraxial_error_dots / coarse.paraxial_error_dots, 2880.0 / 20.0, 1e-6);
-    EXPECT_GT(fine.paraxial_error_dots, 0.25);
-    EXPECT_LT(coarse.paraxial_error_dots, 0.25);
+    EXPECT_NEAR(*fine.paraxial_error_dots / *coarse.paraxial_error_dots, 2880.0 / 20.0, 1e-6);
+    EXPECT_GT(*fine.paraxial_error_dots, 0.25);
+    EXPECT_LT(*coarse.paraxial_error_dots, 0.25);
+    EXPECT_THAT(fine.reason, HasSubstr("beyond the tolerance"));
+}
+
+TEST(ResolveModel, AChoiceMadeByHandIsKeptAndDesignsIIIAndIVAreExactUnderAuto) {
+    const optics::Design design2 = optics::load_design(kDesigns / "design2.toml");
+    EXPECT_EQ(resolve_at(design2, 2880, optics::ModelChoice::Paraxial).model, optics::Model::Paraxial);
+    EXPECT_EQ(resolve_at(design2, 20, optics::ModelChoice::Exact).model, optics::Model::Exact);
+    const optics::Design design3 = optics::load_design(kDesigns / "design3.toml");
+    const optics::DesignOptics optics3(design3);
+    const optics::ResolvedModel automatic = optics::resolve(optics::ModelChoice::Auto, optics3, optics3.dot_mm());
+    EXPECT_EQ(automatic.model, optics::Model::Exact);
+    EXPECT_FALSE(automatic.paraxial_error_dots);
+    EXPECT_THAT(automatic.reason, HasSubstr("Designs III and IV"));
+    EXPECT_EQ(optics::resolve(optics::ModelChoice::Paraxial, optics3, optics3.dot_mm()).model, optics::Model::Paraxial);
+}
+
+TEST(EncodeAttributes, TheOptionsReadBackAsWritten) {
+    EncodeOptions options;
+    options.model = optics::Model::Exact;
+    options.interpolation = relight::Interpolation::SolidAngle;
+    options.fit = ImageFit::Contain;
+    options.mapping = {45.0, -30.0, 1.5};
+    options.field_name = "bottle";
+    PatternFileInfo info;
+    info.attributes = encode_attributes(options);
+    const EncodeOptions back = encode_options_of(info, "p.exr");
+    EXPECT_EQ(back.model, options.model);
+    EXPECT_EQ(back.interpolation, options.interpolation);
+    EXPECT_EQ(back.fit, options.fit);
+    EXPECT_EQ(back.mapping.tilt_deg, 45.0);
+    EXPECT_EQ(back.mapping.turn_deg, -30.0);
+    EXPECT_EQ(back.mapping.angle_scale, 1.5);
+    EXPECT_EQ(back.field_name, "bottle");
+    // A file written before the attributes were recorded reads as the old defaults.
+    const EncodeOptions old = encode_options_of(PatternFileInfo{}, "old.exr");
+    EXPECT_EQ(old.model, optics::Model::Paraxial);
+    EXPECT_EQ(old.interpolation, relight::Interpolation::Delaunay);
+    EXPECT_EQ(old.fit, ImageFit::Cover);
+    info.attributes["interpolation"] = "cubic";
+    EXPECT_THAT(error_of([&] { encode_options_of(info, "p.exr"); }),
+                HasSubstr("p.exr: rfd:interpolation: expected 'delaunay', 'solid-angle' or 'nearest', got 'cubic'"));
 }
 
 }  // namespace

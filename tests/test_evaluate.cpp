@@ -28,7 +28,7 @@ std::vector<Eigen::Vector3d> reference_directions() {
 
 TEST(Evaluate, FieldAgainstItselfHasNoError) {
     const ReflectanceField field = lambertian_sphere_field(fibonacci_hemisphere(60), 24);
-    for (const auto method : {Interpolation::delaunay, Interpolation::nearest}) {
+    for (const auto method : {Interpolation::Delaunay, Interpolation::Nearest}) {
         const Evaluation e = evaluate(field, field, method);
         EXPECT_EQ(e.total_squared_error, 0.0);
         EXPECT_EQ(e.psnr, std::numeric_limits<double>::infinity());
@@ -70,7 +70,7 @@ TEST(Evaluate, ErrorFallsAsTheSparseSetDensifies) {
     for (const std::size_t count : {12u, 40u, 120u, 360u}) {
         const ReflectanceField sparse = lambertian_sphere_field(fibonacci_hemisphere(count), 24);
         const double error = evaluate(sparse, reference).total_squared_error;
-        const double nearest = evaluate(sparse, reference, Interpolation::nearest).total_squared_error;
+        const double nearest = evaluate(sparse, reference, Interpolation::Nearest).total_squared_error;
         EXPECT_LT(error, previous) << count << " directions";
         EXPECT_LT(nearest, previous_nearest) << count << " directions";
         EXPECT_LT(error, nearest) << count << " directions";  // interpolation beats the baseline

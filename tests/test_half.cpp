@@ -21,7 +21,7 @@ std::uint16_t half_bits(float v, HalfConversion conversion) {
 }
 
 TEST(Half, RoundsToNearestEvenAndOverflowsToInfinity) {
-    for (HalfConversion conversion : {HalfConversion::fastest, HalfConversion::portable}) {
+    for (HalfConversion conversion : {HalfConversion::Fastest, HalfConversion::Portable}) {
         EXPECT_EQ(half_bits(1.0f, conversion), 0x3c00);
         EXPECT_EQ(half_bits(-2.0f, conversion), 0xc000);
         EXPECT_EQ(half_bits(65504.0f, conversion), 0x7bff);       // the largest half
@@ -49,8 +49,8 @@ TEST(Half, FastAndPortablePathsAgreeOnEveryFloatClass) {
     // Lengths that are not multiples of the 8-wide vector path.
     values.resize(values.size() - values.size() % 8 + 5);
     std::vector<std::uint16_t> fast(values.size()), portable(values.size());
-    floats_to_half(values, fast, HalfConversion::fastest);
-    floats_to_half(values, portable, HalfConversion::portable);
+    floats_to_half(values, fast, HalfConversion::Fastest);
+    floats_to_half(values, portable, HalfConversion::Portable);
     std::size_t differ = 0;
     for (std::size_t i = 0; i < values.size(); ++i) differ += fast[i] != portable[i];
     EXPECT_EQ(differ, 0u);

@@ -290,14 +290,14 @@ TEST(Hdr, CalibrationFailsWithoutMidGrey) {
 
 void write_codes(const std::filesystem::path& path, const CodeImage& image, double exposure_seconds) {
     ImageFileSpec spec{.width = image.width, .height = image.height, .channels = image.channels,
-                       .type = SampleType::uint8};
+                       .type = SampleType::UInt8};
     if (exposure_seconds > 0.0) spec.exposure_seconds = exposure_seconds;
     std::vector<std::uint8_t> interleaved;
     for (int y = 0; y < image.height; ++y)
         for (int x = 0; x < image.width; ++x)
             for (int c = 0; c < image.channels; ++c) interleaved.push_back(image.at(x, y, c));
     ImageFileWriter out(path, spec);
-    out.write_rows(0, image.height, SampleType::uint8, interleaved.data());
+    out.write_rows(0, image.height, SampleType::UInt8, interleaved.data());
     out.finish();
 }
 

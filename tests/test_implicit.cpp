@@ -458,7 +458,7 @@ TEST(ImplicitStudy, TrainingLightsOverlapAndHeldOutLightsStayInTheirBounds) {
     std::vector<Eigen::Vector3d> directions;
     for (const auto& light : training) {
         EXPECT_GT(light.direction.z(), 0.0);
-        EXPECT_EQ(light.kernel.profile, KernelProfile::smooth);
+        EXPECT_EQ(light.kernel.profile, KernelProfile::Smooth);
         directions.push_back(light.direction);
     }
     EXPECT_NEAR(radians_to_degrees(training[0].kernel.radius), 15.0, 1e-9);

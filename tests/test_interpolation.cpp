@@ -134,7 +134,7 @@ TEST(Interpolation, WeightsArePartitionOfUnityAndReproduceTheDirection) {
             for (std::size_t k = 0; k < 3; ++k) p += w.weight[k] * directions[w.index[k]];
             EXPECT_LT(angle_between(p.normalized(), d), 1e-12);
         }
-        const auto nearest = interp.weights(d, Interpolation::nearest);
+        const auto nearest = interp.weights(d, Interpolation::Nearest);
         ASSERT_EQ(nearest.count, 1u);
         EXPECT_EQ(nearest.weight[0], 1.0);
         std::size_t best = 0;
@@ -219,7 +219,7 @@ TEST(Interpolation, SolidAngleWeightsOfEq46) {
         const double z = unit(random), phi = 2.0 * kPi * unit(random);
         const Eigen::Vector3d d(std::sqrt(1 - z * z) * std::cos(phi), std::sqrt(1 - z * z) * std::sin(phi), z);
         const auto planar = interp.weights(d);
-        const auto solid = interp.weights(d, Interpolation::solid_angle);
+        const auto solid = interp.weights(d, Interpolation::SolidAngle);
         expect_partition_of_unity(solid, directions.size());
         ASSERT_EQ(solid.count, planar.count);
         ASSERT_EQ(solid.index, planar.index);
@@ -235,7 +235,7 @@ TEST(Interpolation, SolidAngleWeightsOfEq46) {
     EXPECT_GT(largest_difference, 0.0);
     EXPECT_LT(largest_difference, 0.05);
     for (std::size_t i = 0; i < directions.size(); ++i)
-        EXPECT_EQ(dense(interp.weights(directions[i], Interpolation::solid_angle), directions.size())[i], 1.0);
+        EXPECT_EQ(dense(interp.weights(directions[i], Interpolation::SolidAngle), directions.size())[i], 1.0);
 }
 
 TEST(Interpolation, ThreeDirections) {

@@ -237,7 +237,7 @@ TEST(SheetTiff, ResolutionTagsAndMarkersWhereTheDesignPutsTheCornerLenslets) {
     EXPECT_EQ(page.spec.dpi_x, 1200.0);
     EXPECT_EQ(page.spec.dpi_y, 600.0);
     EXPECT_EQ(page.spec.channels, 3);
-    EXPECT_EQ(page.spec.type, SampleType::uint8);
+    EXPECT_EQ(page.spec.type, SampleType::UInt8);
     // The page: whole dots inside 50 x 60 mm.
     const int page_w = static_cast<int>(std::floor(50.0 * 1200 / 25.4)), page_h = static_cast<int>(std::floor(60.0 * 600 / 25.4));
     ASSERT_EQ(page.width, page_w);
@@ -332,7 +332,7 @@ TEST(SheetTiff, SixteenBitsKeepTheResolution) {
     options.bits = 16;
     write_sheet(dir / "sheet16.tif", design, printer, pattern, options);
     const ImageFileReader in(dir / "sheet16.tif");
-    EXPECT_EQ(in.spec().type, SampleType::uint16);
+    EXPECT_EQ(in.spec().type, SampleType::UInt16);
     EXPECT_EQ(in.spec().dpi_x, 300.0);
     EXPECT_EQ(in.spec().dpi_y, 150.0);
 }

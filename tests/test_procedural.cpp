@@ -51,7 +51,7 @@ TEST(ProceduralField, LettersRunLeftToRightWithBlackGuardsAway) {
 
 TEST(ProceduralField, BarsAreHorizontalFromTheLeftAndVerticalFromTheRight) {
     ProceduralOptions options;
-    options.kind = ProceduralKind::bars;
+    options.kind = ProceduralKind::Bars;
     options.width = options.height = 50;
     const relight::ReflectanceField field = procedural_field(options);
     const Image& left = field.images[0];
@@ -69,7 +69,7 @@ TEST(ProceduralField, BarsAreHorizontalFromTheLeftAndVerticalFromTheRight) {
 
 TEST(ProceduralField, DiamondsGrowAsTheLightMovesDownAndHollowSideways) {
     ProceduralOptions options;
-    options.kind = ProceduralKind::diamonds;
+    options.kind = ProceduralKind::Diamonds;
     options.diamond_steps = 3;
     options.width = options.height = 60;
     const relight::ReflectanceField field = procedural_field(options);

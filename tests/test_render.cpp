@@ -160,10 +160,10 @@ TEST(Render, NearestUsesOneImage) {
     const ReflectanceField& field = dense_field();
     const SphericalInterpolator interp(field.directions);
     const Eigen::Vector3d d = direction_from_angles(0.7, -0.4);
-    const auto k = light_coefficients(interp, {DirectionalLight{d, Eigen::Vector3d::Ones()}}, Interpolation::nearest);
+    const auto k = light_coefficients(interp, {DirectionalLight{d, Eigen::Vector3d::Ones()}}, Interpolation::Nearest);
     EXPECT_EQ(k.nonzero, 1u);
     const Image image = relight(field, k);
-    const std::size_t nearest = interp.weights(d, Interpolation::nearest).index[0];
+    const std::size_t nearest = interp.weights(d, Interpolation::Nearest).index[0];
     EXPECT_EQ(image, field.images[nearest]);
 }
 

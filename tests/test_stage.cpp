@@ -102,9 +102,9 @@ Scene scene_from(const std::string& text, const std::filesystem::path& dir = "."
 double profile(const LightKernel& k, double a) {
     if (a > k.radius) return 0;
     switch (k.profile) {
-        case KernelProfile::constant: return 1;
-        case KernelProfile::smooth: return std::pow(std::cos(kPi * a / (2 * k.radius)), 2);
-        case KernelProfile::gaussian: return std::exp(-a * a / (2 * k.sigma * k.sigma));
+        case KernelProfile::Constant: return 1;
+        case KernelProfile::Smooth: return std::pow(std::cos(kPi * a / (2 * k.radius)), 2);
+        case KernelProfile::Gaussian: return std::exp(-a * a / (2 * k.sigma * k.sigma));
     }
     return 0;
 }
@@ -112,7 +112,7 @@ double profile(const LightKernel& k, double a) {
 TEST(LightKernel, IntegratesToOneOverTheSphere) {
     for (const LightKernel& kernel : {LightKernel::narrow(), LightKernel::wide(),
                                       LightKernel::gaussian(degrees_to_radians(4.0)),
-                                      LightKernel{KernelProfile::constant, degrees_to_radians(40.0), 0}}) {
+                                      LightKernel{KernelProfile::Constant, degrees_to_radians(40.0), 0}}) {
         const KernelSampler sampler(kernel);
         // A lat-long grid around a tilted centre: checks radiance(w, d) as a function on
         // the sphere, not only the radial profile.
@@ -146,7 +146,7 @@ TEST(LightKernel, IntegratesToOneOverTheSphere) {
 TEST(LightKernel, SamplesFollowTheKernel) {
     // Mean cosine to the centre of K-distributed samples against the closed form of the
     // constant cap, (1 + cos r) / 2, and a quadrature of the smooth profile.
-    for (const LightKernel& kernel : {LightKernel{KernelProfile::constant, degrees_to_radians(20.0), 0},
+    for (const LightKernel& kernel : {LightKernel{KernelProfile::Constant, degrees_to_radians(20.0), 0},
                                       LightKernel::wide()}) {
         const KernelSampler sampler(kernel);
         const Eigen::Vector3d d = Eigen::Vector3d(0.2, -0.3, 0.9).normalized();
@@ -162,7 +162,7 @@ TEST(LightKernel, SamplesFollowTheKernel) {
             }
         mean_cos /= n * n;
         double expected = (1 + std::cos(kernel.radius)) / 2;
-        if (kernel.profile != KernelProfile::constant) {
+        if (kernel.profile != KernelProfile::Constant) {
             double num = 0, den = 0;
             for (int i = 0; i < 100000; ++i) {
                 const double a = (i + 0.5) * kernel.radius / 100000;
@@ -605,7 +605,7 @@ size_mm = [130, 400]
         };
         const double theory = width_10_90(expected, plateau);
         EXPECT_NEAR(width_10_90(rendered, plateau), theory, 1.5 * (xs[1] - xs[0]) + 0.05 * theory);
-        if (kernel.profile == KernelProfile::smooth) {
+        if (kernel.profile == KernelProfile::Smooth) {
             // Geometric spread of a 15-degree kernel's half-maximum cone over 50 mm.
             EXPECT_GT(theory, height * (std::tan(beta + kernel.radius / 2) - std::tan(beta - kernel.radius / 2)) * 0.5);
         } else {
@@ -706,7 +706,7 @@ axis = [1, 2, 3]
 radius_mm = 12
 height_mm = 30
 )");
-    const RayScene rays(scene, ObjectFilter::all);
+    const RayScene rays(scene, ObjectFilter::All);
     const auto& c = std::get<CylinderShape>(scene.objects[0].shape);
     int hits = 0;
     for (int i = 0; i < 2000; ++i) {

@@ -25,7 +25,7 @@ endif()
 # A narrow field: four lights near the zenith, rendered from the light file.
 run(0 capture render ${SCENE} --lights ${NARROW} --resolution 8x4 --samples-per-pixel 1 --out ${OUT}/narrow)
 run(2 pattern encode ${DESIGN} ${OUT}/narrow --dpi 360 --out ${OUT}/narrow.exr)
-if(NOT last_output MATCHES "does not cover the display's angular range" OR NOT last_output MATCHES "display theta [0-9.]+, phi")
+if(NOT last_output MATCHES "does not cover the display's angular range" OR NOT last_output MATCHES "display theta [0-9.]+ deg, phi")
   message(FATAL_ERROR "unexpected message: ${last_output}")
 endif()
 if(EXISTS ${OUT}/narrow.exr)

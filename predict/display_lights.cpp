@@ -1,4 +1,4 @@
-#include "patterns/display_lights.hpp"
+#include "predict/display_lights.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -9,7 +9,7 @@
 #include "core/sphere.hpp"
 #include "core/units.hpp"
 
-namespace rfd::patterns {
+namespace rfd::predict {
 namespace {
 
 // An environment map as power per pixel (radiance x solid angle, per channel), box-filtered
@@ -177,4 +177,4 @@ std::vector<optics::DisplayLight> environment_lights(const Image& radiance, cons
     return lights;
 }
 
-}  // namespace rfd::patterns
+}  // namespace rfd::predict

@@ -16,7 +16,8 @@
 //               with the encoder's interpolation weights w_i (its SphericalInterpolator and
 //               method). R_l(v) / cos(kappa) is exactly the value the encoder writes in the
 //               dots of lenslet l that the chief ray of d reaches; T is the print's tone
-//               mapping (PrintTone: brightness / white, clamped, the stack's black level),
+//               mapping (print::ToneMap::stack_transmittance: brightness / white, clamped,
+//               the stack's black level),
 //               so T(...) is the transmittance a perfect display shows there (transmittance()).
 //               W_l(d) is the scale: the same simulation with a clear print (transmittance 1
 //               everywhere), sampled as P is: the display's flat field, a property of the
@@ -58,24 +59,9 @@
 #include "core/image.hpp"
 #include "optics/display.hpp"
 #include "patterns/encode.hpp"
-#include "patterns/raster.hpp"
+#include "print/printer.hpp"
 
-namespace rfd::patterns {
-
-/// The encoder's options as a pattern file records them in its rfd: attributes (model,
-/// tilt_deg, turn_deg, angle_scale, interpolation, fit; the last two default to delaunay and
-/// cover for files written before they were recorded). InputError naming the file and the
-/// attribute for a value it cannot read.
-EncodeOptions encode_options_of(const PatternFileInfo& info, const std::string& file);
-
-/// The print's tone mapping in the form print::ToneMap::stack_transmittance has it:
-/// T(p) = black + (1 - black) clamp(scale p, 0, 1); scale = brightness / white, black = the
-/// stack's darkest transmittance (black_level^sheets). Example: PrintTone{1.0 / white, 1e-4}.
-struct PrintTone {
-    double scale = 1.0;  ///< transmittance per pattern value before clamping, > 0
-    double black = 0.0;  ///< transmittance of the darkest print, in [0, 1)
-    double transmittance(double pattern_value) const;
-};
+namespace rfd::predict {
 
 /// The macro-pixel core of the header for a design: c = clamp(2 - |m|, 0.25, 1) and m (the
 /// corrective pair's magnification of A onto the diffuser) for Design II with |m| > 1;
@@ -125,10 +111,10 @@ struct DirectionComparison {
 class DisplayComparison {
 public:
     /// `encoder` must be built from the pattern's field with the options the pattern was
-    /// encoded with (encode_options_of) on the design of `simulator`; the three are kept by
-    /// reference.
+    /// encoded with (patterns::encode_options_of) on the design of `simulator`; the three
+    /// are kept by reference. `tone` is the print's (print::PrintedTransparency::tone()).
     DisplayComparison(const optics::DisplaySimulator& simulator, const optics::Transparency& pattern,
-                      const Encoder& encoder, PrintTone tone);
+                      const patterns::Encoder& encoder, const print::ToneMap& tone);
 
     /// T(R_l(v) / cos(kappa)) of the header for field direction v, per lenslet (3
     /// channels): what a perfect display shows relative to its clear-print response.
@@ -149,14 +135,14 @@ public:
     /// sweep also shows where the display stops.
     std::vector<Eigen::Vector3d> sweep(int count) const;
 
-    const Encoder& encoder() const { return encoder_; }
+    const patterns::Encoder& encoder() const { return encoder_; }
     const MacroPixelCore& core() const { return core_; }
 
 private:
     const optics::DisplaySimulator& simulator_;
     const optics::Transparency& pattern_;
-    const Encoder& encoder_;
-    PrintTone tone_;
+    const patterns::Encoder& encoder_;
+    print::ToneMap tone_;
     MacroPixelCore core_;
 };
 
@@ -195,4 +181,4 @@ std::vector<AccuracyPoint> accuracy_sweep(const optics::DisplaySimulator& simula
                                           const std::vector<int>& rays_per_side, int reference_rays,
                                           const optics::SimulationOptions& base);
 
-}  // namespace rfd::patterns
+}  // namespace rfd::predict

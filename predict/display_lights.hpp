@@ -31,7 +31,9 @@
 #include "patterns/encode.hpp"
 #include "relight/render.hpp"
 
-namespace rfd::patterns {
+namespace rfd::predict {
+
+using patterns::AngularMapping;
 
 /// A directional or disc light of the field's frame, for the display. An environment map
 /// is refused (InputError): use environment_lights().
@@ -66,4 +68,4 @@ std::vector<optics::DisplayLight> environment_lights(const Image& radiance, cons
 /// plane seen from the lenslet (dot / B), times the mapping's angle scale.
 double display_resolution_rad(const optics::DesignOptics& optics, const AngularMapping& mapping);
 
-}  // namespace rfd::patterns
+}  // namespace rfd::predict

@@ -1,4 +1,4 @@
-#include "patterns/compare.hpp"
+#include "predict/compare.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -11,7 +11,7 @@
 #include "core/sphere.hpp"
 #include "core/units.hpp"
 
-namespace rfd::patterns {
+namespace rfd::predict {
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -26,11 +26,6 @@ double psnr_of(double peak, double mse) {
     return 10.0 * std::log10(peak * peak / mse);
 }
 
-std::string text_attribute(const PatternFileInfo& info, const std::string& key, const std::string& fallback) {
-    const auto it = info.attributes.find(key);
-    return it == info.attributes.end() ? fallback : it->second;
-}
-
 // A print that transmits everything: the display's own response to a light.
 class ClearTransparency final : public optics::Transparency {
 public:
@@ -41,42 +36,6 @@ public:
 };
 
 }  // namespace
-
-EncodeOptions encode_options_of(const PatternFileInfo& info, const std::string& file) {
-    EncodeOptions options;
-    options.field_name = text_attribute(info, "field", file);
-    const std::string model = text_attribute(info, "model", "paraxial");
-    if (model == "paraxial") options.model = optics::Model::Paraxial;
-    else if (model == "exact") options.model = optics::Model::Exact;
-    else throw InputError(SourceLocation{file, 0, 0, "rfd:model"}, "expected 'paraxial' or 'exact', got '" + model + "'");
-    options.mapping = mapping_of(info, file);
-    const std::string interpolation = text_attribute(info, "interpolation", "delaunay");
-    bool known = false;
-    for (auto method : {relight::Interpolation::delaunay, relight::Interpolation::solid_angle, relight::Interpolation::nearest})
-        if (interpolation == interpolation_name(method)) {
-            options.interpolation = method;
-            known = true;
-        }
-    if (!known)
-        throw InputError(SourceLocation{file, 0, 0, "rfd:interpolation"},
-                         "expected 'delaunay', 'solid-angle' or 'nearest', got '" + interpolation + "'");
-    const std::string fit = text_attribute(info, "fit", "cover");
-    known = false;
-    for (auto kind : {ImageFit::cover, ImageFit::contain, ImageFit::stretch})
-        if (fit == to_string(kind)) {
-            options.fit = kind;
-            known = true;
-        }
-    if (!known)
-        throw InputError(SourceLocation{file, 0, 0, "rfd:fit"}, "expected 'cover', 'contain' or 'stretch', got '" + fit + "'");
-    // The comparison needs every direction the pattern could show, covered or not.
-    options.allow_partial_coverage = true;
-    return options;
-}
-
-double PrintTone::transmittance(double pattern_value) const {
-    return black + (1.0 - black) * std::clamp(scale * pattern_value, 0.0, 1.0);
-}
 
 MacroPixelCore macro_pixel_core(const optics::DesignOptics& optics) {
     MacroPixelCore core;
@@ -125,9 +84,9 @@ ImageComparison compare_images(const Image& prediction, const Image& reference) 
 }
 
 DisplayComparison::DisplayComparison(const optics::DisplaySimulator& simulator, const optics::Transparency& pattern,
-                                     const Encoder& encoder, PrintTone tone)
+                                     const patterns::Encoder& encoder, const print::ToneMap& tone)
     : simulator_(simulator), pattern_(pattern), encoder_(encoder), tone_(tone) {
-    RFD_CHECK(tone.scale > 0.0 && tone.black >= 0.0 && tone.black < 1.0);
+    RFD_CHECK(tone.brightness > 0.0 && tone.white > 0.0 && (tone.sheets == 1 || tone.sheets == 2));
     const optics::Lattice& a = simulator.optics().lattice();
     const optics::Lattice& b = encoder.lattice();
     RFD_CHECK(a.count_x() == b.count_x() && a.count_y() == b.count_y());
@@ -150,7 +109,7 @@ Image DisplayComparison::transmittance(const Eigen::Vector3d& field_direction) c
                 double value = 0.0;
                 for (std::size_t k = 0; k < w.count; ++k)
                     value += w.weight[k] * encoder_.lenslet_sample({i, j}, w.index[k], channel);
-                out.at(i, lattice.count_y() - 1 - j, c) = static_cast<float>(tone_.transmittance(value / cos_kappa));
+                out.at(i, lattice.count_y() - 1 - j, c) = static_cast<float>(tone_.stack_transmittance(value / cos_kappa));
             }
     return out;
 }
@@ -299,4 +258,4 @@ std::vector<AccuracyPoint> accuracy_sweep(const optics::DisplaySimulator& simula
     return points;
 }
 
-}  // namespace rfd::patterns
+}  // namespace rfd::predict

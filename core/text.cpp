@@ -1,0 +1,25 @@
+#include "core/text.hpp"
+
+#include <algorithm>
+#include <cstdio>
+
+#include "core/sphere.hpp"
+#include "core/units.hpp"
+
+namespace rfd {
+
+std::string format_number(double value, int significant) {
+    char text[64];
+    std::snprintf(text, sizeof text, "%.*g", std::clamp(significant, 1, 17), value);
+    return text;
+}
+
+std::string format_direction(const Eigen::Vector3d& direction) {
+    const SphericalAngles a = angles_of(direction);
+    char text[96];
+    std::snprintf(text, sizeof text, "theta %.2f deg, phi %.2f deg", radians_to_degrees(a.theta),
+                  radians_to_degrees(a.phi));
+    return text;
+}
+
+}  // namespace rfd
