@@ -202,11 +202,7 @@ void add_capture_commands(CLI::App& capture) {
             char name[32];
             std::snprintf(name, sizeof name, "view_%02zu", v);
             const std::filesystem::path folder = views == 1 ? out : out / name;
-            ensure_directory(folder);
-            // A light file from an earlier run would describe images being replaced: remove it
-            // first, write it last.
-            std::error_code ec;
-            std::filesystem::remove(folder / "field.lp", ec);
+            relight::FieldWriter field(folder);
 
             const auto t0 = Clock::now();
             const relight::LightStage stage(scene, v);
@@ -215,25 +211,15 @@ void add_capture_commands(CLI::App& capture) {
             shading_points += stage.shading_point_count();
             escaped += stage.escaped_path_count();
 
-            std::vector<std::string> files;
-            std::vector<Eigen::Vector3d> directions;
-            std::vector<double> radii;
-            bool any_radius = false;
             Progress progress(views == 1 ? "lights" : std::string("lights, ") + name, lights.directions.size());
             for (std::size_t i = 0; i < lights.directions.size(); ++i) {
-                char file[32];
-                std::snprintf(file, sizeof file, "field_%04zu.exr", i);
-                write_image(folder / file, stage.render(lights.directions[i], kernels[i]));
-                files.emplace_back(file);
-                directions.push_back((stage.to_view_frame() * lights.directions[i]).normalized());
-                radii.push_back(kernels[i].radius);
-                any_radius = any_radius || kernels[i].radius > 0.0;
+                field.add(stage.render(lights.directions[i], kernels[i]),
+                          (stage.to_view_frame() * lights.directions[i]).normalized(), kernels[i].radius);
                 progress.advance();
             }
             progress.finish();
             light_seconds += std::chrono::duration<double>(Clock::now() - t1).count();
-            relight::write_light_file(folder / "field.lp", files, directions,
-                                      any_radius ? radii : std::vector<double>{});
+            field.finish();
             // The view in the display frame (the first camera's field frame): the direction
             // toward this camera from what it looks at, and the rotation back from its
             // light frame.

@@ -43,7 +43,7 @@ nlohmann::json losses_json(const optics::DesignSummary& s) {
 nlohmann::json to_json(const optics::DesignSummary& s) {
     auto pairs = [](const auto& list) {
         nlohmann::json out = nlohmann::json::object();
-        for (const auto& [name, value] : list) out[name] = value;
+        for (const auto& [name, value] : list) out[name] = json_or_null(value);
         return out;
     };
     return {{"name", s.name},
@@ -63,7 +63,7 @@ nlohmann::json to_json(const optics::DesignSummary& s) {
             {"wrap_over_paraxial_deg", pairs(s.wrap_over_paraxial_deg)},
             {"wrap_over_exact_deg", pairs(s.wrap_over_exact_deg)},
             {"crosstalk_begins_exact_deg", pairs(s.crosstalk_exact_deg)},
-            {"field_of_view_deg", s.field_of_view_deg},
+            {"field_of_view_deg", json_or_null(s.field_of_view_deg)},
             {"efficiency_on_axis", s.efficiency_on_axis},
             {"efficiency_at_half_fov", s.efficiency_at_half_fov},
             {"efficiency_with_fresnel_on_axis", s.efficiency_fresnel_on_axis},
@@ -103,12 +103,20 @@ std::string summary_text(const optics::DesignSummary& s, bool observer_variant) 
     }
     add("  %s (paraxial / exact chief ray):\n",
         observer_variant ? "edge of the meso-pixel array" : "wrap-over angle");
+    // An angle, or where nothing happened up to the searched limit.
+    auto angle_text = [](const std::optional<double>& angle) {
+        char text[32];
+        if (angle) std::snprintf(text, sizeof text, "%6.2f deg", *angle);
+        else std::snprintf(text, sizeof text, "none up to %.0f deg", optics::kWrapOverSearchLimitDeg);
+        return std::string(text);
+    };
     for (std::size_t k = 0; k < s.wrap_over_exact_deg.size(); ++k)
-        add("    along %-12s          %6.2f deg / %6.2f deg\n", s.wrap_over_exact_deg[k].first.c_str(),
-            s.wrap_over_paraxial_deg[k].second, s.wrap_over_exact_deg[k].second);
+        add("    along %-12s          %s / %s\n", s.wrap_over_exact_deg[k].first.c_str(),
+            angle_text(s.wrap_over_paraxial_deg[k].second).c_str(), angle_text(s.wrap_over_exact_deg[k].second).c_str());
     for (const auto& [name, angle] : s.crosstalk_exact_deg)
-        add("  crosstalk begins (exact, full bundle) along %-10s %6.2f deg\n", name.c_str(), angle);
-    add("  field of view             %.2f deg (full cone, exact)\n", s.field_of_view_deg);
+        add("  crosstalk begins (exact, full bundle) along %-10s %s\n", name.c_str(), angle_text(angle).c_str());
+    if (s.field_of_view_deg) add("  field of view             %.2f deg (full cone, exact)\n", *s.field_of_view_deg);
+    else add("  field of view             no wrap-over up to %.0f deg from the axis\n", optics::kWrapOverSearchLimitDeg);
     add("  light efficiency          %.1f %% on axis, %.1f %% at half the field of view\n",
         100 * s.efficiency_on_axis, 100 * s.efficiency_at_half_fov);
     add("                            (rays reaching the last surface of the optics)\n");
@@ -188,19 +196,18 @@ void add_chart_command(CLI::App& optics_cmd) {
         const auto design = optics::load_design(opt->file);
         const optics::DesignOptics optics(design);
         ensure_directory(opt->out);
-        const auto& lattice = optics.lattice();
-        const bool hex = lattice.kind() == optics::LatticeKind::Hexagonal;
-        struct Sweep {
-            std::string name;
-            std::string file;
-            double phi;
-        };
-        const std::vector<Sweep> sweeps = {{hex ? "flat direction (x)" : "x direction", "x", 0.0},
-                                           {hex ? "corner direction (y)" : "y direction", "y", kPi / 2}};
-        double wrap = 90.0;
+        const std::vector<optics::SweepDirection> sweeps = optics::sweep_directions(optics.lattice());
+        // The chart reaches a quarter past the first wrap-over; where no direction wraps
+        // over, to 75 deg and the rays/s are measured at 48 deg.
+        constexpr double kNoWrapOverDeg = 60.0;
+        double wrap = kNoWrapOverDeg;
+        bool wraps = false;
         for (const auto& sweep : sweeps)
-            wrap = std::min(wrap, optics::wrap_over_angle(optics, sweep.phi, optics::Model::Exact).value_or(60.0));
-        const double max_angle = opt->max_angle > 0 ? opt->max_angle : std::min(89.0, 1.25 * wrap);
+            if (const auto angle = optics::wrap_over_angle(optics, sweep.phi, optics::Model::Exact)) {
+                wrap = wraps ? std::min(wrap, *angle) : *angle;
+                wraps = true;
+            }
+        const double max_angle = opt->max_angle > 0 ? opt->max_angle : std::min(optics::kWrapOverSearchLimitDeg, 1.25 * wrap);
 
         // Rays per second are a measurement of this machine, the only part of the output
         // that changes from run to run; --no-timing leaves them out.
@@ -221,11 +228,11 @@ void add_chart_command(CLI::App& optics_cmd) {
             LineChart plot;
             char title[400];
             if (opt->no_timing)
-                std::snprintf(title, sizeof title, "%s\nparaxial against exact along the %s",
+                std::snprintf(title, sizeof title, "%s\nparaxial against exact along the %s direction",
                               design.name.c_str(), sweep.name.c_str());
             else
                 std::snprintf(title, sizeof title,
-                              "%s\nparaxial against exact along the %s; paraxial %.3g rays/s, exact %.3g rays/s",
+                              "%s\nparaxial against exact along the %s direction; paraxial %.3g rays/s, exact %.3g rays/s",
                               design.name.c_str(), sweep.name.c_str(), paraxial_rate, exact_rate);
             plot.title = title;
             plot.x_label = "incident angle (degrees)";
@@ -242,9 +249,8 @@ void add_chart_command(CLI::App& optics_cmd) {
             plot.series = {pixels, microns};
             if (chart.half_pixel_angle_deg)
                 plot.vertical_markers.emplace_back(*chart.half_pixel_angle_deg, "error > 1/2 pixel");
-            plot.vertical_markers.emplace_back(
-                optics::wrap_over_angle(optics, sweep.phi, optics::Model::Exact).value_or(max_angle),
-                "wrap-over");
+            if (const auto angle = optics::wrap_over_angle(optics, sweep.phi, optics::Model::Exact))
+                plot.vertical_markers.emplace_back(*angle, "wrap-over");
             write_line_chart(plot, dir / ("paraxial_error_" + sweep.file));
             summary["sweeps"].push_back(
                 {{"direction", sweep.name},

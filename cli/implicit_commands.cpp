@@ -50,46 +50,6 @@ relight::ProbeBox parse_probe_box(const std::string& text) {
     return {values[0], values[1], values[2], values[3]};
 }
 
-bool is_image_file(const fs::path& path) {
-    const std::string ext = lower_extension(path);
-    return ext == ".exr" || ext == ".hdr" || ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".tif" ||
-           ext == ".tiff";
-}
-
-// The images of a field folder (or .lp) in light-file order.
-std::vector<fs::path> field_images(const fs::path& field) {
-    const fs::path lp = relight::light_file_of(field);
-    std::vector<fs::path> files;
-    for (const auto& entry : relight::read_light_file(lp)) files.push_back(lp.parent_path() / entry.file);
-    return files;
-}
-
-// The training images: a field (.lp, or a folder holding one; its directions are ignored)
-// or a folder of images in name order.
-std::vector<fs::path> training_images(const fs::path& training) {
-    std::vector<fs::path> lp_files;
-    if (fs::is_directory(training)) {
-        for (const auto& entry : fs::directory_iterator(training))
-            if (entry.path().extension() == ".lp") lp_files.push_back(entry.path());
-    } else if (training.extension() == ".lp") {
-        lp_files.push_back(training);
-    } else {
-        throw InputError(SourceLocation{training.string()}, "expected a folder of images or a .lp light file");
-    }
-    std::vector<fs::path> images;
-    if (!lp_files.empty()) {
-        images = field_images(training);
-    } else {
-        for (const auto& entry : fs::directory_iterator(training))
-            if (entry.is_regular_file() && is_image_file(entry.path())) images.push_back(entry.path());
-        std::sort(images.begin(), images.end());
-    }
-    if (images.size() < 2)
-        throw InputError(SourceLocation{training.string()},
-                         "implicit relighting needs at least 2 training images, found " + std::to_string(images.size()));
-    return images;
-}
-
 // Every training image, checked to share the first one's size and channels.
 std::vector<Image> read_training_images(const std::vector<fs::path>& files) {
     std::vector<Image> images;
@@ -144,7 +104,7 @@ void add_train(CLI::App& implicit) {
             throw InputError("relight implicit train: give --probe-box X,Y,WIDTH,HEIGHT (no probe.json beside " +
                              opt->training + ")");
         if (info) files.probe_material = info->material;
-        files.images = training_images(opt->training);
+        files.images = relight::training_image_files(opt->training);
         const std::vector<Image> images = read_training_images(files.images);
         std::vector<Image> probes;
         for (std::size_t i = 0; i < images.size(); ++i) {
@@ -317,56 +277,19 @@ void add_predict(CLI::App& implicit) {
 
 // ---- rfd capture implicit -------------------------------------------------------------
 
-// The probe object: the one named, or else the scene's only sphere of a Phong material.
-const relight::SceneObject& find_probe(const relight::Scene& scene, const std::string& name,
-                                       const std::string& scene_file) {
-    const relight::SceneObject* found = nullptr;
-    std::size_t phong_spheres = 0;
-    for (const auto& object : scene.objects) {
-        if (!name.empty()) {
-            if (object.name == name) found = &object;
-            continue;
-        }
-        if (std::holds_alternative<relight::SphereShape>(object.shape) &&
-            std::holds_alternative<relight::PhongMaterial>(scene.materials[object.material])) {
-            found = &object;
-            ++phong_spheres;
-        }
-    }
-    if (!name.empty() && !found)
-        throw InputError(SourceLocation{scene_file}, "--probe " + name + ": no object of that name");
-    if (name.empty() && phong_spheres != 1)
-        throw InputError(SourceLocation{scene_file},
-                         "found " + std::to_string(phong_spheres) +
-                             " spheres of a phong material; name the probe object with --probe NAME");
-    if (!std::holds_alternative<relight::SphereShape>(found->shape))
-        throw InputError(SourceLocation{scene_file}, "--probe " + found->name + ": the probe must be a sphere");
-    return *found;
-}
-
 // Renders `lights` into a field folder, with camera noise (0: none) seeded per image.
 void render_set(const relight::LightStage& stage, const std::vector<relight::StageLight>& lights,
                 const fs::path& folder, double noise, std::uint64_t seed, const std::string& label) {
-    ensure_directory(folder);
-    std::error_code ec;
-    fs::remove(folder / "field.lp", ec);  // a light file from an earlier run would list images being replaced
-    std::vector<std::string> files;
-    std::vector<Eigen::Vector3d> directions;
-    std::vector<double> radii;
+    relight::FieldWriter field(folder);
     Progress progress(label, lights.size());
     for (std::size_t i = 0; i < lights.size(); ++i) {
-        char file[32];
-        std::snprintf(file, sizeof file, "field_%04zu.exr", i);
         Image image = stage.render(lights[i].direction, lights[i].kernel);
         relight::add_camera_noise(image, noise, seed * 0x9E3779B97F4A7C15ull + i);
-        write_image(folder / file, image);
-        files.emplace_back(file);
-        directions.push_back(lights[i].direction);
-        radii.push_back(lights[i].kernel.radius);
+        field.add(image, lights[i].direction, lights[i].kernel.radius);
         progress.advance();
     }
     progress.finish();
-    relight::write_light_file(folder / "field.lp", files, directions, radii);
+    field.finish();
 }
 
 }  // namespace
@@ -409,7 +332,7 @@ void add_capture_implicit_command(CLI::App& capture) {
         const auto t0 = std::chrono::steady_clock::now();
         relight::Scene scene = relight::load_scene(opt->scene);
         apply_scene_overrides(scene, opt->resolution, opt->samples);
-        const relight::SceneObject& probe = find_probe(scene, opt->probe, opt->scene);
+        const relight::SceneObject& probe = relight::probe_object(scene, opt->probe, opt->scene);
         const auto& sphere = std::get<relight::SphereShape>(probe.shape);
         const Eigen::Vector4d box = scene.cameras.front().sphere_box(sphere.centre, sphere.radius);
         const relight::Camera& camera = scene.cameras.front();
@@ -519,8 +442,8 @@ void add_sweep(CLI::App& implicit) {
             if (etas.empty()) throw InputError("--etas: expected at least one eta");
         }
         const fs::path test(opt->test);
-        const std::vector<fs::path> photo_files = field_images(test / "photos");
-        const std::vector<fs::path> truth_files = field_images(test / "truth");
+        const std::vector<fs::path> photo_files = relight::field_image_files(test / "photos");
+        const std::vector<fs::path> truth_files = relight::field_image_files(test / "truth");
         if (photo_files.size() != truth_files.size())
             throw InputError(SourceLocation{opt->test}, "photos/ lists " + std::to_string(photo_files.size()) +
                                                              " images and truth/ " +

@@ -186,7 +186,7 @@ std::optional<double> first_failure(Predicate fails) {
     constexpr double kStep = 0.25;
     double ok = 0.0;
     if (fails(0.0)) return 0.0;
-    for (double angle = kStep; angle <= 89.0 + 1e-9; angle += kStep) {
+    for (double angle = kStep; angle <= kWrapOverSearchLimitDeg + 1e-9; angle += kStep) {
         if (!fails(angle)) {
             ok = angle;
             continue;
@@ -220,18 +220,13 @@ std::optional<double> first_loss_angle(const DesignOptics& optics, double phi, i
     });
 }
 
-namespace {
-
-struct SweepDirection {
-    std::string name;
-    double phi;
-};
-
 std::vector<SweepDirection> sweep_directions(const Lattice& lattice) {
     if (lattice.kind() == LatticeKind::Hexagonal)
-        return {{"flat (x)", 0.0}, {"corner (y)", kPi / 2}};
-    return {{"x", 0.0}, {"y", kPi / 2}, {"diagonal", std::atan2(lattice.pitch_y(), lattice.pitch_x())}};
+        return {{"flat (x)", "x", 0.0}, {"corner (y)", "y", kPi / 2}};
+    return {{"x", "x", 0.0}, {"y", "y", kPi / 2}, {"diagonal", "diagonal", std::atan2(lattice.pitch_y(), lattice.pitch_x())}};
 }
+
+namespace {
 
 const PlanoConvex* entry_lens(const Design& design) {
     const Plane& first = design.planes.front();
@@ -344,28 +339,28 @@ DesignSummary summarise(const DesignOptics& optics) {
         s.angular_step_x_deg = radians_to_degrees(std::atan(dot.x() / b));
         s.angular_step_y_deg = radians_to_degrees(std::atan(dot.y() / b));
     }
-    double min_wrap = 90.0;
+    std::optional<double> min_wrap;
     for (const auto& sweep : sweep_directions(lattice)) {
         const auto paraxial = wrap_over_angle(optics, sweep.phi, Model::Paraxial);
         const auto exact = wrap_over_angle(optics, sweep.phi, Model::Exact);
-        s.wrap_over_paraxial_deg.emplace_back(sweep.name, paraxial.value_or(90.0));
-        s.wrap_over_exact_deg.emplace_back(sweep.name, exact.value_or(90.0));
-        min_wrap = std::min(min_wrap, exact.value_or(90.0));
-        if (!variant) {
-            const auto loss = first_loss_angle(optics, sweep.phi, 15);
-            s.crosstalk_exact_deg.emplace_back(sweep.name, loss.value_or(90.0));
-        }
+        s.wrap_over_paraxial_deg.emplace_back(sweep.name, paraxial);
+        s.wrap_over_exact_deg.emplace_back(sweep.name, exact);
+        if (exact) min_wrap = std::min(min_wrap.value_or(*exact), *exact);
+        if (!variant) s.crosstalk_exact_deg.emplace_back(sweep.name, first_loss_angle(optics, sweep.phi, 15));
     }
-    s.field_of_view_deg = 2.0 * min_wrap;
+    if (min_wrap) s.field_of_view_deg = 2.0 * *min_wrap;
+    // "Half the field of view": half of the smallest wrap-over angle, or of the search's
+    // limit when no direction wraps over.
+    const double reach_deg = min_wrap.value_or(kWrapOverSearchLimitDeg);
     const CellIndex cell = optics.centre_cell();
     const auto on_axis = optics.trace_bundle(incident_direction(0, 0), cell, 41);
     const auto half_fov = optics.trace_bundle(
-        incident_direction(degrees_to_radians(0.5 * min_wrap), 0), cell, 41);
+        incident_direction(degrees_to_radians(0.5 * reach_deg), 0), cell, 41);
     s.efficiency_on_axis = on_axis.rays ? double(on_axis.arrived) / double(on_axis.rays) : 0.0;
     s.efficiency_at_half_fov = half_fov.rays ? double(half_fov.arrived) / double(half_fov.rays) : 0.0;
     s.efficiency_fresnel_on_axis = on_axis.rays ? on_axis.transmitted / double(on_axis.rays) : 0.0;
     s.efficiency_fresnel_at_half_fov = half_fov.rays ? half_fov.transmitted / double(half_fov.rays) : 0.0;
-    for (const auto& [angle, report] : {std::pair{0.0, &on_axis}, std::pair{0.5 * min_wrap, &half_fov}}) {
+    for (const auto& [angle, report] : {std::pair{0.0, &on_axis}, std::pair{0.5 * reach_deg, &half_fov}}) {
         for (std::size_t k = 0; k < report->lost_per_surface.size(); ++k)
             for (int status = 1; status < kRayStatusCount; ++status) {
                 const std::size_t n = report->lost_per_surface[k][static_cast<std::size_t>(status)];
@@ -408,8 +403,8 @@ DesignSummary summarise(const DesignOptics& optics) {
     if (!variant && s.directions_per_lenslet < 64)
         s.warnings.push_back("only " + format(s.directions_per_lenslet, 0) +
                              " print pixels per lenslet: the angular resolution is coarse");
-    if (min_wrap < 5.0)
-        s.warnings.push_back("wrap-over begins at " + format(min_wrap, 2) +
+    if (min_wrap && *min_wrap < 5.0)
+        s.warnings.push_back("wrap-over begins at " + format(*min_wrap, 2) +
                              " deg: the display's field of view is very narrow");
     s.conjugates = conjugate_checks(optics);
     for (const auto& check : s.conjugates) {

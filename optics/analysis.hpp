@@ -1,17 +1,10 @@
 #pragma once
 // Analyses of a display design, in both models of light (paraxial and exact):
-//  - the forward map: where light from an incident direction lands on the encoding plane
-//    of a lenslet (the pattern plane of Designs I/II, the meso-pixel plane of III/IV);
-//  - the inverse map the pattern encoder needs (thesis 8.4): encoding-plane position ->
-//    incident direction;
+//  (the forward and inverse maps between incident direction and encoding-plane position
+//  are DesignOptics, optics/design_optics.hpp, whose frame and conventions hold here)
 //  - wrap-over: the incident angle where light entering one lenslet starts to land under
 //    its neighbour, along the flat and the corner directions of the cell;
 //  - field of view, spot size, vignetting and the fraction of rays lost at each surface.
-//
-// Directions: the incident light travels along d = (tan_x, tan_y, 1)/|.| in the system
-// frame (surface.hpp). An incident angle (theta, phi) means d = (sin theta cos phi,
-// sin theta sin phi, cos theta): theta from the axis, phi counter-clockwise from +x as the
-// observer sees it. Positions on the encoding plane are relative to the lenslet's centre.
 
 #include <array>
 #include <limits>
@@ -23,84 +16,28 @@
 #include <Eigen/LU>
 
 #include "optics/design.hpp"
+#include "optics/design_optics.hpp"
 #include "optics/exact.hpp"
 #include "optics/model.hpp"
 #include "optics/paraxial.hpp"
 
 namespace rfd::optics {
 
+/// The largest incident angle the searches below look at, degrees.
+inline constexpr double kWrapOverSearchLimitDeg = 89.0;
 
-/// Unit direction of travel for incident angles theta (from the axis) and phi (azimuth).
-Eigen::Vector3d incident_direction(double theta_rad, double phi_rad);
-
-/// A design prepared for analysis: the sequential system and the surfaces that matter.
-class DesignOptics {
-public:
-    explicit DesignOptics(const Design& design);
-
-    const Design& design() const { return design_; }
-    const SequentialSystem& system() const { return system_; }
-    /// Surface where incident direction becomes position.
-    std::size_t encoding_surface() const { return encoding_surface_; }
-    /// First surface whose lattice defines the lenslets (the first arrayed surface).
-    std::size_t first_arrayed_surface() const { return first_arrayed_; }
-    /// Lattice of the lenslets; for Designs III/IV the meso-pixel lattice.
-    const Lattice& lattice() const;
-    /// Print dot size on the pattern plane along x and y, mm.
-    Eigen::Vector2d dot_mm() const;
-
-    /// Where the chief ray of direction d (through the centre of the entrance element: the
-    /// vertex of lenslet `cell` for I/II, the main lens's centre for III/IV) meets the
-    /// encoding plane, relative to the centre of `cell`. nullopt if the ray does not arrive
-    /// (the status says why).
-    struct Landing {
-        Eigen::Vector2d offset = Eigen::Vector2d::Zero();  ///< mm from the cell centre
-        RayStatus status = RayStatus::Ok;
-        CellIndex cell{};  ///< cell the ray arrived under (== entry cell unless wrap-over)
-        int surface = -1;  ///< surface where the ray stopped (the encoding surface if it got there)
-    };
-    Landing land(const Eigen::Vector3d& direction, CellIndex cell, Model model) const;
-
-    /// Inverse map: the incident direction whose chief ray lands at `offset` from the
-    /// centre of `cell` on the encoding plane. Paraxial: closed form from the lenslet's
-    /// matrix. Exact: Newton iteration on the exact forward map, started from the paraxial
-    /// answer; nullopt where it does not converge to within 1e-9 mm (beyond wrap-over).
-    std::optional<Eigen::Vector3d> direction_for(const Eigen::Vector2d& offset, CellIndex cell,
-                                                 Model model) const;
-
-    /// Slope-per-offset of the paraxial map: offset = B * (tan_x, tan_y); B in mm.
-    double paraxial_b() const { return paraxial_b_; }
-
-    /// Fraction of a uniform bundle filling the entry lenslet (or the main lens) at the
-    /// given direction that reaches the last surface, and where the rest was lost.
-    struct BundleReport {
-        std::size_t rays = 0;
-        std::size_t arrived = 0;
-        std::size_t crossed = 0;  ///< landed under a neighbouring lenslet (wrap-over)
-        double transmitted = 0.0; ///< sum of Fresnel transmittances of the rays that arrived
-        std::vector<std::array<std::size_t, kRayStatusCount>> lost_per_surface;
-        double rms_spot_radius = 0.0;  ///< mm, on the encoding plane, rays that got there
-    };
-    BundleReport trace_bundle(const Eigen::Vector3d& direction, CellIndex cell,
-                              int rays_per_side) const;
-
-    /// Centre cell of the lattice (the lenslet nearest the axis).
-    CellIndex centre_cell() const;
-
-private:
-    Ray chief_ray(const Eigen::Vector3d& direction, CellIndex cell) const;
-
-    Design design_;
-    SequentialSystem system_;
-    std::size_t encoding_surface_ = 0;
-    std::size_t first_arrayed_ = 0;
-    double paraxial_b_ = 0.0;
-    double entry_z_ = 0.0;  // plane where chief rays are aimed (entrance element's vertex)
+/// The azimuths the analyses sweep for a lattice: the flat and corner directions of a
+/// hexagonal cell; x, y and the diagonal of a rectangular one.
+struct SweepDirection {
+    std::string name;  ///< for reports, e.g. "flat (x)"
+    std::string file;  ///< for file names, e.g. "x"
+    double phi = 0.0;  ///< radians, counter-clockwise from +x
 };
+std::vector<SweepDirection> sweep_directions(const Lattice& lattice);
 
 /// Incident angle (degrees) along azimuth phi where the chief ray of the centre lenslet
 /// first lands outside its cell on the encoding plane, by bisection. nullopt if it stays
-/// inside up to 89 degrees.
+/// inside up to kWrapOverSearchLimitDeg.
 std::optional<double> wrap_over_angle(const DesignOptics& optics, double phi_rad, Model model);
 
 /// Incident angle (degrees) along phi where the first ray of a full bundle is lost or
@@ -136,10 +73,12 @@ struct DesignSummary {
     double dpi_x = 0, dpi_y = 0;
     double directions_per_lenslet = 0; ///< print pixels under one lenslet cell
     double angular_step_x_deg = 0, angular_step_y_deg = 0;  ///< per print pixel, on axis
-    std::vector<std::pair<std::string, double>> wrap_over_paraxial_deg;  ///< per direction
-    std::vector<std::pair<std::string, double>> wrap_over_exact_deg;
-    std::vector<std::pair<std::string, double>> crosstalk_exact_deg;
-    double field_of_view_deg = 0;      ///< full cone where no direction wraps (exact, min)
+    /// Per sweep direction; nullopt: none up to kWrapOverSearchLimitDeg.
+    std::vector<std::pair<std::string, std::optional<double>>> wrap_over_paraxial_deg;
+    std::vector<std::pair<std::string, std::optional<double>>> wrap_over_exact_deg;
+    std::vector<std::pair<std::string, std::optional<double>>> crosstalk_exact_deg;
+    /// Full cone where no direction wraps over (exact, min); nullopt when none does.
+    std::optional<double> field_of_view_deg;
     double efficiency_on_axis = 0;     ///< fraction of light on the entry aperture arriving
     double efficiency_at_half_fov = 0;
     double efficiency_fresnel_on_axis = 0;      ///< the same with Fresnel reflection losses

@@ -1,5 +1,6 @@
 #include "relight/field.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -151,18 +152,43 @@ ReflectanceField read_field(const std::filesystem::path& field_path) {
     return field;
 }
 
+FieldWriter::FieldWriter(std::filesystem::path folder, std::string name, std::string extension)
+    : folder_(std::move(folder)), name_(std::move(name)), extension_(std::move(extension)) {
+    ensure_directory(folder_);
+    const std::filesystem::path lp = folder_ / (name_ + ".lp");
+    std::error_code ec;
+    std::filesystem::remove(lp, ec);
+    if (ec) throw IoError(SourceLocation{lp.string()}, "cannot remove the light file of an earlier field: " + ec.message());
+}
+
+std::string FieldWriter::add(const Image& image, const Eigen::Vector3d& direction, double kernel_radius) {
+    RFD_CHECK(!finished_);
+    char number[32];
+    std::snprintf(number, sizeof number, "_%04zu", files_.size());
+    const std::string file = name_ + number + extension_;
+    write_image(folder_ / file, image);
+    files_.push_back(file);
+    directions_.push_back(direction);
+    kernel_radii_.push_back(kernel_radius);
+    return file;
+}
+
+std::filesystem::path FieldWriter::finish() {
+    RFD_CHECK(!finished_);
+    finished_ = true;
+    const bool any_kernel =
+        std::any_of(kernel_radii_.begin(), kernel_radii_.end(), [](double radius) { return radius > 0.0; });
+    const std::filesystem::path lp = folder_ / (name_ + ".lp");
+    write_light_file(lp, files_, directions_, any_kernel ? kernel_radii_ : std::vector<double>{});
+    return lp;
+}
+
 void write_field(const std::filesystem::path& folder, const ReflectanceField& field,
                  const std::string& name, const std::string& extension) {
     RFD_CHECK(field.images.size() == field.directions.size());
-    ensure_directory(folder);
-    std::vector<std::string> files;
-    char buffer[32];
-    for (std::size_t i = 0; i < field.size(); ++i) {
-        std::snprintf(buffer, sizeof buffer, "_%04zu", i);
-        files.push_back(name + buffer + extension);
-        write_image(folder / files.back(), field.images[i]);
-    }
-    write_light_file(folder / (name + ".lp"), files, field.directions, field.kernel_radii);
+    FieldWriter out(folder, name, extension);
+    for (std::size_t i = 0; i < field.size(); ++i) out.add(field.images[i], field.directions[i], field.kernel_radius(i));
+    out.finish();
 }
 
 }  // namespace rfd::relight

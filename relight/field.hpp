@@ -64,8 +64,35 @@ std::filesystem::path light_file_of(const std::filesystem::path& field);
 /// images of different sizes, and non-finite samples, naming the file and the .lp line.
 ReflectanceField read_field(const std::filesystem::path& field);
 
-/// Writes `field` to `folder` (created if needed) as `<name>.lp` plus `<name>_NNNN<ext>`
-/// images; the light file is written last, so an interrupted write leaves no readable field.
+/// Writes a field into `folder` one image at a time, for fields too large to hold: open
+/// (creates the folder and removes `<name>.lp` if an earlier run left one, since it would
+/// list images being replaced), add each image as `<name>_NNNN<ext>`, finish (writes the
+/// light file, last). Until finish() the folder holds no readable field, so an interrupted
+/// write, or one that throws, never leaves a field mixing old and new images.
+//
+// Example: FieldWriter out("out/field");
+//          for (...) out.add(image, direction);
+//          out.finish();
+class FieldWriter {
+public:
+    explicit FieldWriter(std::filesystem::path folder, std::string name = "field", std::string extension = ".exr");
+    /// Writes `image` (the light toward unit `direction`, a kernel of `kernel_radius`
+    /// radians, 0 for a narrow light) and returns its file name.
+    std::string add(const Image& image, const Eigen::Vector3d& direction, double kernel_radius = 0.0);
+    /// Writes the light file (with kernel radii when any is non-zero) and returns its path.
+    std::filesystem::path finish();
+    std::size_t size() const { return files_.size(); }
+
+private:
+    std::filesystem::path folder_;
+    std::string name_, extension_;
+    std::vector<std::string> files_;
+    std::vector<Eigen::Vector3d> directions_;
+    std::vector<double> kernel_radii_;
+    bool finished_ = false;
+};
+
+/// Writes `field` to `folder` with a FieldWriter: `<name>.lp` plus `<name>_NNNN<ext>` images.
 void write_field(const std::filesystem::path& folder, const ReflectanceField& field,
                  const std::string& name = "field", const std::string& extension = ".exr");
 

@@ -83,15 +83,11 @@ void check_prior_options(const PriorOptions& options) {
 }
 
 PatchBasis PatchBasis::fit(const std::vector<const Image*>& images, int radius, int components, int stride) {
-    if (images.empty()) throw InputError("image priors need at least one source image");
-    if (radius < 1) throw InputError("the prior window radius must be >= 1, got " + std::to_string(radius));
+    // The callers' own choices, not a user's: a failure is a bug.
+    RFD_CHECK(!images.empty() && radius >= 1 && stride >= 1);
     const int side = 2 * radius + 1, size = side * side;
-    if (components < 1 || components > size)
-        throw InputError("the prior's principal components must be 1 to " + std::to_string(size) + ", got " +
-                         std::to_string(components));
-    if (stride < 1) throw InputError("the prior's sampling stride must be >= 1");
-    for (const Image* image : images)
-        if (!image->same_shape(*images.front())) throw InputError("image prior sources of different shapes");
+    RFD_CHECK(components >= 1 && components <= size);
+    for (const Image* image : images) RFD_CHECK(image->same_shape(*images.front()));
 
     Eigen::MatrixXd scatter = Eigen::MatrixXd::Zero(size, size);
     std::vector<float> window(static_cast<std::size_t>(size));
@@ -128,10 +124,8 @@ Image regularise_with_priors(const Image& estimate, const std::vector<std::uint8
                              const std::vector<const Image*>& sources, const PatchBasis& basis,
                              const PriorOptions& options) {
     check_prior_options(options);
-    if (sources.empty()) throw InputError("image priors need at least one source image");
-    for (const Image* source : sources)
-        if (!source->same_shape(estimate)) throw InputError("image prior sources must have the estimate's shape");
-    if (uncertain.size() != estimate.pixel_count()) throw InputError("the uncertain mask must cover every pixel");
+    RFD_CHECK(!sources.empty() && uncertain.size() == estimate.pixel_count());
+    for (const Image* source : sources) RFD_CHECK(source->same_shape(estimate));
     if (options.iterations == 0 || std::none_of(uncertain.begin(), uncertain.end(), [](std::uint8_t u) { return u; }))
         return estimate;
 

@@ -18,6 +18,7 @@
 #include "core/parallel.hpp"
 #include "core/sphere.hpp"
 #include "core/units.hpp"
+#include "relight/field.hpp"
 #include "relight/vision.hpp"
 
 namespace rfd::relight {
@@ -524,6 +525,72 @@ ProbeDescription read_probe_description(const std::filesystem::path& file) {
     if (field_of<std::string>(j, "format", file) != kProbeFormat)
         throw InputError(SourceLocation{file.string(), 0, 0, "format"}, std::string("expected \"") + kProbeFormat + "\"");
     return get_probe(j, file);
+}
+
+namespace {
+
+bool is_image_file(const std::filesystem::path& path) {
+    const std::string ext = lower_extension(path);
+    return ext == ".exr" || ext == ".hdr" || ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".tif" ||
+           ext == ".tiff";
+}
+
+}  // namespace
+
+std::vector<std::filesystem::path> field_image_files(const std::filesystem::path& field) {
+    const std::filesystem::path lp = light_file_of(field);
+    std::vector<std::filesystem::path> files;
+    for (const auto& entry : read_light_file(lp)) files.push_back(lp.parent_path() / entry.file);
+    return files;
+}
+
+std::vector<std::filesystem::path> training_image_files(const std::filesystem::path& training) {
+    std::vector<std::filesystem::path> lp_files;
+    if (std::filesystem::is_directory(training)) {
+        for (const auto& entry : std::filesystem::directory_iterator(training))
+            if (entry.path().extension() == ".lp") lp_files.push_back(entry.path());
+    } else if (training.extension() == ".lp") {
+        lp_files.push_back(training);
+    } else {
+        throw InputError(SourceLocation{training.string()}, "expected a folder of images or a .lp light file");
+    }
+    std::vector<std::filesystem::path> images;
+    if (!lp_files.empty()) {
+        images = field_image_files(training);
+    } else {
+        for (const auto& entry : std::filesystem::directory_iterator(training))
+            if (entry.is_regular_file() && is_image_file(entry.path())) images.push_back(entry.path());
+        std::sort(images.begin(), images.end());
+    }
+    if (images.size() < 2)
+        throw InputError(SourceLocation{training.string()},
+                         "implicit relighting needs at least 2 training images, found " + std::to_string(images.size()));
+    return images;
+}
+
+const SceneObject& probe_object(const Scene& scene, const std::string& name, const std::string& scene_file) {
+    const SceneObject* found = nullptr;
+    std::size_t phong_spheres = 0;
+    for (const auto& object : scene.objects) {
+        if (!name.empty()) {
+            if (object.name == name) found = &object;
+            continue;
+        }
+        if (std::holds_alternative<SphereShape>(object.shape) &&
+            std::holds_alternative<PhongMaterial>(scene.materials[object.material])) {
+            found = &object;
+            ++phong_spheres;
+        }
+    }
+    if (!name.empty() && !found)
+        throw InputError(SourceLocation{scene_file}, "--probe " + name + ": no object of that name");
+    if (name.empty() && phong_spheres != 1)
+        throw InputError(SourceLocation{scene_file},
+                         "found " + std::to_string(phong_spheres) +
+                             " spheres of a phong material; name the probe object with --probe NAME");
+    if (!std::holds_alternative<SphereShape>(found->shape))
+        throw InputError(SourceLocation{scene_file}, "--probe " + found->name + ": the probe must be a sphere");
+    return *found;
 }
 
 }  // namespace rfd::relight

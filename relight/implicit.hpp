@@ -152,4 +152,13 @@ void write_implicit_model(const std::filesystem::path& folder, const ImplicitMod
 /// Reads a model. Throws InputError naming the file and field for anything malformed.
 ImplicitModelFiles read_implicit_model(const std::filesystem::path& folder);
 
+/// The images of a field (a folder holding one .lp, or the .lp) in light-file order.
+std::vector<std::filesystem::path> field_image_files(const std::filesystem::path& field);
+/// Training images: a field (its directions are ignored) or a folder of images (.exr, .hdr,
+/// .png, .jpg, .tif) in name order. InputError when fewer than 2.
+std::vector<std::filesystem::path> training_image_files(const std::filesystem::path& training);
+/// The scene's probe: the object called `name`, or without a name its only sphere of a
+/// Phong material. InputError naming `scene_file` otherwise.
+const SceneObject& probe_object(const Scene& scene, const std::string& name, const std::string& scene_file);
+
 }  // namespace rfd::relight

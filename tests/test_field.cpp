@@ -119,6 +119,35 @@ TEST(Field, WritingTwiceGivesIdenticalBytes) {
     }
 }
 
+// A rewrite that stops half-way (here: the second image cannot be written) must not leave
+// the earlier light file listing a mix of new and old images.
+TEST(Field, AnInterruptedRewriteLeavesNoReadableField) {
+    TempDir dir;
+    write_field(dir.path(), small_field(false));
+    ReflectanceField second = small_field(false);
+    for (Image& image : second.images) image.at(0, 0, 0) += 1.0f;
+    second.images[1].at(0, 0, 0) = std::nanf("");
+    EXPECT_THROW(write_field(dir.path(), second), InputError);
+    EXPECT_THAT(error_of([&] { read_field(dir.path()); }), HasSubstr("folder holds no .lp light file"));
+}
+
+TEST(Field, TheStreamingWriterWritesTheSameFilesAsWriteField) {
+    TempDir dir;
+    const ReflectanceField field = small_field(true);
+    write_field(dir / "whole", field);
+    FieldWriter writer(dir / "streamed");
+    for (std::size_t i = 0; i < field.size(); ++i)
+        EXPECT_EQ(writer.add(field.images[i], field.directions[i], field.kernel_radius(i)),
+                  "field_000" + std::to_string(i) + ".exr");
+    EXPECT_FALSE(std::filesystem::exists(dir / "streamed" / "field.lp"));  // not before finish()
+    EXPECT_EQ(writer.finish(), dir / "streamed" / "field.lp");
+    for (const auto& entry : std::filesystem::directory_iterator(dir / "whole")) {
+        std::ifstream a(entry.path(), std::ios::binary), b(dir / "streamed" / entry.path().filename(), std::ios::binary);
+        const std::string bytes_a((std::istreambuf_iterator<char>(a)), {}), bytes_b((std::istreambuf_iterator<char>(b)), {});
+        EXPECT_EQ(bytes_a, bytes_b) << entry.path();
+    }
+}
+
 // Each malformed light file gives its own message, naming the file and the line.
 class MalformedLightFile : public ::testing::Test {
 protected:

@@ -1,0 +1,2 @@
+#pragma once
+#include "optics/lens.hpp"  // core may not use optics
