@@ -13,6 +13,7 @@
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "core/error.hpp"
+#include "core/text.hpp"
 #include "core/units.hpp"
 #include "patterns/angular.hpp"
 #include "relight/view_set.hpp"
@@ -80,9 +81,7 @@ void add_pattern_angular_command(CLI::App& group) {
         const patterns::AngularPattern pattern(optics, *field, options);
         const double white = patterns::estimate_white(pattern, 99.5);
         patterns::PatternAttributes attributes = pattern.attributes();
-        char text[32];
-        std::snprintf(text, sizeof text, "%.9g", white);
-        attributes["white"] = text;
+        attributes["white"] = format_number(white, 9);
         attributes["source"] = opt->procedural.empty() ? opt->source : "procedural " + opt->procedural;
         patterns::WriteOptions write;
         write.half_float = !opt->single;

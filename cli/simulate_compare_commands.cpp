@@ -27,6 +27,7 @@
 #include "predict/compare.hpp"
 #include "patterns/encode.hpp"
 #include "print/printed.hpp"
+#include "core/text.hpp"
 
 namespace rfd::cli {
 namespace {
@@ -66,12 +67,6 @@ struct Stats {
 
 // JSON cannot hold infinity: a perfect match is reported as null.
 nlohmann::json db(double value) { return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr); }
-
-std::string format(const char* spec, double value) {
-    char text[64];
-    std::snprintf(text, sizeof text, spec, value);
-    return text;
-}
 
 }  // namespace
 
@@ -166,7 +161,7 @@ void add_simulate_compare_command(CLI::App& simulate) {
         if (std::abs(encoder.white() - white) > 1e-3 * white)
             throw InputError(SourceLocation{opt->field},
                              "not the field the pattern '" + opt->pattern + "' was encoded from: its white is " +
-                                 format("%.6g", encoder.white()) + ", the pattern's rfd:white " + format("%.6g", white) +
+                                 format_number(encoder.white()) + ", the pattern's rfd:white " + format_number(white) +
                                  " (pattern field '" + (info.attributes.count("field") ? info.attributes.at("field") : "?") +
                                  "')");
         const predict::DisplayComparison comparison(simulator, pattern, encoder, pattern.tone());
@@ -238,13 +233,13 @@ void add_simulate_compare_command(CLI::App& simulate) {
                             {"psnr_cell_db", db(r.cell_comparison.psnr_db)},
                             {"rays", r.rays},
                             {"seconds", r.seconds}});
-            csv += std::to_string(k) + "," + format("%.4f", theta) + "," + format("%.4f", phi) + "," +
-                   format("%.4f", r.display_angle_deg) + "," + (r.inside_field_of_view ? "1" : "0") + "," +
+            csv += std::to_string(k) + "," + format_fixed(theta, 4) + "," + format_fixed(phi, 4) + "," +
+                   format_fixed(r.display_angle_deg, 4) + "," + (r.inside_field_of_view ? "1" : "0") + "," +
                    (r.crosstalk_free ? "1" : "0") + "," +
-                   format("%.6g", r.efficiency) + "," + format("%.6g", r.comparison.peak) + "," +
-                   format("%.6g", r.comparison.mse) + "," + format("%.4f", r.comparison.psnr_db) + "," +
-                   format("%.6g", r.comparison.fitted_gain) + "," + format("%.4f", r.comparison.psnr_fitted_db) + "," +
-                   format("%.4f", r.cell_comparison.psnr_db) + "\n";  // no times: byte-identical reruns
+                   format_number(r.efficiency) + "," + format_number(r.comparison.peak) + "," +
+                   format_number(r.comparison.mse) + "," + format_fixed(r.comparison.psnr_db, 4) + "," +
+                   format_number(r.comparison.fitted_gain) + "," + format_fixed(r.comparison.psnr_fitted_db, 4) + "," +
+                   format_fixed(r.cell_comparison.psnr_db, 4) + "\n";  // no times: byte-identical reruns
         }
         write_text_file(out / "directions.csv", csv);
 
@@ -296,8 +291,8 @@ void add_simulate_compare_command(CLI::App& simulate) {
         std::string table = "model,rays_per_side,rays,seconds,mse,psnr_db,worst_psnr_db,fitted_psnr_db\n";
         for (const auto& p : points) {
             table += p.label + "," + std::to_string(p.rays_per_side) + "," + std::to_string(p.rays) + "," +
-                     format("%.5f", p.seconds) + "," + format("%.6g", p.mse) + "," + format("%.4f", p.psnr_db) + "," +
-                     format("%.4f", p.worst_psnr_db) + "," + format("%.4f", p.fitted_psnr_db) + "\n";
+                     format_fixed(p.seconds, 5) + "," + format_number(p.mse) + "," + format_fixed(p.psnr_db, 4) + "," +
+                     format_fixed(p.worst_psnr_db, 4) + "," + format_fixed(p.fitted_psnr_db, 4) + "\n";
             nlohmann::json per_direction = nlohmann::json::array();
             std::vector<const predict::DirectionComparison*> used;
             for (const auto& r : results)

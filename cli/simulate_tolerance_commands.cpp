@@ -18,6 +18,7 @@
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "core/error.hpp"
+#include "core/text.hpp"
 #include "core/number.hpp"
 #include "core/files.hpp"
 #include "core/plot.hpp"
@@ -68,11 +69,8 @@ Display display_of(optics::MountingError kind) {
     return {"?", "", 1.0, ""};
 }
 
-std::string format(double value) {
-    char text[32];
-    std::snprintf(text, sizeof text, std::abs(value) >= 1e4 ? "%.0f" : "%.4g", value);
-    return text;
-}
+// Four significant digits, but never an exponent: 1.2e+04 ppm reads worse than 12000.
+std::string format(double value) { return std::abs(value) >= 1e4 ? format_fixed(value, 0) : format_number(value, 4); }
 
 }  // namespace
 

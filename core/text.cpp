@@ -14,6 +14,12 @@ std::string format_number(double value, int significant) {
     return text;
 }
 
+std::string format_fixed(double value, int decimals) {
+    char text[352];  // %.17f of the largest double
+    std::snprintf(text, sizeof text, "%.*f", std::clamp(decimals, 0, 17), value);
+    return text;
+}
+
 std::string format_direction(const Eigen::Vector3d& direction) {
     const SphericalAngles a = angles_of(direction);
     char text[96];

@@ -4,6 +4,7 @@
 //
 // Example: format_number(0.1 + 0.2)            // "0.3"
 //          format_number(1.0 / 3.0, 9)         // "0.333333333"
+//          format_fixed(0.25, 3)               // "0.250"
 //          format_direction(Eigen::Vector3d::UnitZ())  // "theta 0.00 deg, phi 0.00 deg"
 
 #include <string>
@@ -15,6 +16,10 @@ namespace rfd {
 /// `value` with at most `significant` significant digits, trailing zeros dropped, as
 /// printf's %g writes it ("2880", "0.25", "1e-05", "inf", "nan").
 std::string format_number(double value, int significant = 6);
+
+/// `value` with exactly `decimals` digits after the point, as printf's %.Nf writes it
+/// ("0.250", "12").
+std::string format_fixed(double value, int decimals);
 
 /// A unit direction (core/sphere.hpp's frame) as its polar and azimuth angles in degrees,
 /// two decimals: "theta 41.57 deg, phi -142.59 deg".

@@ -5,15 +5,10 @@
 #include <cstdio>
 
 #include "core/parallel.hpp"
+#include "core/text.hpp"
 
 namespace rfd::holders {
 namespace {
-
-std::string mm(double v, int decimals = 3) {
-    char buffer[64];
-    std::snprintf(buffer, sizeof buffer, "%.*f", decimals, v);
-    return buffer;
-}
 
 }  // namespace
 
@@ -22,24 +17,24 @@ std::vector<std::string> HolderCheck::problems(const Tolerances& t) const {
     for (const PartCheck& p : parts) {
         for (const std::string& m : p.mesh.problems()) out.push_back("part " + p.name + ": " + m);
         if (std::abs(p.volume_error) > t.volume)
-            out.push_back("part " + p.name + ": volume " + mm(p.mesh.volume_mm3, 1) + " mm^3, the design gives " +
-                          mm(p.expected_volume, 1) + " mm^3 (" + mm(100 * p.volume_error, 2) + " %)");
+            out.push_back("part " + p.name + ": volume " + format_fixed(p.mesh.volume_mm3, 1) + " mm^3, the design gives " +
+                          format_fixed(p.expected_volume, 1) + " mm^3 (" + format_fixed(100 * p.volume_error, 2) + " %)");
         if (p.box_error > t.box)
-            out.push_back("part " + p.name + ": bounding box off the design by " + mm(p.box_error) + " mm");
+            out.push_back("part " + p.name + ": bounding box off the design by " + format_fixed(p.box_error, 3) + " mm");
     }
     for (const SeatCheck& s : seats) {
         if (!s.measured_z)
             out.push_back("seat of plane " + s.plane + ": no face found at the seat");
         else if (std::abs(s.error()) > t.seat)
-            out.push_back("seat of plane " + s.plane + " is at z = " + mm(*s.measured_z) + " mm, the design needs " +
-                          mm(s.expected_z) + " mm");
+            out.push_back("seat of plane " + s.plane + " is at z = " + format_fixed(*s.measured_z, 3) + " mm, the design needs " +
+                          format_fixed(s.expected_z, 3) + " mm");
     }
     if (clearance.rays == 0) out.push_back("beam clearance: no ray of the field of view passes the clear apertures");
     if (clearance.blocked > 0)
         out.push_back("beam clearance: " + std::to_string(clearance.blocked) + " of " + std::to_string(clearance.rays) +
                       " rays of the field of view touch the holder (part " + clearance.closest_part + ", near x = " +
-                      mm(clearance.closest.x(), 2) + ", y = " + mm(clearance.closest.y(), 2) + ", z = " +
-                      mm(clearance.closest.z(), 2) + " mm)");
+                      format_fixed(clearance.closest.x(), 2) + ", y = " + format_fixed(clearance.closest.y(), 2) + ", z = " +
+                      format_fixed(clearance.closest.z(), 2) + " mm)");
     return out;
 }
 

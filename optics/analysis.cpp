@@ -9,6 +9,7 @@
 #include "core/error.hpp"
 #include "core/units.hpp"
 #include "optics/spot.hpp"
+#include "core/text.hpp"
 
 namespace rfd::optics {
 
@@ -20,14 +21,6 @@ namespace {
 
 bool is_observer_variant(const Design& design) {
     return design.kind == DesignKind::III || design.kind == DesignKind::IV;
-}
-
-std::string format(double value, int precision = 3) {
-    std::ostringstream out;
-    out.setf(std::ios::fixed);
-    out.precision(precision);
-    out << value;
-    return out.str();
 }
 
 }  // namespace
@@ -383,9 +376,9 @@ DesignSummary summarise(const DesignOptics& optics) {
     const double smallest_feature = variant ? std::min(lattice.pitch_x(), lattice.pitch_y()) / 4
                                             : std::min(dot.x(), dot.y());
     if (blur > smallest_feature)
-        s.warnings.push_back("the encoding plane lies " + format(s.focus_error_mm, 4) +
-                             " mm from the paraxial focus: defocus blur " + format(1000 * blur, 1) +
-                             " um exceeds " + format(1000 * smallest_feature, 1) + " um");
+        s.warnings.push_back("the encoding plane lies " + format_fixed(s.focus_error_mm, 4) +
+                             " mm from the paraxial focus: defocus blur " + format_fixed(1000 * blur, 1) +
+                             " um exceeds " + format_fixed(1000 * smallest_feature, 1) + " um");
     for (const auto* report : {&on_axis, &half_fov}) {
         std::size_t tir = 0;
         for (std::size_t k = 0; k < report->lost_per_surface.size(); ++k) {
@@ -393,7 +386,7 @@ DesignSummary summarise(const DesignOptics& optics) {
             if (n == 0) continue;
             tir += n;
             s.warnings.push_back(
-                format(100.0 * double(n) / double(report->rays), 1) + "% of the rays " +
+                format_fixed(100.0 * double(n) / double(report->rays), 1) + "% of the rays " +
                 (report == &on_axis ? "on axis" : "at half the field of view") +
                 " are lost to total internal reflection at '" + system.surfaces[k].label +
                 "'" + (k % 2 == 1 ? " (a flat-side-first lens: turn its curved side toward the light)" : ""));
@@ -401,10 +394,10 @@ DesignSummary summarise(const DesignOptics& optics) {
         (void)tir;
     }
     if (!variant && s.directions_per_lenslet < 64)
-        s.warnings.push_back("only " + format(s.directions_per_lenslet, 0) +
+        s.warnings.push_back("only " + format_fixed(s.directions_per_lenslet, 0) +
                              " print pixels per lenslet: the angular resolution is coarse");
     if (min_wrap && *min_wrap < 5.0)
-        s.warnings.push_back("wrap-over begins at " + format(*min_wrap, 2) +
+        s.warnings.push_back("wrap-over begins at " + format_fixed(*min_wrap, 2) +
                              " deg: the display's field of view is very narrow");
     s.conjugates = conjugate_checks(optics);
     for (const auto& check : s.conjugates) {
@@ -412,13 +405,13 @@ DesignSummary summarise(const DesignOptics& optics) {
         if (!std::isfinite(check.target_z))
             s.warnings.push_back(check.description + ": the image is at infinity");
         else if (std::abs(miss) > check.tolerance)
-            s.warnings.push_back(check.description + ": the plane is " + format(miss, 3) +
+            s.warnings.push_back(check.description + ": the plane is " + format_fixed(miss, 3) +
                                  " mm from where the optics put it (z = " +
-                                 format(check.target_z, 3) + " mm)");
+                                 format_fixed(check.target_z, 3) + " mm)");
         if (std::isfinite(check.magnification) && design.kind == DesignKind::II &&
             std::abs(std::abs(check.magnification) - 1.0) > 0.1)
             s.warnings.push_back("plane B images each lenslet of A onto the diffuser at " +
-                                 format(std::abs(check.magnification), 3) + "x: macro-pixels " +
+                                 format_fixed(std::abs(check.magnification), 3) + "x: macro-pixels " +
                                  (std::abs(check.magnification) > 1 ? "overlap" : "leave gaps"));
     }
     return s;

@@ -6,6 +6,7 @@
 
 #include "core/config.hpp"
 #include "optics/lens_file.hpp"
+#include "core/text.hpp"
 
 namespace rfd::optics {
 
@@ -42,13 +43,6 @@ const Plane& Design::plane(const std::string& plane_name) const {
 
 namespace {
 
-std::string format(double value, int precision = 4) {
-    std::ostringstream out;
-    out.precision(precision);
-    out << value;
-    return out.str();
-}
-
 PlanoConvex read_plano_convex(ConfigTable& t) {
     PlanoConvex lens;
     lens.radius = t.positive("radius_mm");
@@ -61,10 +55,10 @@ PlanoConvex read_plano_convex(ConfigTable& t) {
     const double computed = focal_length(lens);
     // Makers round their focal lengths; 2% catches a wrong radius, index or unit.
     if (std::abs(computed - lens.nominal_focal_length) > 0.02 * lens.nominal_focal_length)
-        t.fail("focal_length_mm", "radius " + format(lens.radius) + " mm and index " +
-                                      format(lens.index) + " give f = R/(n-1) = " +
-                                      format(computed) + " mm, not " +
-                                      format(lens.nominal_focal_length) + " mm");
+        t.fail("focal_length_mm", "radius " + format_number(lens.radius, 4) + " mm and index " +
+                                      format_number(lens.index, 4) + " give f = R/(n-1) = " +
+                                      format_number(computed, 4) + " mm, not " +
+                                      format_number(lens.nominal_focal_length, 4) + " mm");
     return lens;
 }
 
@@ -74,11 +68,11 @@ void check_reach(ConfigTable& t, const PlanoConvex& lens, double rim, const std:
     const Conic conic{1.0 / lens.radius, lens.conic};
     const auto edge_sag = sag(conic, rim * rim);
     if (!edge_sag)
-        t.fail("radius_mm", what + " at " + format(rim) + " mm from the axis lie outside the lens "
-                            "sphere of radius " + format(lens.radius) + " mm");
+        t.fail("radius_mm", what + " at " + format_number(rim, 4) + " mm from the axis lie outside the lens "
+                            "sphere of radius " + format_number(lens.radius, 4) + " mm");
     if (*edge_sag >= lens.center_thickness)
         t.fail("center_thickness_mm", "the lens is thinner than its sag: edge thickness " +
-                                          format(lens.center_thickness - *edge_sag) + " mm at " +
+                                          format_number(lens.center_thickness - *edge_sag, 4) + " mm at " +
                                           what);
 }
 
@@ -230,9 +224,9 @@ Design build_design(ConfigTable& root) {
             }
         }
         if (macro.pitch_x < widest_x || macro.pitch_y < widest_y)
-            t->fail("pitch_mm", "macro-pixel pitch " + format(macro.pitch_x) + " x " +
-                                    format(macro.pitch_y) + " mm is smaller than the widest part (" +
-                                    format(widest_x) + " x " + format(widest_y) + " mm)");
+            t->fail("pitch_mm", "macro-pixel pitch " + format_number(macro.pitch_x, 4) + " x " +
+                                    format_number(macro.pitch_y, 4) + " mm is smaller than the widest part (" +
+                                    format_number(widest_x, 4) + " x " + format_number(widest_y, 4) + " mm)");
     } else if (design.kind == DesignKind::IV) {
         root.fail("macro", "Design IV needs a [macro] grid of Design III cells");
     }
@@ -249,15 +243,15 @@ Design build_design(ConfigTable& root) {
         if (b.z <= a.z)
             throw InputError(SourceLocation{b.where.file, b.where.line, 0, "planes." + b.name + ".z_mm"},
                              "negative or zero distance from plane " + a.name + " (z = " +
-                                 format(a.z) + " mm) to plane " + b.name + " (z = " + format(b.z) +
+                                 format_number(a.z, 4) + " mm) to plane " + b.name + " (z = " + format_number(b.z, 4) +
                                  " mm): planes must follow in order A, B, C, ... along the light");
         const double overlap = axial_extent(a)[1] - axial_extent(b)[0];
         if (overlap > 1e-6)
             throw InputError(SourceLocation{b.where.file, b.where.line, 0, "planes." + b.name + ".z_mm"},
                              "plane " + b.name + " overlaps plane " + a.name + " by " +
-                                 format(overlap) + " mm (" + a.name + " ends at z = " +
-                                 format(axial_extent(a)[1]) + " mm, " + b.name + " starts at z = " +
-                                 format(axial_extent(b)[0]) + " mm)");
+                                 format_number(overlap, 4) + " mm (" + a.name + " ends at z = " +
+                                 format_number(axial_extent(a)[1], 4) + " mm, " + b.name + " starts at z = " +
+                                 format_number(axial_extent(b)[0], 4) + " mm)");
     }
     const auto pattern_count = std::count_if(planes.begin(), planes.end(),
                                              [](const Plane& p) { return p.pattern; });

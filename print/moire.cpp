@@ -11,6 +11,7 @@
 #include "core/error.hpp"
 #include "core/files.hpp"
 #include "print/pdf_file.hpp"
+#include "core/text.hpp"
 
 namespace rfd::print {
 namespace {
@@ -27,12 +28,6 @@ const optics::Lattice& array_lattice(const optics::Design& design) {
         if (plane.part)
             if (const auto* array = std::get_if<optics::LensletArrayPart>(&*plane.part)) return array->lattice;
     throw InputError(SourceLocation{design.file}, "design has no lenslet array to calibrate");
-}
-
-std::string format(const char* format, double value) {
-    char text[64];
-    std::snprintf(text, sizeof text, format, value);
-    return text;
 }
 
 }  // namespace
@@ -87,7 +82,7 @@ std::vector<MoireBand> write_moire_pdf(const std::filesystem::path& out, const o
     const int per_page = static_cast<int>(std::floor((usable + kBandGap) / (band_height + kBandGap)));
     if (per_page < 1 || band_width < 4.0 * options.x.to)
         throw InputError(SourceLocation{printer.file, 0, 0, "paper"},
-                         "a calibration band (" + format("%.1f", band_width) + " x " + format("%.1f", band_height) +
+                         "a calibration band (" + format_fixed(band_width, 1) + " x " + format_fixed(band_height, 1) +
                              " mm) does not fit the printable area of " + paper.name + " paper");
 
     std::vector<MoireBand> bands;
@@ -114,8 +109,8 @@ std::vector<MoireBand> write_moire_pdf(const std::filesystem::path& out, const o
                     std::to_string(pages),
                 "Lay the array on a band, curved side up, its rows parallel to the band's long edge; the band whose",
                 "fringes are widest or vanish (the band looks even) has the array's true pitch. x: spacing within a row,",
-                "rows: spacing of the rows. Design: pitch " + format("%.4f", lattice.pitch_x()) + " mm, rows " +
-                    format("%.4f", lattice.pitch_y()) + " mm apart. " + printer.name + "."};
+                "rows: spacing of the rows. Design: pitch " + format_fixed(lattice.pitch_x(), 4) + " mm, rows " +
+                    format_fixed(lattice.pitch_y(), 4) + " mm apart. " + printer.name + "."};
             for (std::size_t k = 0; k < std::size(header); ++k) {
                 cairo_move_to(cr, paper.margin, paper.margin + 3.0 + 3.2 * static_cast<double>(k));
                 cairo_show_text(cr, header[k].c_str());
@@ -124,15 +119,15 @@ std::vector<MoireBand> write_moire_pdf(const std::filesystem::path& out, const o
                 if (band.page != page) continue;
                 // Label: the hypothesis, and which spacing it tests.
                 cairo_set_font_size(cr, 2.8);
-                const std::string name = band.along_x ? "x " + format("%.4f", band.pitch) + " mm"
-                                         : hex ? "rows " + format("%.4f", band.period) + " mm"
-                                               : "rows " + format("%.4f", band.pitch) + " mm";
+                const std::string name = band.along_x ? "x " + format_fixed(band.pitch, 4) + " mm"
+                                         : hex ? "rows " + format_fixed(band.period, 4) + " mm"
+                                               : "rows " + format_fixed(band.pitch, 4) + " mm";
                 cairo_move_to(cr, paper.margin, band.top + 0.5 * band_height);
                 cairo_show_text(cr, name.c_str());
                 if (!band.along_x && hex) {
                     cairo_set_font_size(cr, 2.0);
                     cairo_move_to(cr, paper.margin, band.top + 0.5 * band_height + 3.0);
-                    cairo_show_text(cr, ("(pitch " + format("%.4f", band.pitch) + " mm)").c_str());
+                    cairo_show_text(cr, ("(pitch " + format_fixed(band.pitch, 4) + " mm)").c_str());
                 }
                 // Lines of period `period`, a quarter period wide, one centred in the band.
                 cairo_save(cr);
