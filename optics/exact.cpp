@@ -21,9 +21,12 @@ std::string_view to_string(RayStatus status) {
 
 namespace {
 
-// Self-intersection guard: a ray leaving a surface must travel at least this far (mm)
-// before it can meet another surface. Far below any real glass or air gap.
-constexpr double kMinTravel = 1e-9;
+// Faces in contact (a spacer against a diffuser, two lenses whose vertices touch) meet
+// where a ray that has just reached one is already on the other, up to rounding: the next
+// surface's hit is accepted from this far (mm) behind the ray's origin on. Far below any
+// real glass or air gap. intersect() takes a root at t ~ 0 of a curved face only where the
+// ray crosses it from front to back, so a ray never meets again the face it sits on.
+constexpr double kContact = 1e-9;
 
 struct Hit {
     double t = 0.0;
@@ -152,18 +155,13 @@ TraceResult trace(const SequentialSystem& system, const Ray& ray, std::size_t fi
     RFD_DCHECK(last < system.surfaces.size() && first <= last);
     TraceResult result;
     result.ray = ray;
-    double t_min = 0.0;
     for (std::size_t s = first; s <= last; ++s) {
         const Surface& surface = system.surfaces[s];
         result.surface = static_cast<int>(s);
         const auto* arrayed = std::get_if<LatticeAperture>(&surface.aperture);
         const Lattice* lattice = arrayed ? &arrayed->lattice : nullptr;
-        // Flat faces in contact (a spacer against a diffuser) share one z: a ray that has
-        // just reached one is already on the other, so flats accept t down to -kMinTravel.
-        const double t_from =
-            std::holds_alternative<Flat>(surface.profile) ? std::min(t_min, -kMinTravel) : t_min;
-        const auto hit = lattice ? hit_arrayed(surface, *lattice, result.ray, t_from)
-                                 : hit_plain(surface, result.ray, t_from);
+        const auto hit = lattice ? hit_arrayed(surface, *lattice, result.ray, -kContact)
+                                 : hit_plain(surface, result.ray, -kContact);
         if (!hit) {
             result.status = RayStatus::Missed;
             return result;
@@ -195,7 +193,6 @@ TraceResult trace(const SequentialSystem& system, const Ray& ray, std::size_t fi
                 n_before, surface.index_after);
             result.ray.direction = *refracted;
         }
-        t_min = kMinTravel;
     }
     result.status = RayStatus::Ok;
     return result;

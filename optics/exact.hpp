@@ -42,7 +42,8 @@ struct TraceResult {
 };
 
 /// Traces one ray through surfaces [first, last] (inclusive) of the system.
-/// Rays start in front of `first`; the first intersection must have t > 0.
+/// Rays start in front of `first` (or on it); a surface touching the one before it is
+/// crossed where they touch.
 TraceResult trace(const SequentialSystem& system, const Ray& ray, std::size_t first,
                   std::size_t last);
 /// Traces through the whole system.

@@ -57,10 +57,13 @@ std::optional<double> intersect(const Profile& profile, const Eigen::Vector3d& o
     if (a != 0.0) roots[1] = s / a;
     if (roots[0] > roots[1]) std::swap(roots[0], roots[1]);
     // A ray that starts on the surface has a root at t = 0 that rounding turns into
-    // +-1e-17: never return a hit closer than kSelfIntersection.
-    const double t_first = std::max(t_min, kSelfIntersection);
+    // +-1e-17. Leaving the surface (t_min >= 0), that root is where it came from: no hit
+    // closer than kSelfIntersection. Not yet across it (t_min < 0: it sits where the
+    // surface touches the one it came through), that root is the crossing when the ray
+    // goes from the front (F > 0) to the back (F < 0) there: dF/dt = 2 (a t + b) < 0.
     for (double t : roots) {
-        if (!(t > t_first) || !std::isfinite(t)) continue;
+        if (!(t > t_min) || !std::isfinite(t)) continue;
+        if (t <= kSelfIntersection && !(t_min < 0.0 && a * t + b < 0.0)) continue;
         // Keep only the vertex branch: there, (1+k) c z <= 1 (the far sheet of a sphere
         // or ellipsoid and the second sheet of a hyperboloid lie beyond).
         const double z = o.z() + t * d.z();

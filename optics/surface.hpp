@@ -75,15 +75,19 @@ std::optional<double> sag(const Profile& profile, double r2);
 /// Outward unit normal (pointing toward +z at the vertex) at local point p on the profile.
 Eigen::Vector3d normal_at(const Profile& profile, const Eigen::Vector3d& local_point);
 
-/// Curved surfaces never report a hit closer than this (mm) along the ray: a ray that
-/// starts on a surface must not meet it again at its own starting point.
+/// A ray that starts on a curved surface it has just crossed must not meet it again at its
+/// own starting point: with t_min >= 0 no hit closer than this (mm) along the ray is reported.
 inline constexpr double kSelfIntersection = 1e-9;
 
 /// Distance t along a ray (origin o, unit direction d, both in the vertex frame) to the
-/// first intersection with the vertex branch of the profile with t > t_min (and, for a
-/// conic, t > kSelfIntersection), computed with the cancellation-free form of the
-/// quadratic root. nullopt when the ray misses. Flats honour a negative t_min, so that a
-/// ray already on a flat in contact with the previous one is not lost.
+/// first intersection with the vertex branch of the profile with t > t_min, computed with
+/// the cancellation-free form of the quadratic root. nullopt when the ray misses.
+/// t_min >= 0: the ray may be leaving this surface; a conic's hits closer than
+/// kSelfIntersection are not reported. t_min < 0: the ray has not crossed this surface
+/// yet but may already be on it (where it touches the surface just crossed, e.g. two lenses
+/// whose vertices touch); a hit at |t| <= kSelfIntersection is then reported when the ray
+/// crosses from the front (the side the vertex normal points away from) to the back, and a
+/// flat's hit down to t_min in any case.
 std::optional<double> intersect(const Profile& profile, const Eigen::Vector3d& o,
                                 const Eigen::Vector3d& d, double t_min);
 

@@ -777,3 +777,128 @@ TEST(Exact, RaysLeavingAnySurfaceNeverMeetItAtTheirStart) {
 
 }  // namespace
 }  // namespace rfd::optics
+
+namespace rfd::optics {
+namespace {
+
+// Two equal biconvex lenses whose vertices touch at z = 4 (faces R = +-20 mm, n = 1.5168),
+// and the same glass fused into one 8 mm lens. At the contact point both faces have the
+// normal +z, so a ray through it refracts out of the first lens and back into the second at
+// one point, unchanged: through the contact the pair traces like the fused lens.
+SequentialSystem touching_biconvex_pair() {
+    SequentialSystem s;
+    s.surfaces.push_back({Conic{1 / 20.0}, CircularAperture{5.0}, 0.0, 1.5168, "A front"});
+    s.surfaces.push_back({Conic{-1 / 20.0}, CircularAperture{5.0}, 4.0, 1.0, "A back"});
+    s.surfaces.push_back({Conic{1 / 20.0}, CircularAperture{5.0}, 4.0, 1.5168, "B front"});
+    s.surfaces.push_back({Conic{-1 / 20.0}, CircularAperture{5.0}, 8.0, 1.0, "B back"});
+    return with_image_plane(s, 30.0);
+}
+
+SequentialSystem fused_biconvex() {
+    SequentialSystem s;
+    s.surfaces.push_back({Conic{1 / 20.0}, CircularAperture{5.0}, 0.0, 1.5168, "front"});
+    s.surfaces.push_back({Conic{-1 / 20.0}, CircularAperture{5.0}, 8.0, 1.0, "back"});
+    return with_image_plane(s, 30.0);
+}
+
+// The ray in front of the first face (R = 20 mm, vertex at z = 0, index n behind it) that
+// runs inside the glass through `target` along `inside`: sphere intersection and Snell's
+// law worked backwards, by hand.
+Ray ray_reaching(const Eigen::Vector3d& target, const Eigen::Vector3d& inside, double n) {
+    const Eigen::Vector3d centre(0.0, 0.0, 20.0);
+    // |w - s inside|^2 = 20^2 with w = target - centre: s = b +- sqrt(b^2 - c); the vertex
+    // cap is the nearer crossing behind the target, the smaller positive root.
+    const Eigen::Vector3d w = target - centre;
+    const double b = w.dot(inside), c = w.squaredNorm() - 400.0;
+    const double s = b + std::sqrt(b * b - c);
+    const Eigen::Vector3d entry = target - s * inside;
+    const Eigen::Vector3d normal = (centre - entry).normalized();  // toward +z at the vertex
+    // Snell: n (inside x normal) = (outside x normal), outside on the same side of the normal.
+    const Eigen::Vector3d tangential = n * (inside - inside.dot(normal) * normal);
+    const Eigen::Vector3d outside =
+        tangential + std::sqrt(1.0 - tangential.squaredNorm()) * normal;
+    return Ray{entry - 1.0 * outside, outside};
+}
+
+TEST(Exact, ARayThroughTheContactOfTwoCurvedFacesPassesIt) {
+    const SequentialSystem pair = touching_biconvex_pair();
+    const SequentialSystem fused = fused_biconvex();
+    const double image_z = pair.surfaces.back().z;
+    // On the axis: through both vertices, straight on to the image plane's centre.
+    const TraceResult axial = trace(pair, Ray{{0.0, 0.0, -1.0}, Eigen::Vector3d::UnitZ()});
+    ASSERT_EQ(axial.status, RayStatus::Ok) << "stopped at " << axial.surface;
+    EXPECT_EQ(axial.surface, 4);
+    EXPECT_NEAR((axial.ray.origin - Eigen::Vector3d(0.0, 0.0, image_z)).norm(), 0.0, 1e-12);
+    EXPECT_NEAR((axial.ray.direction - Eigen::Vector3d::UnitZ()).norm(), 0.0, 1e-15);
+    // Oblique rays through the contact point, which rounding puts a few 1e-16 mm off it.
+    for (double degrees : {0.5, 3.0, 10.0, 20.0}) {
+        for (double azimuth : {0.0, 1.0, 2.5}) {
+            const double a = degrees * std::numbers::pi / 180.0;
+            const Eigen::Vector3d inside(std::sin(a) * std::cos(azimuth), std::sin(a) * std::sin(azimuth),
+                                         std::cos(a));
+            const Ray ray = ray_reaching({0.0, 0.0, 4.0}, inside, 1.5168);
+            const TraceResult through_pair = trace(pair, ray);
+            const TraceResult through_fused = trace(fused, ray);
+            ASSERT_EQ(through_fused.status, RayStatus::Ok);
+            ASSERT_EQ(through_pair.status, RayStatus::Ok)
+                << degrees << " deg: stopped at " << pair.surfaces[static_cast<std::size_t>(through_pair.surface)].label;
+            EXPECT_NEAR((through_pair.ray.origin - through_fused.ray.origin).norm(), 0.0, 1e-12) << degrees;
+            EXPECT_NEAR((through_pair.ray.direction - through_fused.ray.direction).norm(), 0.0, 1e-14) << degrees;
+        }
+    }
+}
+
+// The other half of the contact rule: a ray on a surface that it has not crossed yet
+// (t_min < 0) meets it right there when it goes from the front to the back (along the
+// normal, which points to +z at the vertex), and never when it goes the other way.
+TEST(Exact, ARayOnASurfaceNotYetCrossedMeetsItThereOnlyGoingFrontToBack) {
+    std::mt19937_64 random(43);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    for (const Profile& profile :
+         {Profile(Conic{1 / 5.0}), Profile(Conic{-1 / 5.0}), Profile(Conic{1 / 4.0, -1.0}),
+          Profile(Conic{-1 / 4.0, -2.5}), Profile(Conic{1 / 6.0, 0.8})}) {
+        int forward = 0, backward = 0;
+        for (int k = 0; k < 4000; ++k) {
+            const double x = 2.0 * unit(random), y = 2.0 * unit(random);
+            const auto z = sag(profile, x * x + y * y);
+            if (!z) continue;
+            const Eigen::Vector3d on(x, y, *z);
+            const Eigen::Vector3d d = Eigen::Vector3d(unit(random), unit(random), unit(random)).normalized();
+            const double across = normal_at(profile, on).dot(d);
+            if (std::abs(across) < 1e-3) continue;  // grazing: either answer is rounding
+            const auto t = intersect(profile, on, d, -1e-9);
+            if (across > 0) {
+                ++forward;
+                ASSERT_TRUE(t.has_value());
+                EXPECT_LE(std::abs(*t), 1e-9);
+            } else {
+                ++backward;
+                if (t) {
+                    EXPECT_GT(*t, 1e-6);
+                }
+            }
+        }
+        EXPECT_GT(forward, 1000);
+        EXPECT_GT(backward, 1000);
+    }
+}
+
+// A biconcave lens of zero centre thickness (R = -+20 mm): its faces touch at the vertex,
+// where both normals are +z, so the chief ray through the vertex leaves it undeviated.
+TEST(Exact, AZeroThicknessBiconcaveLensPassesTheChiefRayUndeviated) {
+    SequentialSystem s;
+    s.surfaces.push_back({Conic{-1 / 20.0}, CircularAperture{5.0}, 0.0, 1.5168, "front"});
+    s.surfaces.push_back({Conic{1 / 20.0}, CircularAperture{5.0}, 0.0, 1.0, "back"});
+    s = with_image_plane(s, 25.0);
+    for (double degrees : {0.0, 2.0, 5.0, 30.0}) {
+        const double a = degrees * std::numbers::pi / 180.0;
+        const Eigen::Vector3d d(0.0, std::sin(a), std::cos(a));
+        const TraceResult result = trace(s, Ray{-1.0 / d.z() * d, d});
+        ASSERT_EQ(result.status, RayStatus::Ok) << degrees << " deg: stopped at " << result.surface;
+        EXPECT_NEAR(result.ray.origin.y(), 25.0 * std::tan(a), 1e-12) << degrees;
+        EXPECT_NEAR((result.ray.direction - d).norm(), 0.0, 1e-15) << degrees;
+    }
+}
+
+}  // namespace
+}  // namespace rfd::optics
