@@ -136,9 +136,11 @@ void add_optics_commands(CLI::App& app) {
             std::printf("  paraxial focal plane       z = %.6f mm\n", report.focal_plane_z);
             if (report.chief_height_exact)
                 std::printf("  chief ray height, exact    %.6f mm\n", *report.chief_height_exact);
-            else
+            else if (report.chief_status != optics::RayStatus::Ok)
                 std::printf("  chief ray height, exact    none: the chief ray is %s\n",
                             std::string(optics::to_string(report.chief_status)).c_str());
+            else
+                std::printf("  chief ray height, exact    none: the chief ray leaves parallel to the focal plane\n");
             std::printf("  chief ray height, paraxial %.6f mm\n", report.chief_height_paraxial);
             if (report.chief_height_exact)
                 std::printf("  difference                 %.3f um\n",

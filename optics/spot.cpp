@@ -54,7 +54,11 @@ SpotReport spot_report(const SequentialSystem& system, double field_angle_deg,
 
     const TraceResult chief = trace(system, ray_through(0.0, 0.0));
     report.chief_status = chief.status;
-    if (chief.status == RayStatus::Ok) report.chief_height_exact = point_at_z(chief.ray, report.focal_plane_z).y();
+    // A ray that leaves parallel to the focal plane never gets there: no height (not NaN).
+    if (chief.status == RayStatus::Ok) {
+        const double y = point_at_z(chief.ray, report.focal_plane_z).y();
+        if (std::isfinite(y)) report.chief_height_exact = y;
+    }
     const ParaxialResult paraxial =
         trace_paraxial(system, {0.0, 0.0, 0.0, std::tan(theta)}, z0, 0, last);
     report.chief_height_paraxial =
@@ -71,7 +75,8 @@ SpotReport spot_report(const SequentialSystem& system, double field_angle_deg,
             ++report.rays_traced;
             ++report.status_counts[static_cast<std::size_t>(result.status)];
             if (result.status != RayStatus::Ok) continue;
-            landed.push_back(point_at_z(result.ray, report.focal_plane_z).head<2>());
+            const Eigen::Vector2d at = point_at_z(result.ray, report.focal_plane_z).head<2>();
+            if (at.allFinite()) landed.push_back(at);
         }
     }
     if (!landed.empty()) {

@@ -18,11 +18,12 @@ struct SpotReport {
     double pupil_semi_diameter = 0.0;  ///< mm, at the first vertex plane
     std::size_t rays_traced = 0;
     double focal_plane_z = 0.0;        ///< paraxial rear focal plane, mm
-    /// y of the exact chief ray in that plane, mm; none when the chief ray does not get there.
+    /// y of the exact chief ray in that plane, mm; none when the chief ray does not get there
+    /// (stopped: chief_status says why; or Ok but leaving parallel to the plane).
     std::optional<double> chief_height_exact;
     double chief_height_paraxial = 0.0;
     RayStatus chief_status = RayStatus::Ok;
-    /// mm, about the centroid of the rays that arrived; none when no ray arrived.
+    /// mm, about the centroid of the rays that reached the plane; none when none did.
     std::optional<double> rms_spot_radius;
     std::optional<double> centroid_y;  ///< mm
     std::array<std::size_t, kRayStatusCount> status_counts{};
