@@ -170,6 +170,59 @@ DesignOptics::BundleReport DesignOptics::trace_bundle(const Eigen::Vector3d& dir
     return report;
 }
 
+bool DesignOptics::bundle_crosses(const Eigen::Vector3d& direction, CellIndex cell,
+                                  int rays_per_side) const {
+    RFD_CHECK(rays_per_side >= 2);
+    const bool variant = is_observer_variant(design_);
+    const Surface& entry = system_.surfaces.front();
+    // The entry aperture: the lenslet cell (I/II) or the main lens disc (III/IV), as a
+    // polygon of corners relative to its centre (a disc as a polygon of 8 x rays_per_side).
+    const Eigen::Vector2d centre = variant ? Eigen::Vector2d::Zero() : lattice().center(cell);
+    std::vector<Eigen::Vector2d> corners;
+    if (variant) {
+        const double disc = std::get<CircularAperture>(entry.aperture).semi_diameter;
+        const int sides = 8 * rays_per_side;
+        for (int k = 0; k < sides; ++k)
+            corners.push_back(disc * Eigen::Vector2d(std::cos(2 * kPi * k / sides), std::sin(2 * kPi * k / sides)));
+    } else {
+        corners = lattice().cell_corners();
+    }
+    std::vector<Eigen::Vector2d> points;
+    for (std::size_t k = 0; k < corners.size(); ++k) {
+        const Eigen::Vector2d& a = corners[k];
+        const Eigen::Vector2d& b = corners[(k + 1) % corners.size()];
+        const int along = variant ? 1 : rays_per_side;
+        for (int m = 0; m < along; ++m) points.push_back(a + (b - a) * (double(m) / along));
+    }
+    Eigen::Vector2d low = corners.front(), high = corners.front();
+    for (const auto& c : corners) {
+        low = low.cwiseMin(c);
+        high = high.cwiseMax(c);
+    }
+    for (int iy = 0; iy < rays_per_side; ++iy) {
+        for (int ix = 0; ix < rays_per_side; ++ix) {
+            const Eigen::Vector2d f(double(ix) / (rays_per_side - 1), double(iy) / (rays_per_side - 1));
+            const Eigen::Vector2d p = low + f.cwiseProduct(high - low);
+            const bool inside = variant ? p.squaredNorm() <= corners.front().squaredNorm()
+                                        : lattice().cell_contains(cell, centre + p);
+            if (inside) points.push_back(p);
+        }
+    }
+    const std::size_t last = system_.surfaces.size() - 1;
+    for (const Eigen::Vector2d& p : points) {
+        // A hair inside the rim, so that the ray aimed at this lenslet's edge meets it and
+        // not its neighbour's; aimed at the entry surface itself, whose edge lies deeper
+        // than its vertex by the sag.
+        const Eigen::Vector2d q = (1.0 - 1e-9) * p;
+        const double z = entry.z + sag(entry.profile, q.squaredNorm()).value_or(0.0);
+        const Eigen::Vector3d at(centre.x() + q.x(), centre.y() + q.y(), z);
+        const double back = z - (std::min(entry.z, z) - 2.0);
+        const Ray ray{at - (back / direction.z()) * direction, direction};
+        if (trace(system_, ray, 0, last).status == RayStatus::CrossedCell) return true;
+    }
+    return false;
+}
+
 namespace {
 
 // First angle in (0, 89] degrees along phi where `fails` holds, assuming it holds from
@@ -207,9 +260,8 @@ std::optional<double> wrap_over_angle(const DesignOptics& optics, double phi, Mo
 std::optional<double> first_loss_angle(const DesignOptics& optics, double phi, int rays_per_side) {
     const CellIndex cell = optics.centre_cell();
     return first_failure([&](double angle_deg) {
-        const auto d = incident_direction(degrees_to_radians(angle_deg), phi);
-        const auto report = optics.trace_bundle(d, cell, rays_per_side);
-        return report.crossed > 0;
+        return optics.bundle_crosses(incident_direction(degrees_to_radians(angle_deg), phi), cell,
+                                     rays_per_side);
     });
 }
 

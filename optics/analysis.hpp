@@ -40,8 +40,8 @@ std::vector<SweepDirection> sweep_directions(const Lattice& lattice);
 /// inside up to kWrapOverSearchLimitDeg.
 std::optional<double> wrap_over_angle(const DesignOptics& optics, double phi_rad, Model model);
 
-/// Incident angle (degrees) along phi where the first ray of a full bundle is lost or
-/// crosses into a neighbour (crosstalk begins); exact model.
+/// Incident angle (degrees) along phi where the first ray of the beam entering the centre
+/// lenslet crosses into a neighbour (crosstalk begins), with bundle_crosses(); exact model.
 std::optional<double> first_loss_angle(const DesignOptics& optics, double phi_rad,
                                        int rays_per_side);
 

@@ -80,6 +80,14 @@ public:
     BundleReport trace_bundle(const Eigen::Vector3d& direction, CellIndex cell,
                               int rays_per_side) const;
 
+    /// Whether any ray of a parallel beam along `direction` that enters the lenslet `cell`
+    /// (I/II; the main lens for III/IV) crosses into a neighbouring lenslet. The beam is
+    /// sampled where it meets the entry surface, not in its vertex plane: on the aperture's
+    /// rim (every corner of the cell and `rays_per_side` points along each edge), where the
+    /// steep edge of a lenslet sends the light furthest, and on a grid of `rays_per_side`
+    /// squared points spanning the aperture edge to edge. Stops at the first ray that crosses.
+    bool bundle_crosses(const Eigen::Vector3d& direction, CellIndex cell, int rays_per_side) const;
+
     /// Centre cell of the lattice (the lenslet nearest the axis).
     CellIndex centre_cell() const;
 

@@ -316,8 +316,10 @@ TEST(DisplayComparison, DesignOneShowsAUniformFieldAtLeast30dB) {
     const Printed p = print_field(design, uniform_field(), EncodeOptions{});
     const optics::DisplaySimulator simulator(design);
     const DisplayComparison comparison(simulator, *p.transparency, *p.encoder, p.tone);
-    // The axis and 6 degrees along the flat and the corner directions of the hexagonal cell
-    // (crosstalk begins at 11.7 and 7.5 degrees there).
+    // The axis and 6 degrees along the flat and the corner directions of the hexagonal cell,
+    // where crosstalk_free's bundle (16 rays a side) finds no ray crossing. (The first light
+    // crosses from 5.5 and 6.1 degrees there, through the lenslets' corners: `rfd design
+    // show`.)
     for (const Eigen::Vector3d& d : {Eigen::Vector3d(Eigen::Vector3d::UnitZ()),
                                      optics::incident_direction(degrees_to_radians(6.0), 0.0),
                                      optics::incident_direction(degrees_to_radians(6.0), 0.5 * kPi)}) {
