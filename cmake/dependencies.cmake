@@ -55,6 +55,16 @@ if(NOT RFD_GNUPLOT)
   set(RFD_GNUPLOT "")
 endif()
 
+# poppler-utils' pdftoppm and pdftocairo render print sheets the way viewers do, for the
+# test that their tile joins do not show (tests/test_print.cpp); without them it is skipped.
+find_program(RFD_PDFTOPPM pdftoppm)
+find_program(RFD_PDFTOCAIRO pdftocairo)
+foreach(tool RFD_PDFTOPPM RFD_PDFTOCAIRO)
+  if(NOT ${tool})
+    set(${tool} "")
+  endif()
+endforeach()
+
 # OpenSCAD builds the lens holders' STLs (holders/openscad.cpp); without it rfd still
 # writes the .scad and says the STL needs openscad.
 find_program(RFD_OPENSCAD openscad)

@@ -174,17 +174,25 @@ void write_pdf(const std::filesystem::path& out, const SheetLayout& layout, cons
             cairo_scale(cr.get(), -1.0, 1.0);
         }
         // The pattern, a band of tiles at a time; each tile its own image at the true dot size.
+        // A viewer that anti-aliases image edges blends two abutting tiles with the paper
+        // where they meet, a light line, so tiles overlap: each carries the next tile's first
+        // dots (the same data) and is drawn first, and the next one, drawn over it, starts at
+        // its true dot. No clip path: the images' edges are their own, on whole dots.
+        const int overlap_x = pdf_tile_overlap(layout.dpi_x), overlap_y = pdf_tile_overlap(layout.dpi_y);
         const std::size_t row_floats = static_cast<std::size_t>(g.width) * static_cast<std::size_t>(channels);
         constexpr int kReadRows = 64;
         std::vector<float> rows(row_floats * kReadRows);
         std::vector<float> codes(3 * static_cast<std::size_t>(g.width));
         Progress progress("sheet rows", static_cast<std::size_t>(g.height));
         for (int ty = 0; ty < g.height; ty += kPdfTile) {
-            const int th = std::min(kPdfTile, g.height - ty);
+            const int th = std::min(kPdfTile + overlap_y, g.height - ty);  // rows with the overlap
             std::vector<SurfacePtr> tiles;
-            for (int tx = 0; tx < g.width; tx += kPdfTile)
-                tiles.emplace_back(cairo_image_surface_create(CAIRO_FORMAT_RGB24, std::min(kPdfTile, g.width - tx), th),
+            std::vector<int> tile_x;
+            for (int tx = 0; tx < g.width; tx += kPdfTile) {
+                tiles.emplace_back(cairo_image_surface_create(CAIRO_FORMAT_RGB24, std::min(kPdfTile + overlap_x, g.width - tx), th),
                                    &cairo_surface_destroy);
+                tile_x.push_back(tx);
+            }
             for (int r0 = 0; r0 < th; r0 += kReadRows) {
                 const int r1 = std::min(th, r0 + kReadRows);
                 reader.read_rows(ty + r0, ty + r1, rows);
@@ -196,7 +204,7 @@ void write_pdf(const std::filesystem::path& out, const SheetLayout& layout, cons
                         auto* pixels = reinterpret_cast<std::uint32_t*>(
                             cairo_image_surface_get_data(tile) +
                             static_cast<std::ptrdiff_t>(r) * cairo_image_surface_get_stride(tile));
-                        const int x0 = static_cast<int>(t) * kPdfTile;
+                        const int x0 = tile_x[t];
                         for (int x = 0; x < cairo_image_surface_get_width(tile); ++x) {
                             std::uint32_t pixel = 0;
                             for (int c = 0; c < 3; ++c)
@@ -207,18 +215,17 @@ void write_pdf(const std::filesystem::path& out, const SheetLayout& layout, cons
                         }
                     }
                 }
-                progress.advance(static_cast<std::size_t>(r1 - r0));
+                // Rows of the overlap are the next band's and counted there.
+                progress.advance(static_cast<std::size_t>(std::max(0, std::min(r1, kPdfTile) - std::min(r0, kPdfTile))));
             }
             for (std::size_t t = 0; t < tiles.size(); ++t) {
                 cairo_surface_mark_dirty(tiles[t].get());
-                const int x0 = static_cast<int>(t) * kPdfTile;
                 cairo_save(cr.get());
-                cairo_translate(cr.get(), (layout.offset_x + x0) * layout.dot_x, (layout.offset_y + ty) * layout.dot_y);
+                cairo_translate(cr.get(), (layout.offset_x + tile_x[t]) * layout.dot_x, (layout.offset_y + ty) * layout.dot_y);
                 cairo_scale(cr.get(), layout.dot_x, layout.dot_y);
                 cairo_set_source_surface(cr.get(), tiles[t].get(), 0.0, 0.0);
                 cairo_pattern_set_filter(cairo_get_source(cr.get()), CAIRO_FILTER_NEAREST);
-                cairo_rectangle(cr.get(), 0.0, 0.0, cairo_image_surface_get_width(tiles[t].get()), th);
-                cairo_fill(cr.get());
+                cairo_paint(cr.get());
                 cairo_restore(cr.get());
             }
         }

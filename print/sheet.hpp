@@ -6,9 +6,10 @@
 //    whatever the page's size), XResolution/YResolution = the printer's dpi; the codes are
 //    the printer's codes 1 - v (printer.hpp), not sRGB-encoded light;
 //  - PDF: a page of the paper's exact size (points = mm / 25.4 * 72), the pattern as
-//    tiles of at most kPdfTile x kPdfTile dots each, placed edge to edge at the true dot
-//    size (x and y scaled separately) and drawn with nearest-neighbour filtering; the marks
-//    as vectors. Cairo's PDF writer keeps the page's images until the page is finished,
+//    tiles of kPdfTile x kPdfTile dots each at the true dot size (x and y scaled
+//    separately), drawn with nearest-neighbour filtering, each carrying the next tile's
+//    first dots (the same dots, pdf_tile_overlap()) under it, so that viewers which
+//    anti-alias image edges show no line where tiles meet; the marks as vectors. Cairo's PDF writer keeps the page's images until the page is finished,
 //    so a PDF needs memory for the whole raster (4 bytes a dot): use TIFF for full-page
 //    patterns at 2880 x 1440 dpi.
 // Both are written to a temporary sibling and renamed: nothing half-written survives a
@@ -19,6 +20,8 @@
 //
 // Example: write_sheet("sheet.tif", design, printer, "pattern.tif", {.brightness = 1.2});
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <string>
 
@@ -28,7 +31,15 @@
 
 namespace rfd::print {
 
-inline constexpr int kPdfTile = 2048;  ///< largest PDF image tile side, dots (Cairo stops at 32767)
+inline constexpr int kPdfTile = 2048;  ///< PDF image tile pitch, dots (Cairo stops at 32767)
+/// How far (inches) a PDF tile reaches under the next: one pixel of a viewer at 32 dpi, so
+/// that the anti-aliased edge of the tile on top lies over the same picture, not the paper.
+inline constexpr double kPdfTileOverlapInch = 1.0 / 32.0;
+/// Dots a PDF tile reaches under the next at `dpi` along that axis: kPdfTileOverlapInch,
+/// at most an eighth of a tile.
+inline int pdf_tile_overlap(double dpi) {
+    return std::min(kPdfTile / 8, static_cast<int>(std::ceil(dpi * kPdfTileOverlapInch)));
+}
 
 struct SheetOptions {
     double brightness = 1.0;  ///< scales the pattern before clamping, > 0

@@ -25,6 +25,9 @@ packages=(
   libtomlplusplus-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   openscad gnuplot-nox
+  # pdftoppm and pdftocairo: the test that a PDF sheet's tile joins do not show renders it
+  # as viewers do (tests/test_print.cpp).
+  poppler-utils
 )
 
 missing=()

@@ -2,6 +2,7 @@
 // back (resolution tags, markers found where the design puts the corner lenslets, the
 // mirror, determinism), PDF page size and tiling, the moire sheet, and bad input.
 
+#include <cstdlib>
 #include <cmath>
 #include <random>
 #include <fstream>
@@ -381,18 +382,72 @@ TEST(SheetPdf, RasterWiderThanCairosLimitIsTiled) {
     ASSERT_GT(g.width, 32767);
     write_sheet(dir / "wide.pdf", design, printer, pattern, {});
     const std::string pdf = read_bytes(dir / "wide.pdf");
-    // Every image tile, and together they are the raster's width exactly.
+    // Every image tile, kPdfTile dots apart, each reaching under the next by the overlap
+    // (the last to the raster's edge); one band of rows.
+    const int overlap = pdf_tile_overlap(40000);
+    EXPECT_EQ(overlap, kPdfTile / 8);
     int tiles = 0;
-    long long width = 0;
     for (std::size_t at = pdf.find("/Subtype /Image"); at != std::string::npos; at = pdf.find("/Subtype /Image", at + 1)) {
-        ++tiles;
-        const long long tile_width = number_after(pdf, "/Width ", at);
-        width += tile_width;
+        EXPECT_EQ(number_after(pdf, "/Width ", at), std::min(kPdfTile + overlap, g.width - tiles * kPdfTile)) << tiles;
         EXPECT_EQ(number_after(pdf, "/Height ", at), g.height);
-        EXPECT_LE(tile_width, kPdfTile);
+        ++tiles;
     }
     EXPECT_EQ(tiles, (g.width + kPdfTile - 1) / kPdfTile);
-    EXPECT_EQ(width, g.width);
+}
+
+// Anti-aliased viewers must not show the tile joins: a uniform pattern's sheet rendered at
+// 150 dpi by poppler, through both of its renderers (Splash: pdftoppm; Cairo: pdftocairo, as
+// evince draws), has no column or row at a join that differs from the pattern a few pixels
+// away. Each join of Design II at 2880 dpi falls inside a 150 dpi pixel (2048 dots = 106.7
+// px). Skipped only when poppler-utils is missing (scripts/install-deps.sh installs it).
+TEST(SheetPdf, TileJoinsDoNotShowInAntiAliasedViewers) {
+    const std::string pdftoppm = RFD_PDFTOPPM, pdftocairo = RFD_PDFTOCAIRO;
+    if (pdftoppm.empty() || pdftocairo.empty()) GTEST_SKIP() << "poppler-utils (pdftoppm, pdftocairo) not installed";
+    TempDir dir;
+    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const PrinterProfile printer = parse_printer(small_printer_toml(2880, 2880), "test.toml");
+    const auto pattern = write_test_pattern(dir, design, printer, 0.5f);
+    const SheetLayout layout = write_sheet(dir / "sheet.pdf", design, printer, pattern, {}).layout;
+    ASSERT_GT(layout.pattern.width, kPdfTile);
+    ASSERT_GT(layout.pattern.height, kPdfTile);
+    constexpr double kViewerDpi = 150.0;
+    const double px_per_mm = kViewerDpi / 25.4;
+    for (const std::string& renderer : {pdftoppm, pdftocairo}) {
+        SCOPED_TRACE(renderer);
+        const std::string command = renderer + " -r 150 -png -singlefile " + (dir / "sheet.pdf").string() + " " +
+                                    (dir / "view").string();
+        ASSERT_EQ(std::system(command.c_str()), 0) << command;
+        const Page view = read_page(dir / "view.png");
+        // The pattern's extent in viewer pixels, and a band across its middle, clear of the
+        // markers at its corner lenslets and of the joins the other way.
+        const Eigen::Vector2d lo = layout.pattern_min() * px_per_mm, hi = layout.pattern_max() * px_per_mm;
+        const auto band = [](double a, double b) { return std::pair<int, int>(static_cast<int>(a + 0.3 * (b - a)), static_cast<int>(a + 0.6 * (b - a))); };
+        const auto [row0, row1] = band(lo.y(), hi.y());
+        const auto [col0, col1] = band(lo.x(), hi.x());
+        auto column = [&](int x) {
+            double sum = 0.0;
+            for (int y = row0; y < row1; ++y) sum += view.code(x, y);
+            return sum / (row1 - row0);
+        };
+        auto row = [&](int y) {
+            double sum = 0.0;
+            for (int x = col0; x < col1; ++x) sum += view.code(x, y);
+            return sum / (col1 - col0);
+        };
+        const double gray = column(col0);
+        EXPECT_GT(gray, 20.0);  // a gray, not the white paper
+        EXPECT_LT(gray, 235.0);
+        for (int tx = kPdfTile; tx < layout.pattern.width; tx += kPdfTile) {
+            const int at = static_cast<int>((layout.offset_x + tx) * layout.dot_x * px_per_mm);
+            for (int x = at - 1; x <= at + 1; ++x)
+                EXPECT_NEAR(column(x), 0.5 * (column(at - 5) + column(at + 5)), 1.0) << "column " << x << ", join at dot " << tx;
+        }
+        for (int ty = kPdfTile; ty < layout.pattern.height; ty += kPdfTile) {
+            const int at = static_cast<int>((layout.offset_y + ty) * layout.dot_y * px_per_mm);
+            for (int y = at - 1; y <= at + 1; ++y)
+                EXPECT_NEAR(row(y), 0.5 * (row(at - 5) + row(at + 5)), 1.0) << "row " << y << ", join at dot " << ty;
+        }
+    }
 }
 
 // ----------------------------------------------------------------------------- bad input
@@ -516,3 +571,4 @@ TEST(Moire, BandsForEveryHypothesisOnPaperSizedPages) {
 
 }  // namespace
 }  // namespace rfd::print
+
