@@ -14,38 +14,31 @@
 //    i next to a lit j becomes lit when L_i > f_lit * L_j, until nothing changes. The
 //    default 0.7 sits low in the thesis's 0.66 to 0.9: with lights 9 degrees apart, the
 //    smooth fall-off of a lit surface toward grazing loses more than a fifth between
-//    neighbours and 0.8 called it shadow (figure scene, 256 lights: 42.74 -> 43.30 dB;
-//    bottle and spheres unchanged). Just below a feature's own contrast it fails: a caustic
-//    at 1.5 times its surround is mislabelled at 0.66 (1.7 times blending's error).
+//    neighbours, which 0.8 calls shadow. Just below a feature's own contrast it fails: 0.66
+//    mislabels a caustic 1.5 times as bright as its surround.
 // 2. Feature upsampling (6.3), `levels` times: every edge of the Delaunay triangulation of
 //    the directions so far gets its midpoint k. H_k: compact highlights matched between
 //    the two layers (mutual nearest energy centroids within `blob_reach` pixels, and the one
-//    moved onto the other covering at least half of it) move rigidly half-way; a reflected
-//    small light is a blob of a few pixels that the flow cannot track (at 256 stage lights
-//    the flow gained 0.5 dB over blending where the matching gains 5). A glossy streak that
-//    changes shape goes to the flow (figure scene: 42.38 -> 42.74 dB). A highlight with no
+//    moved onto the other covering at least half of it) move rigidly half-way: a reflected
+//    small light is a blob of a few pixels that the flow cannot track, yet its centroid is
+//    exact. A glossy streak that changes shape goes to the flow. A highlight with no
 //    highlight near it in the other layer is seen from one end of the edge only, a glint
 //    narrower in light directions than the sampling (the bottle's glass edges): it stays in
 //    place, scaled by the overlap of the two light kernels (one_sided_highlight_weight), so
 //    it vanishes at a midpoint more than two kernel radii away instead of being smeared
-//    half-bright over the edge as blending does (bottle scene, 256 lights with a 2-degree
-//    kernel, one level, against fading to half: 61.18 -> 62.33 dB at 1024 other
-//    directions, 41.33 -> 44.07 dB under four 15-degree area lights). The rest: optical
-//    flow (OpenCV's Farneback) both ways on clamped, blurred highlight luminance, both
-//    layers warped half-way with their full range (each keeping its total energy) and
-//    averaged. Where the two lights' discs overlap (an edge shorter than two kernel radii:
-//    a wide, frost-like light, or the close directions of an adaptive capture), a mirror
-//    pixel lit at both ends is lit at the midpoint too, since the lens the discs share lies
-//    in the midpoint's disc, and much of a highlight may not move at all; what the flow,
-//    carried all the way, lays onto the other layer no closer than it already lies stays
-//    in place, pixel by pixel (the mean where both are lit). A highlight lit at one end
-//    only keeps midpoint_highlight_weight, the share of that end's own light the midpoint
-//    sees (one_sided_highlight_weight where the discs are apart). 256 stage lights of the
-//    15-degree wide light, one level, at 1024 others: spheres 58.02 -> 58.14 dB, bottle
-//    60.17 -> 60.68 (blending 52.09 and 59.98); a 256-image adaptive capture of the bottle
-//    with the narrow light, 63.07 -> 63.14 (blending 63.24: there the glass's glints are
-//    thin segments that shrink in place as the light leaves their track, and the matching
-//    still moves some rigidly).
+//    half-bright over the edge as blending does. The rest: optical flow (OpenCV's
+//    Farneback) both ways on clamped, blurred highlight luminance, both layers warped
+//    half-way with their full range (each keeping its total energy) and averaged. Where
+//    the two lights' discs overlap (an edge shorter than two kernel radii: a wide,
+//    frost-like light, or the close directions of an adaptive capture), a mirror pixel lit
+//    at both ends is lit at the midpoint too, since the lens the discs share lies in the
+//    midpoint's disc, and much of a highlight may not move at all; what the flow, carried
+//    all the way, lays onto the other layer no closer than it already lies stays in place,
+//    pixel by pixel (the mean where both are lit). A highlight lit at one end only keeps
+//    midpoint_highlight_weight, the share of that end's own light the midpoint sees
+//    (one_sided_highlight_weight where the discs are apart). Glints that are thin segments,
+//    shrinking in place as the light leaves their track, are still partly moved rigidly by
+//    the matching: such a field is better blended.
 //    S_k: level-set blending: the two maps' signed distance functions, each carried
 //    half-way along the flow between them, averaged, and re-quantised to 0/1 at the zero
 //    level set. (The plain mean of two distance functions, without the flow, shrinks a
@@ -57,23 +50,18 @@
 //    H_k there at every new direction next to an input that shows the highlight at that
 //    pixel. The lacquer of the figure scene (GGX, roughness 0.12) makes streaks that
 //    split and bend between neighbouring lights, which neither the matching nor the flow
-//    follows: 43.30 -> 43.62 dB at its 1024 reference directions. The spread test keeps
-//    out pixels with two highlights and the glass's caustics (bottle and spheres scenes:
-//    unchanged, where without it the spheres lost 0.4 dB). A lobe at least as wide as the
-//    edge (angular_width() >= the angle between its ends) is sampled finely enough that the
-//    two ends' mean beats the fit, whose log-linear model is only right near the peak: there
-//    H_k is that mean. On a broad Blinn-Phong dome (exponent 25, a lobe about 23 degrees
-//    wide against inputs 9 degrees apart) the squared error of the new images is 163,
-//    against 137 for blending and 267 reading every lobe off its fit; the spread test
-//    turns most of the dome away, and at 40 degrees it is 93. 40 is not the default: the
-//    spheres lose 0.25 dB under a 15-degree area light (30,120) there.
+//    follows. The spread test keeps out pixels with two highlights and the glass's
+//    caustics. A lobe at least as wide as the edge (angular_width() >= the angle between
+//    its ends) is sampled finely enough that the two ends' mean beats the fit, whose
+//    log-linear model is only right near the peak: there H_k is that mean. A lobe broader
+//    than the spread allows is mostly turned away by the spread test; a wider spread
+//    catches it but costs the spheres under an area light, so 30 stays the default.
 // 3. Synthesis (6.4.1), per new direction k in input triangle (a, b, c) with barycentric
 //    weights: blurred shadow maps S-bar = the mean S over the `blur_neighbours` nearest
 //    directions (inputs and new ones). The thesis averages 10; the default here is 1 (S-bar =
-//    S), which measured as good or better on every field tried: with 10 after one level
-//    the average spans a whole input spacing and blurs moving shadows (256 stage lights,
-//    spheres scene: +0.33 dB over blending against +0.70 dB with 1; after two levels the
-//    two tie). Uncertain pixels, 0 < S-bar < 1, then come from the fit alone. Where S-bar_a = S-bar_b = S-bar_c = 1 the lit value is
+//    S): with 10 after one level the average spans a whole input spacing and blurs moving
+//    shadows (after two levels the two tie). Uncertain pixels, 0 < S-bar < 1, then come
+//    from the fit alone. Where S-bar_a = S-bar_b = S-bar_c = 1 the lit value is
 //    the barycentric blend of D; where all are 0 the shadowed value is; otherwise the value
 //    is extrapolated by a least-squares fit of two spherical-harmonic bands (1, x, y, z) to
 //    the `fit_neighbours` nearest inputs labelled lit (or shadowed) at the pixel, weighted by
@@ -82,14 +70,17 @@
 // 4. Image-based priors (6.4.2, relight/image_priors.hpp): the extrapolated pixels of R_reco
 //    and those at an edge of S_k are regularised, `priors.iterations` times (3), against
 //    the 5 x 5 windows of the highlight-free inputs D of the triangle around k, matched up
-//    to an intensity scale. R_k = R_reco + H_k. (Spheres scene, 256 stage lights, one
-//    level: +1.4 dB on the diffuse half of the image, 1.5x the time per image.)
+//    to an intensity scale. R_k = R_reco + H_k. They help on the diffuse part of the image
+//    and cost most of the time per new image.
 //
 // Where it fails stays no worse than linear blending: a pixel with no reliable samples of
 // the needed state falls back to the barycentric blend, pixels that are black in every
 // image are never highlights, a highlight-free pair of images skips the flow, and shadow
 // maps that do not overlap blend to whatever their mean distance says (the thesis's
 // grazing-angle limitation, 6.5.1).
+//
+// What each rule gains, with the commands that reproduce it: docs/results.md, "Feature-guided
+// upsampling" (the rules one by one, overlapping lights, time).
 //
 // Example: UpsampledField up = upsample_field(read_field("in"), 1, UpsampleOptions{});
 
