@@ -450,6 +450,48 @@ TEST(SheetPdf, TileJoinsDoNotShowInAntiAliasedViewers) {
     }
 }
 
+// The overlap must not move a dot: rendered at the printer's own resolution around the
+// corner where four tiles meet, every pixel is its pattern dot's printer code (a pattern
+// whose every dot differs from its neighbours). Rendered by poppler's Cairo renderer, which
+// maps an image whose edges lie on pixels one dot to one pixel (its Splash renderer,
+// pdftoppm, draws such an image a pixel wider, stretched: a repeated column).
+TEST(SheetPdf, EveryDotAtATileJoinIsThePatternsAtThePrintersResolution) {
+    const std::string pdftocairo = RFD_PDFTOCAIRO;
+    if (pdftocairo.empty()) GTEST_SKIP() << "poppler-utils (pdftocairo) not installed";
+    TempDir dir;
+    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    // A paper of whole dots (2 x 2.5 inches): PDF puts the origin at the page's foot, and a
+    // fractional page height would shift a renderer that does not snap images to pixels.
+    const PrinterProfile printer = parse_printer(small_printer_toml(2880, 2880, 50.8, 63.5), "test.toml");
+    const auto g = patterns::pattern_geometry(design, printer.dpi_x, printer.dpi_y);
+    patterns::write_pattern(dir / "steps.exr", Steps(g), {{"white", "0.8"}});
+    const SheetReport report = write_sheet(dir / "sheet.pdf", design, printer, dir / "steps.exr", {});
+    const SheetLayout& layout = report.layout;
+    ASSERT_GT(g.width, kPdfTile + 32);
+    ASSERT_GT(g.height, kPdfTile + 32);
+    constexpr int kHalf = 24;  // pixels either side of the joins
+    const int x0 = layout.offset_x + kPdfTile - kHalf, y0 = layout.offset_y + kPdfTile - kHalf;
+    const std::string command = pdftocairo + " -r 2880 -x " + std::to_string(x0) + " -y " + std::to_string(y0) +
+                                " -W " + std::to_string(2 * kHalf) + " -H " + std::to_string(2 * kHalf) +
+                                " -png -singlefile " + (dir / "sheet.pdf").string() + " " + (dir / "dots").string();
+    ASSERT_EQ(std::system(command.c_str()), 0) << command;
+    const Page view = read_page(dir / "dots.png");
+    ASSERT_EQ(view.width, 2 * kHalf);
+    ASSERT_EQ(view.height, 2 * kHalf);
+    int wrong = 0;
+    for (int y = 0; y < view.height; ++y)
+        for (int x = 0; x < view.width; ++x)
+            for (int c = 0; c < 3; ++c) {
+                const int px = x0 + x - layout.offset_x, py = y0 + y - layout.offset_y;
+                const int expected = static_cast<int>(std::lround(
+                    255.0f * static_cast<float>(1.0 - report.tone.printer_value(Steps::value(px, py, c)))));
+                if (view.code(x, y, c) != expected && ++wrong <= 5)
+                    ADD_FAILURE() << "dot (" << px << ", " << py << ") channel " << c << ": " << view.code(x, y, c)
+                                  << ", expected " << expected;
+            }
+    EXPECT_EQ(wrong, 0);
+}
+
 // ----------------------------------------------------------------------------- bad input
 
 TEST(Sheet, PatternOfTheWrongSizeSaysBothSizes) {
