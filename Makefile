@@ -28,7 +28,7 @@ build-tests: configure
 
 build-asan: deps
 	cmake --preset asan
-	cmake --build build-asan -j $(JOBS) --target rfd rfd_tests
+	cmake --build build-asan -j $(JOBS) --target rfd rfd_tests rfd_fuzz
 
 test: test-release test-asan
 
@@ -53,4 +53,4 @@ studies: build
 	./scripts/studies.sh $(RFD) out/studies
 
 clean:
-	rm -rf build build-asan build-debug out
+	rm -rf build build-asan build-debug build-fuzz out

@@ -20,6 +20,11 @@ if(RFD_SANITIZE)
                          -fno-sanitize-recover=undefined)
   target_link_options(rfd_sanitizers INTERFACE -fsanitize=address,undefined)
 endif()
+# libFuzzer's coverage counters in all of rfd's code; the fuzz programs link the fuzzer
+# itself (fuzz/CMakeLists.txt). Third-party libraries stay as installed.
+if(RFD_BUILD_FUZZ AND RFD_FUZZ_ENGINE STREQUAL "libfuzzer")
+  target_compile_options(rfd_sanitizers INTERFACE -fsanitize=fuzzer-no-link)
+endif()
 
 # -fno-trapping-math: rfd never reads floating-point exception flags, so the compiler may
 # evaluate both arms of a select; without it GCC will not vectorise the masked loops of the
@@ -43,7 +48,11 @@ function(rfd_add_module name)
   add_library(${target} MODULE ${ARGN})
   target_include_directories(${target} PRIVATE ${PROJECT_SOURCE_DIR})
   target_link_libraries(${target} PRIVATE rfd_flags)
-  target_link_options(${target} PRIVATE -Wl,--no-undefined)
+  # clang links its sanitizer runtimes into programs only, so a sanitized module finds
+  # them in the program that loads it.
+  if(NOT (RFD_SANITIZE AND CMAKE_CXX_COMPILER_ID STREQUAL "Clang"))
+    target_link_options(${target} PRIVATE -Wl,--no-undefined)
+  endif()
   set_target_properties(${target} PROPERTIES OUTPUT_NAME rfd_${name} LIBRARY_OUTPUT_DIRECTORY ${RFD_MODULE_DIR}
                         CXX_VISIBILITY_PRESET hidden VISIBILITY_INLINES_HIDDEN ON)
 endfunction()
