@@ -3,6 +3,7 @@
 #include <system_error>
 
 #include "core/error.hpp"
+#include "core/exr_header.hpp"
 #include "core/files.hpp"
 #include "core/image_backend.hpp"
 #include "core/module.hpp"
@@ -46,6 +47,8 @@ ImageFileReader::ImageFileReader(const std::filesystem::path& path, const std::s
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec))
         throw IoError(SourceLocation{path.string()}, "cannot open: no such " + what + " file");
+    if (const auto problem = exr_header_problem(path))
+        throw InputError(SourceLocation{path.string()}, what + " file is damaged: " + *problem);
     std::string error;
     backend_ = backend().open(path.string(), error);
     if (!backend_) throw IoError(SourceLocation{path.string()}, "cannot read " + what + ": " + error);

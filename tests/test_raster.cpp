@@ -3,7 +3,11 @@
 // leaving a file behind.
 
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -153,6 +157,41 @@ TEST(WritePattern, UnwritableDirectoryIsAnIoError) {
     const Ramp ramp(small_geometry(), 1);
     EXPECT_THAT(error_of([&] { write_pattern("/proc/rfd-no/p.exr", ramp, {}); }),
                 HasSubstr("does not exist"));
+}
+
+// A pattern whose header's rfd:white attribute declares `size` bytes (little-endian int32).
+std::filesystem::path pattern_with_attribute_size(const TempDir& dir, std::uint32_t size) {
+    const auto path = dir / "p.exr";
+    write_pattern(path, Ramp(small_geometry(), 3), {{"white", "0.75"}});
+    std::string bytes;
+    {
+        std::ifstream in(path, std::ios::binary);
+        bytes.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    const std::string attribute("rfd:white\0string\0", 17);
+    const std::size_t at = bytes.find(attribute);
+    EXPECT_NE(at, std::string::npos);
+    for (std::size_t b = 0; b < 4; ++b) bytes[at + attribute.size() + b] = static_cast<char>((size >> (8 * b)) & 0xff);
+    std::ofstream(path, std::ios::binary) << bytes;
+    return path;
+}
+
+TEST(ReadPattern, AttributeLargerThanTheFileIsAnInputError) {
+    // Found by fuzz/fuzz_pattern.cpp: OpenEXR allocated the 1.6 GB a damaged attribute size
+    // declared (1.6 s under ASan) before noticing the file's end.
+    TempDir dir;
+    const auto path = pattern_with_attribute_size(dir, 1664102458u);
+    try {
+        read_pattern_info(path);
+        ADD_FAILURE() << "no error";
+    } catch (const InputError& error) {
+        EXPECT_THAT(error.what(), HasSubstr("p.exr: pattern file is damaged: its EXR header's attribute "
+                                            "'rfd:white' (string) declares 1664102458 bytes, but "));
+    }
+    EXPECT_THAT(error_of([&] { read_pattern_info(pattern_with_attribute_size(dir, 0xffffffffu)); }),
+                HasSubstr("'rfd:white' (string) declares -1 bytes"));
+    // The true size reads as before.
+    EXPECT_EQ(read_pattern_info(pattern_with_attribute_size(dir, 4)).attributes.at("white"), "0.75");
 }
 
 }  // namespace

@@ -1,0 +1,126 @@
+#include "core/exr_header.hpp"
+
+#include <cstdint>
+#include <fstream>
+#include <map>
+#include <system_error>
+
+namespace rfd {
+namespace {
+
+// The value sizes of OpenEXR 3.1's fixed-size attribute types (ImfHeader.cpp registers them).
+const std::map<std::string, std::int64_t>& fixed_sizes() {
+    static const std::map<std::string, std::int64_t> sizes = {
+        {"box2i", 16}, {"box2f", 16}, {"compression", 1}, {"lineOrder", 1}, {"envmap", 1},
+        {"deepImageState", 1}, {"float", 4}, {"double", 8}, {"int", 4}, {"rational", 8},
+        {"v2i", 8}, {"v2f", 8}, {"v2d", 16}, {"v3i", 12}, {"v3f", 12}, {"v3d", 24},
+        {"m33f", 36}, {"m33d", 72}, {"m44f", 64}, {"m44d", 128}, {"chromaticities", 32},
+        {"keycode", 28}, {"timecode", 8}, {"tiledesc", 9},
+    };
+    return sizes;
+}
+
+class Walk {
+public:
+    explicit Walk(const std::filesystem::path& path) : in_(path, std::ios::binary) {
+        std::error_code ec;
+        size_ = static_cast<std::int64_t>(std::filesystem::file_size(path, ec));
+        if (ec) size_ = -1;
+    }
+
+    std::optional<std::string> problem() {
+        unsigned char start[8] = {};
+        if (size_ < 0 || !in_.read(reinterpret_cast<char*>(start), sizeof start)) return std::nullopt;
+        if (start[0] != 0x76 || start[1] != 0x2f || start[2] != 0x31 || start[3] != 0x01) return std::nullopt;
+        const bool multi_part = (start[5] & 0x10) != 0;  // version field bit 12
+        while (true) {
+            std::string name;
+            if (!read_name(name)) return problem_;
+            if (name.empty()) return std::nullopt;  // an empty header: the end of a multi-part list
+            while (!name.empty())
+                if (!read_attribute(name) || !read_name(name)) return problem_;
+            if (!multi_part) return std::nullopt;
+        }
+    }
+
+private:
+    std::int64_t left() { return size_ - static_cast<std::int64_t>(in_.tellg()); }
+
+    bool fail(const std::string& message) {
+        problem_ = "its EXR header " + message;
+        return false;
+    }
+
+    // A null-terminated name of at most 255 characters, as OpenEXR reads names and types.
+    bool read_name(std::string& name) {
+        name.clear();
+        for (int c = in_.get(); c != 0; c = in_.get()) {
+            if (c == std::char_traits<char>::eof()) return fail("ends early");
+            if (name.size() >= 255) return fail("holds a name of more than 255 characters");
+            name += static_cast<char>(c);
+        }
+        return true;
+    }
+
+    bool read_int32(std::int32_t& value) {
+        unsigned char b[4];
+        if (!in_.read(reinterpret_cast<char*>(b), 4)) return fail("ends early");
+        value = static_cast<std::int32_t>(static_cast<std::uint32_t>(b[0]) | static_cast<std::uint32_t>(b[1]) << 8 |
+                                          static_cast<std::uint32_t>(b[2]) << 16 |
+                                          static_cast<std::uint32_t>(b[3]) << 24);
+        return true;
+    }
+
+    // The attribute whose name has been read: its type, size and value.
+    bool read_attribute(const std::string& name) {
+        std::string type;
+        std::int32_t size = 0;
+        if (!read_name(type) || !read_int32(size)) return false;
+        const std::string what = "'s attribute '" + name + "' (" + type + ")";
+        const std::int64_t available = left();
+        if (size < 0 || size > available)
+            return fail_attribute(what, "declares " + std::to_string(size) + " bytes, but " +
+                                            std::to_string(available) + " are left in the file");
+        const auto fixed = fixed_sizes().find(type);
+        if (fixed != fixed_sizes().end() && size != fixed->second)
+            return fail_attribute(what, "declares " + std::to_string(size) + " bytes, but a " + type + " holds " +
+                                            std::to_string(fixed->second));
+        if (type == "chlist") return check_channels(what, size);
+        in_.seekg(size, std::ios::cur);
+        return true;
+    }
+
+    bool fail_attribute(const std::string& what, const std::string& message) {
+        problem_ = "its EXR header" + what + " " + message;
+        return false;
+    }
+
+    // OpenEXR reads a channel list to its empty name, whatever the size says: name, 16 bytes
+    // (type, pLinear, reserved, x and y sampling), ..., an empty name.
+    bool check_channels(const std::string& what, std::int64_t size) {
+        const std::int64_t begin = in_.tellg();
+        std::string channel;
+        while (true) {
+            if (!read_name(channel)) return false;
+            if (channel.empty()) break;
+            in_.seekg(16, std::ios::cur);
+            if (static_cast<std::int64_t>(in_.tellg()) - begin > size) break;
+        }
+        if (static_cast<std::int64_t>(in_.tellg()) - begin != size)
+            return fail_attribute(what, "declares " + std::to_string(size) + " bytes, but its channel list does not end there");
+        return true;
+    }
+
+    std::ifstream in_;
+    std::int64_t size_ = -1;
+    std::string problem_;
+};
+
+}  // namespace
+
+std::optional<std::string> exr_header_problem(const std::filesystem::path& path) {
+    Walk walk(path);
+    return walk.problem();
+}
+
+}  // namespace rfd
