@@ -43,6 +43,10 @@ const Plane& Design::plane(const std::string& plane_name) const {
 
 namespace {
 
+// Parts closer than this are touching, not overlapping: a plane's z plus a thickness in
+// floating point lands a rounding error away from the next plane's z.
+constexpr double kTouching = 1e-6;  // mm
+
 PlanoConvex read_plano_convex(ConfigTable& t) {
     PlanoConvex lens;
     lens.radius = t.positive("radius_mm");
@@ -246,7 +250,7 @@ Design build_design(ConfigTable& root) {
                                  format_number(a.z, 4) + " mm) to plane " + b.name + " (z = " + format_number(b.z, 4) +
                                  " mm): planes must follow in order A, B, C, ... along the light");
         const double overlap = axial_extent(a)[1] - axial_extent(b)[0];
-        if (overlap > 1e-6)
+        if (overlap > kTouching)
             throw InputError(SourceLocation{b.where.file, b.where.line, 0, "planes." + b.name + ".z_mm"},
                              "plane " + b.name + " overlaps plane " + a.name + " by " +
                                  format_number(overlap, 4) + " mm (" + a.name + " ends at z = " +
@@ -355,6 +359,10 @@ SequentialSystem build_system(const Design& design) {
             system.surfaces.push_back({toward_observer, curved_aperture(), p.z + ct, 1.0, n + " back"});
         }
     }
+    // A surface that touching planes put a hair (< kTouching) before the surface ahead of
+    // it lies on that surface.
+    for (std::size_t s = 1; s < system.surfaces.size(); ++s)
+        system.surfaces[s].z = std::max(system.surfaces[s].z, system.surfaces[s - 1].z);
     system.validate();
     return system;
 }

@@ -159,6 +159,18 @@ TEST(Design, OverlappingPlanesAreRejected) {
     EXPECT_THAT(error_of(text), HasSubstr("plane B overlaps plane A by 0.5 mm"));
 }
 
+TEST(Design, PlanesTouchingWithinRoundingBuildASystemInOrder) {
+    // Found by fuzz/fuzz_design.cpp: B starts 5e-7 mm before A ends, which the overlap
+    // check takes for touching; build_system then put B's surface before A's back and
+    // failed its ordering check (an abort) instead of placing B on A.
+    const std::string text = replace(kDesignI, "z_mm = 3.6592", "z_mm = 1.9999995");
+    ASSERT_EQ(error_of(text), "");
+    const SequentialSystem system = build_system(parse_design(text, "test.toml"));
+    ASSERT_EQ(system.surfaces[2].label, "B pattern");
+    EXPECT_EQ(system.surfaces[2].z, system.surfaces[1].z);
+    EXPECT_EQ(system.surfaces[1].z, 2.0);
+}
+
 TEST(Design, NegativeDistancesAreRejected) {
     const std::string text = replace(kDesignI, "z_mm = 6.0", "z_mm = 3.0");
     EXPECT_THAT(error_of(text), HasSubstr("negative or zero distance from plane B"));
