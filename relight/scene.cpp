@@ -1,6 +1,7 @@
 #include "relight/scene.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -22,6 +23,12 @@ constexpr double kHuge = 1e9;  // mm: bounds coordinates to something a float ca
 double size(ConfigTable& table, const std::string& key) {
     table.number(key, -kHuge, kHuge);  // bounded, with the range in the message
     return table.positive(key);
+}
+
+// Two sizes > 0 (a card's width and height), bounded as coordinates are.
+std::array<double, 2> size_pair(ConfigTable& table, const std::string& key) {
+    table.numbers(key, 2, -kHuge, kHuge);  // bounded, with the range in the message
+    return table.positive_pair(key);
 }
 
 Eigen::Vector3d vector3(ConfigTable& table, const std::string& key, double min = -kHuge,
@@ -205,7 +212,7 @@ SceneObject read_object(ConfigTable& table, const std::map<std::string, std::siz
         up.normalize();
         const Eigen::Vector3d u_axis = up.cross(normal);
         std::array<double, 2> size{2000.0, 2000.0};
-        if (card || table.has("size_mm")) size = table.positive_pair("size_mm");
+        if (card || table.has("size_mm")) size = size_pair(table, "size_mm");
         object.shape = rectangle_mesh(centre, u_axis, up, 0.5 * size[0], 0.5 * size[1]);
     } else {
         const std::string file = table.string("file");

@@ -765,6 +765,12 @@ TEST(SceneFile, ErrorsNameFileLineAndKey) {
                 HasSubstr("glass needs a closed solid"));
     EXPECT_THAT(error("type = \"sphere\"\nmaterial = \"m\"\ncenter_mm = [0, 0]\nradius_mm = 5\n"),
                 HasSubstr("center_mm: expected an array of 3 numbers"));
+    // A card's size is bounded as positions are: one of 1e300 mm loaded, and Embree aborted
+    // on its first shadow ray (fuzz/fuzz_scene.cpp, scene_render).
+    EXPECT_THAT(error("type = \"card\"\nmaterial = \"m\"\ncenter_mm = [0, 0, 0]\nsize_mm = [1e300, 1]\n"),
+                HasSubstr("object[0].size_mm: value 1e+300 is outside the allowed range [-1e+09, 1e+09]"));
+    EXPECT_THAT(error("type = \"plane\"\nmaterial = \"m\"\npoint_mm = [0, 0, 0]\nsize_mm = [1, -1]\n"),
+                HasSubstr("object[0].size_mm: expected two positive numbers"));
 }
 
 TEST(SceneFile, BundledScenesLoad) {
