@@ -225,8 +225,12 @@ AngularDisplayOutput AngularDisplaySimulator::simulate(const Transparency& patte
     std::vector<Outgoing> outgoing;
     std::vector<Eigen::Vector2d> points;
     std::vector<float> transmittance;
-    for (const auto& [d, light] : directions) {
-        const auto& [colour, share] = light;
+    for (const auto& entry : directions) {
+        // References, not structured bindings: clang 14 (the fuzz preset) cannot capture
+        // those in the lambdas below.
+        const Eigen::Vector3d& d = entry.first;
+        const std::array<double, 3>& colour = entry.second.first;
+        const double share = entry.second.second;
         const Model model = options.model;
         // The main lens to the pattern, and on out of E: every ray independent.
         parallel_for_chunks(ray_count, 512, [&](std::size_t begin, std::size_t end) {

@@ -374,8 +374,11 @@ Encoder::Encoder(const optics::Design& design, const relight::ReflectanceField& 
                              "\n  capture those directions, change --tilt/--angle-scale, or pass --allow-partial");
     }
 
-    // Which field directions any dot can need, and their samples at every lenslet.
-    const auto [axis, radius] = needed_cone(t.optics, options);
+    // Which field directions any dot can need, and their samples at every lenslet. (Not a
+    // structured binding: clang 14, the fuzz preset, cannot capture one in the lambda.)
+    const std::pair<Eigen::Vector3d, double> needed = needed_cone(t.optics, options);
+    const Eigen::Vector3d& axis = needed.first;
+    const double radius = needed.second;
     const double cone = std::max(radius, [&] {
         double r = 0.0;
         for (const auto& d : range_.probes) r = std::max(r, angle_between(options.mapping.field_direction(d), axis));
