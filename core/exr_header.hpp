@@ -8,7 +8,9 @@
 // left is refused here. The walk keeps in step with OpenEXR's own reading: name, type,
 // 32-bit size, value; fixed-size types must declare their size, and a channel list must
 // end where its size says (OpenEXR reads both by their content, whatever the size says);
-// one header, or for a multi-part file a list of them ending in an empty one.
+// one header, or for a multi-part file a list of them ending in an empty one. A tile may
+// not be larger than its data window (beyond 64 pixels): OpenEXR fills a whole tile's
+// buffer to read one.
 //
 // Example: if (auto problem = exr_header_problem("a.exr")) throw InputError(..., *problem);
 

@@ -194,5 +194,35 @@ TEST(ReadPattern, AttributeLargerThanTheFileIsAnInputError) {
     EXPECT_EQ(read_pattern_info(pattern_with_attribute_size(dir, 4)).attributes.at("white"), "0.75");
 }
 
+TEST(ReadPattern, TilesLargerThanTheImageAreAnInputError) {
+    // Found by fuzz/fuzz_pattern.cpp: a 19 x 19 pattern in tiles of 16904 x 2048 pixels made
+    // OpenEXR fill a 200 MB tile buffer (1.6 GB for tiles of 16000 x 16000) to read it.
+    TempDir dir;
+    std::string bytes;
+    {
+        std::ifstream in(std::filesystem::path(RFD_SOURCE_DIR) / "fuzz/corpus/pattern/tiled.exr", std::ios::binary);
+        bytes.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    const auto with_tiles = [&](std::uint32_t x, std::uint32_t y) {
+        std::string file = bytes;
+        const std::string attribute("tiles\0tiledesc\0\x09\0\0\0", 19);
+        const std::size_t at = file.find(attribute);
+        EXPECT_NE(at, std::string::npos);
+        for (std::size_t b = 0; b < 4; ++b) {
+            file[at + attribute.size() + b] = static_cast<char>((x >> (8 * b)) & 0xff);
+            file[at + attribute.size() + 4 + b] = static_cast<char>((y >> (8 * b)) & 0xff);
+        }
+        const auto path = dir / "tiled.exr";
+        std::ofstream(path, std::ios::binary) << file;
+        return path;
+    };
+    EXPECT_THAT(error_of([&] { read_pattern_info(with_tiles(16904, 2048)); }),
+                HasSubstr("tiled.exr: pattern file is damaged: its EXR header declares tiles of 16904 x 2048 "
+                          "pixels, larger than its data window of 19 x 19"));
+    // Tiles up to OpenEXR's default of 64 pixels, or up to the image, read as before.
+    EXPECT_EQ(read_pattern_info(with_tiles(8, 8)).width, 19);
+    EXPECT_EQ(read_pattern_info(with_tiles(64, 19)).width, 19);
+}
+
 }  // namespace
 }  // namespace rfd::patterns
