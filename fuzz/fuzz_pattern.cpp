@@ -9,8 +9,8 @@
 #include "optics/design.hpp"
 #include "patterns/encode.hpp"
 #include "patterns/raster.hpp"
+#include "print/printed.hpp"
 #include "print/printer.hpp"
-#include "print/sheet.hpp"
 
 using namespace rfd;
 
@@ -34,13 +34,12 @@ RFD_FUZZ_TARGET(pattern) {
     const auto path = fuzz::scratch_folder() / "pattern.exr";
     fuzz::write_bytes(path, data, size);
     const patterns::PatternFileInfo header = patterns::read_pattern_info(path);
-    patterns::mapping_of(header, path.string());
+    patterns::encode_options_of(header, path.string());  // the mapping and every other attribute
 
     patterns::PatternReader reader(path);
     const patterns::PatternFileInfo& info = reader.info();
     patterns::require_printable_channels(info.channels, SourceLocation{path.string()});
-    print::check_pattern(design(), printer(), path, info);
-    print::attribute_number(info, "white", path, 1.0, /*allow_zero=*/false);
+    print::check_print(design(), printer(), path, info, /*brightness=*/1.0, /*sheets=*/0);
     constexpr int kStrip = 64;
     std::vector<float> strip(static_cast<std::size_t>(info.width) * static_cast<std::size_t>(info.channels) * kStrip);
     for (int y0 = 0; y0 < info.height; y0 += kStrip) reader.read_rows(y0, std::min(info.height, y0 + kStrip), strip);
