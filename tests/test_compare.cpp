@@ -153,6 +153,8 @@ TEST(EncodeOptionsOf, RoundTripsTheEncodersAttributes) {
     EXPECT_DOUBLE_EQ(read.mapping.tilt_deg, 12.5);
     EXPECT_DOUBLE_EQ(read.mapping.turn_deg, -30.0);
     EXPECT_DOUBLE_EQ(read.mapping.angle_scale, 1.25);
+    EXPECT_EQ(read.field_name, encoder.options().field_name);
+    EXPECT_EQ(encode_options_of(PatternFileInfo{}, "old.exr").model, optics::Model::Paraxial);
 
     // Patterns written before the two were recorded: the encoder's defaults.
     PatternFileInfo older = info;

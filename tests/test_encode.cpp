@@ -357,32 +357,5 @@ TEST(ResolveModel, AChoiceMadeByHandIsKeptAndDesignsIIIAndIVAreExactUnderAuto) {
     EXPECT_EQ(optics::resolve(optics::ModelChoice::Paraxial, optics3, optics3.dot_mm()).model, optics::Model::Paraxial);
 }
 
-TEST(EncodeAttributes, TheOptionsReadBackAsWritten) {
-    EncodeOptions options;
-    options.model = optics::Model::Exact;
-    options.interpolation = relight::Interpolation::SolidAngle;
-    options.fit = ImageFit::Contain;
-    options.mapping = {45.0, -30.0, 1.5};
-    options.field_name = "bottle";
-    PatternFileInfo info;
-    info.attributes = encode_attributes(options);
-    const EncodeOptions back = encode_options_of(info, "p.exr");
-    EXPECT_EQ(back.model, options.model);
-    EXPECT_EQ(back.interpolation, options.interpolation);
-    EXPECT_EQ(back.fit, options.fit);
-    EXPECT_EQ(back.mapping.tilt_deg, 45.0);
-    EXPECT_EQ(back.mapping.turn_deg, -30.0);
-    EXPECT_EQ(back.mapping.angle_scale, 1.5);
-    EXPECT_EQ(back.field_name, "bottle");
-    // A file written before the attributes were recorded reads as the old defaults.
-    const EncodeOptions old = encode_options_of(PatternFileInfo{}, "old.exr");
-    EXPECT_EQ(old.model, optics::Model::Paraxial);
-    EXPECT_EQ(old.interpolation, relight::Interpolation::Delaunay);
-    EXPECT_EQ(old.fit, ImageFit::Cover);
-    info.attributes["interpolation"] = "cubic";
-    EXPECT_THAT(error_of([&] { encode_options_of(info, "p.exr"); }),
-                HasSubstr("p.exr: rfd:interpolation: expected 'delaunay', 'solid-angle' or 'nearest', got 'cubic'"));
-}
-
 }  // namespace
 }  // namespace rfd::patterns
