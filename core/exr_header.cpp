@@ -38,13 +38,17 @@ public:
         while (true) {
             std::string name;
             if (!read_name(name)) return problem_;
-            if (name.empty()) return std::nullopt;  // an empty header: the end of a multi-part list
+            if (name.empty()) break;  // an empty header: the end of a multi-part list
             window_ = tile_ = {};
+            lines_per_chunk_ = 1;
             while (!name.empty())
                 if (!read_attribute(name) || !read_name(name)) return problem_;
             if (!check_tiles()) return problem_;
-            if (!multi_part) return std::nullopt;
+            chunks_ += std::min(chunks(), size_);  // more than size_ / 8 is refused anyway; no overflow
+            if (!multi_part) break;
         }
+        if (!check_offset_tables()) return problem_;
+        return std::nullopt;
     }
 
 private:
@@ -96,6 +100,8 @@ private:
             for (std::int32_t& v : box)
                 if (!read_int32(v)) return false;
             window_ = {static_cast<std::int64_t>(box[2]) - box[0] + 1, static_cast<std::int64_t>(box[3]) - box[1] + 1};
+        } else if (name == "compression" && type == "compression") {
+            lines_per_chunk_ = lines_per_chunk(in_.get());
         } else if (name == "tiles" && type == "tiledesc") {
             std::int32_t x = 0, y = 0;
             if (!read_int32(x) || !read_int32(y)) return false;
@@ -118,6 +124,41 @@ private:
                         " pixels, larger than its data window of " + std::to_string(width) + " x " +
                         std::to_string(height));
         return true;
+    }
+
+    // How many chunks of pixels the current header's image has, at least: scanline blocks, or
+    // tiles of the full-resolution level (mipmap and ripmap levels add more). OpenEXR 3.1's
+    // scanline reader sizes its offset table as (height + lines - 1) / lines.
+    std::int64_t chunks() const {
+        const auto [width, height] = window_;
+        if (width <= 0 || height <= 0) return 0;  // OpenEXR refuses these itself
+        const auto [tile_x, tile_y] = tile_;
+        if (tile_x == 0 && tile_y == 0) return (height + lines_per_chunk_ - 1) / lines_per_chunk_;
+        if (tile_x == 0 || tile_y == 0) return 0;
+        return ((width + tile_x - 1) / tile_x) * ((height + tile_y - 1) / tile_y);
+    }
+
+    // OpenEXR allocates and reads a table of one 64-bit file offset per chunk before any
+    // pixel: a 2 KB file declaring 400 million rows made it reserve 3 GB (3-8 s under ASan).
+    // A whole file holds its tables after the headers, so the chunks must fit in what is left.
+    bool check_offset_tables() {
+        const std::int64_t available = left();
+        if (chunks_ > available / 8)
+            return fail("declares " + std::to_string(chunks_) + " chunks of pixels, whose offset table alone takes " +
+                        std::to_string(8 * chunks_) + " bytes, but " + std::to_string(available) +
+                        " are left in the file");
+        return true;
+    }
+
+    // The scanlines in one chunk, by OpenEXR's compression code (ImfCompression.h); unknown
+    // codes, which OpenEXR refuses, count as the largest.
+    static std::int64_t lines_per_chunk(int compression) {
+        switch (compression) {
+            case 0: case 1: case 2: return 1;     // none, RLE, ZIPS
+            case 3: case 5: return 16;            // ZIP, PXR24
+            case 4: case 6: case 7: case 8: return 32;  // PIZ, B44, B44A, DWAA
+            default: return 256;                  // DWAB
+        }
     }
 
     bool fail_attribute(const std::string& what, const std::string& message) {
@@ -146,6 +187,8 @@ private:
     std::string problem_;
     std::pair<std::int64_t, std::int64_t> window_;  // the current header's data window, 0 x 0 if none
     std::pair<std::int64_t, std::int64_t> tile_;    // its tile size, 0 x 0 if none
+    std::int64_t lines_per_chunk_ = 1;              // its scanlines per chunk, by its compression
+    std::int64_t chunks_ = 0;                       // the chunks of every header read so far
 };
 
 }  // namespace

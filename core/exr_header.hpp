@@ -10,7 +10,8 @@
 // end where its size says (OpenEXR reads both by their content, whatever the size says);
 // one header, or for a multi-part file a list of them ending in an empty one. A tile may
 // not be larger than its data window (beyond 64 pixels): OpenEXR fills a whole tile's
-// buffer to read one.
+// buffer to read one. The headers' chunks of pixels must leave room in the file for their
+// offset tables (8 bytes a chunk), which OpenEXR allocates before it reads a pixel.
 //
 // Example: if (auto problem = exr_header_problem("a.exr")) throw InputError(..., *problem);
 

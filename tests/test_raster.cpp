@@ -224,5 +224,34 @@ TEST(ReadPattern, TilesLargerThanTheImageAreAnInputError) {
     EXPECT_EQ(read_pattern_info(with_tiles(64, 19)).width, 19);
 }
 
+TEST(ReadPattern, MoreRowsThanTheFileHasOffsetsForIsAnInputError) {
+    // Found by fuzz/fuzz_pattern.cpp: a 2 KB pattern whose data window declared 400 million
+    // rows made OpenEXR allocate an offset table of 3 GB (3-8 s under ASan) before reading.
+    TempDir dir;
+    const auto path = dir / "p.exr";
+    write_pattern(path, Ramp(small_geometry(), 3), {});
+    std::string bytes;
+    {
+        std::ifstream in(path, std::ios::binary);
+        bytes.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    const auto with_last_row = [&](std::int32_t y_max) {
+        std::string file = bytes;
+        const std::string attribute("dataWindow\0box2i\0\x10\0\0\0", 21);
+        const std::size_t at = file.find(attribute);
+        EXPECT_NE(at, std::string::npos);
+        for (std::size_t b = 0; b < 4; ++b)
+            file[at + attribute.size() + 12 + b] = static_cast<char>((static_cast<std::uint32_t>(y_max) >> (8 * b)) & 0xff);
+        std::ofstream(path, std::ios::binary) << file;
+        return path;
+    };
+    const std::string message = error_of([&] { read_pattern_info(with_last_row(400'000'000)); });
+    EXPECT_THAT(message, HasSubstr("p.exr: pattern file is damaged: its EXR header declares "));
+    EXPECT_THAT(message, HasSubstr(" chunks of pixels, whose offset table alone takes "));
+    // The true window reads as before.
+    const PatternFileInfo info = read_pattern_info(with_last_row(small_geometry().height - 1));
+    EXPECT_EQ(info.height, small_geometry().height);
+}
+
 }  // namespace
 }  // namespace rfd::patterns
