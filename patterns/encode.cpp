@@ -687,6 +687,8 @@ PatternAttributes Encoder::attributes() const {
     attributes["design_file"] = design.file;
     attributes["kind"] = std::string(optics::to_string(design.kind));
     attributes["white"] = format_number(white_, 9);
+    // The printer's tools rebuild the raster from the design, the resolution and this.
+    if (geometry_.margin_mm > 0.0) attributes["margin_mm"] = format_number(geometry_.margin_mm, 17);
     return attributes;
 }
 

@@ -87,6 +87,7 @@ PatternGeometry pattern_geometry(const optics::Design& design, Dpi dpi_x, Dpi dp
     g.dpi_y = dpi_y.value;
     g.dot_x = dpi_x.dot_mm();
     g.dot_y = dpi_y.dot_mm();
+    g.margin_mm = margin_mm;
     // Whole dots; a hair of tolerance so an extent that is a whole number of dots in exact
     // arithmetic does not gain one from rounding.
     const double w = std::ceil(2.0 * (half.x() + margin_mm) / g.dot_x - 1e-9);

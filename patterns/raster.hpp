@@ -36,6 +36,7 @@ struct PatternGeometry {
     double dot_y = 0.0;   ///< mm per dot along y
     double dpi_x = 0.0;
     double dpi_y = 0.0;
+    double margin_mm = 0.0;  ///< blank border around the array on every side
 
     std::size_t dot_count() const {
         return static_cast<std::size_t>(width) * static_cast<std::size_t>(height);

@@ -22,6 +22,14 @@ if(NOT hash_a STREQUAL hash_b)
   message(FATAL_ERROR "encoding twice gave different files")
 endif()
 
+# A pattern with a blank margin prints: the file records its margin, so the printer's tools
+# rebuild the same raster (28 mm at 720 x 360 dpi: 794 x 397 dots).
+run(0 pattern encode ${DESIGN} ${OUT}/bars --dpi 720x360 --margin 2 --out ${OUT}/margin.exr --json)
+if(NOT last_output MATCHES "\"width\": 794" OR NOT last_output MATCHES "\"height\": 397")
+  message(FATAL_ERROR "unexpected pattern size with a margin: ${last_output}")
+endif()
+run(0 print sheet ${DESIGN} ${OUT}/margin.exr --printer ${PRINTER} --out ${OUT}/margin.tif)
+
 # A narrow field: four lights near the zenith, rendered from the light file.
 run(0 capture render ${SCENE} --lights ${NARROW} --resolution 8x4 --samples-per-pixel 1 --out ${OUT}/narrow)
 run(2 pattern encode ${DESIGN} ${OUT}/narrow --dpi 360 --out ${OUT}/narrow.exr)
