@@ -97,8 +97,9 @@ index_entry predicted/tolerance_design2_sig08.txt "how precisely to assemble Des
 
 # More predictions: coloured, disc and environment light; Design I against the field.
 index_section more_predictions "More predictions"
-oiiotool --pattern constant:color=4,3.6,3.2 10x6 3 --pattern constant:color=0.04,0.05,0.07 64x32 3 \
-  --paste +43+5 -d float -o "$out/predicted/window_room.exr"
+# A fixed DateTime: oiiotool stamps the time of writing otherwise, and reruns would differ.
+oiiotool --nosoftwareattrib --pattern constant:color=4,3.6,3.2 10x6 3 --pattern constant:color=0.04,0.05,0.07 64x32 3 \
+  --paste +43+5 -d float --attrib DateTime "2026:01:01 00:00:00" -o "$out/predicted/window_room.exr"
 for n in 1 2; do
   for case in "red_green:--light 45,75,1:0:0 --light 45,105,0:1:0" "disc:--light 45,90,8 --area-samples 3"; do
     name="${case%%:*}"
