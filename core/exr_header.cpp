@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstdio>
 #include <fstream>
 #include <map>
 #include <system_error>
@@ -44,7 +45,7 @@ public:
             while (!name.empty())
                 if (!read_attribute(name) || !read_name(name)) return problem_;
             if (!check_tiles()) return problem_;
-            chunks_ += std::min(chunks(), size_);  // more than size_ / 8 is refused anyway; no overflow
+            chunks_ += chunks();
             if (!multi_part) break;
         }
         if (!check_offset_tables()) return problem_;
@@ -129,13 +130,18 @@ private:
     // How many chunks of pixels the current header's image has, at least: scanline blocks, or
     // tiles of the full-resolution level (mipmap and ripmap levels add more). OpenEXR 3.1's
     // scanline reader sizes its offset table as (height + lines - 1) / lines.
-    std::int64_t chunks() const {
+    // In double: tile counts of damaged headers overflow 64 bits, and beyond 2^53 only the
+    // size matters.
+    double chunks() const {
         const auto [width, height] = window_;
         if (width <= 0 || height <= 0) return 0;  // OpenEXR refuses these itself
         const auto [tile_x, tile_y] = tile_;
-        if (tile_x == 0 && tile_y == 0) return (height + lines_per_chunk_ - 1) / lines_per_chunk_;
+        const auto blocks = [](std::int64_t length, std::int64_t block) {
+            return static_cast<double>((length + block - 1) / block);
+        };
+        if (tile_x == 0 && tile_y == 0) return blocks(height, lines_per_chunk_);
         if (tile_x == 0 || tile_y == 0) return 0;
-        return ((width + tile_x - 1) / tile_x) * ((height + tile_y - 1) / tile_y);
+        return blocks(width, tile_x) * blocks(height, tile_y);
     }
 
     // OpenEXR allocates and reads a table of one 64-bit file offset per chunk before any
@@ -143,11 +149,14 @@ private:
     // A whole file holds its tables after the headers, so the chunks must fit in what is left.
     bool check_offset_tables() {
         const std::int64_t available = left();
-        if (chunks_ > available / 8)
-            return fail("declares " + std::to_string(chunks_) + " chunks of pixels, whose offset table alone takes " +
-                        std::to_string(8 * chunks_) + " bytes, but " + std::to_string(available) +
-                        " are left in the file");
-        return true;
+        if (8.0 * chunks_ <= static_cast<double>(available)) return true;
+        const auto whole = [](double value) {
+            char text[32];
+            std::snprintf(text, sizeof text, "%.0f", value);
+            return std::string(text);
+        };
+        return fail("declares " + whole(chunks_) + " chunks of pixels, whose offset table alone takes " +
+                    whole(8.0 * chunks_) + " bytes, but " + std::to_string(available) + " are left in the file");
     }
 
     // The scanlines in one chunk, by OpenEXR's compression code (ImfCompression.h); unknown
@@ -188,7 +197,7 @@ private:
     std::pair<std::int64_t, std::int64_t> window_;  // the current header's data window, 0 x 0 if none
     std::pair<std::int64_t, std::int64_t> tile_;    // its tile size, 0 x 0 if none
     std::int64_t lines_per_chunk_ = 1;              // its scanlines per chunk, by its compression
-    std::int64_t chunks_ = 0;                       // the chunks of every header read so far
+    double chunks_ = 0;                             // the chunks of every header read so far
 };
 
 }  // namespace
