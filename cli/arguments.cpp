@@ -94,11 +94,7 @@ CLI::Option* add_model_option(CLI::App& command, optics::ModelChoice& target) {
 
 print::PrinterProfile printer_for(const optics::Design& design, const std::string& option) {
     if (!option.empty()) return print::load_printer(option);
-    print::PrinterProfile printer = print::load_printer("epson_stylus_pro_4800");
-    printer.dpi_x = design.printer.dpi_x;
-    printer.dpi_y = design.printer.dpi_y;
-    printer.name += " (default profile at the design's resolution)";
-    return printer;
+    return print::default_printer(design.printer.dpi_x, design.printer.dpi_y);
 }
 
 nlohmann::json environment_json(const std::string& file, const predict::EnvironmentSampling& sampling) {
@@ -151,7 +147,8 @@ CLI::Validator finite_number_check() {
 
 void add_print_options(CLI::App& command, PrintOptions& options) {
     command.add_option("--printer", options.printer,
-                       "Printer profile (tone mapping); default the Epson's at the design's dpi");
+                       "Printer profile (tone mapping); default the one the pattern was encoded for, else the Epson's "
+                       "at the pattern's dpi");
     command.add_option("--brightness", options.brightness, "Tone mapping: transmittance = brightness * value / white")
         ->check(positive_number());
     command.add_option("--sheets", options.sheets, "Sheets back to back (1 or 2); default the profile's");
@@ -159,8 +156,9 @@ void add_print_options(CLI::App& command, PrintOptions& options) {
 
 print::PrintedTransparency printed_pattern(const optics::Design& design, const std::string& pattern_file,
                                            const PrintOptions& options) {
-    return print::PrintedTransparency(design, printer_for(design, options.printer), pattern_file, options.brightness,
-                                      options.sheets);
+    const print::PrinterProfile printer =
+        print::printer_for_pattern(design, patterns::read_pattern_info(pattern_file), pattern_file, options.printer);
+    return print::PrintedTransparency(design, printer, pattern_file, options.brightness, options.sheets);
 }
 
 patterns::AngularMapping read_pattern_mapping(const std::string& pattern_file) {

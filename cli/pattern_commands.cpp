@@ -14,6 +14,7 @@
 #include "cli/commands.hpp"
 #include "core/error.hpp"
 #include "core/files.hpp"
+#include "core/text.hpp"
 #include "optics/design.hpp"
 #include "patterns/encode.hpp"
 #include "patterns/procedural.hpp"
@@ -33,10 +34,35 @@ std::pair<double, double> parse_dpi(const std::string& text) {
     return {x, y};
 }
 
+// The resolution to encode at: --printer's (recorded in the pattern), --dpi's, or the
+// design's. Both options must agree on the resolution when both are given.
+struct EncodingResolution {
+    double dpi_x, dpi_y;
+    patterns::PatternAttributes printer_record;
+};
+EncodingResolution encoding_resolution(const optics::Design& design, const std::string& printer_option,
+                                       const std::string& dpi_option) {
+    EncodingResolution resolution{design.printer.dpi_x.value, design.printer.dpi_y.value, {}};
+    if (!printer_option.empty()) {
+        const print::PrinterProfile printer = print::load_printer(printer_option);
+        resolution = {printer.dpi_x.value, printer.dpi_y.value, print::printer_attributes(printer)};
+    }
+    if (!dpi_option.empty()) {
+        const auto [x, y] = parse_dpi(dpi_option);
+        if (!printer_option.empty() && (x != resolution.dpi_x || y != resolution.dpi_y))
+            throw InputError("--dpi " + dpi_option + " disagrees with --printer " + printer_option + " (" +
+                             format_number(resolution.dpi_x) + " x " + format_number(resolution.dpi_y) +
+                             " dpi): give one of them");
+        resolution.dpi_x = x;
+        resolution.dpi_y = y;
+    }
+    return resolution;
+}
+
 void add_encode_command(CLI::App& pattern) {
     auto* cmd = pattern.add_subcommand("encode", "Encode a reflectance field into a print-resolution pattern (Designs I and II)");
     struct Options {
-        std::string design, field, out, dpi, compression = "rle", preview;
+        std::string design, field, out, dpi, printer, compression = "rle", preview;
         optics::ModelChoice model = optics::ModelChoice::Auto;
         relight::Interpolation interpolation = relight::Interpolation::Delaunay;
         patterns::ImageFit fit = patterns::ImageFit::Cover;
@@ -57,7 +83,10 @@ void add_encode_command(CLI::App& pattern) {
         ->check(CLI::Range(0.05, 20.0));
     add_choice(*cmd, "--fit", opt->fit, patterns::kImageFitNames,
                "Field image on the array: cover (crop), contain (letterbox) or stretch");
-    cmd->add_option("--dpi", opt->dpi, "Printer resolution XDPIxYDPI (default: the design's [printer])");
+    cmd->add_option("--printer", opt->printer,
+                    "Printer profile to encode for (a file or a bundled name): its resolution, recorded in the "
+                    "pattern so simulate and print sheet use it too");
+    cmd->add_option("--dpi", opt->dpi, "Printer resolution XDPIxYDPI (default: --printer's, else the design's [printer])");
     cmd->add_option("--margin", opt->margin, "Blank border around the array, mm")->check(CLI::Range(0.0, 100.0));
     cmd->add_option("--compression", opt->compression, "EXR compression: rle (fast, default), zips (smaller), none")
         ->check(CLI::IsMember({"none", "rle", "zips", "zip", "piz"}));
@@ -68,8 +97,7 @@ void add_encode_command(CLI::App& pattern) {
     cmd->callback([opt] {
         const optics::Design design = optics::load_design(opt->design);
         patterns::EncodeOptions options;
-        double dpi_x = design.printer.dpi_x.value, dpi_y = design.printer.dpi_y.value;
-        if (!opt->dpi.empty()) std::tie(dpi_x, dpi_y) = parse_dpi(opt->dpi);
+        const auto [dpi_x, dpi_y, printer_record] = encoding_resolution(design, opt->printer, opt->dpi);
         const patterns::PatternGeometry geometry = patterns::pattern_geometry(design, Dpi{dpi_x}, Dpi{dpi_y}, opt->margin);
         const optics::ResolvedModel choice =
             optics::resolve(opt->model, optics::DesignOptics(design), {geometry.dot_x, geometry.dot_y});
@@ -87,7 +115,9 @@ void add_encode_command(CLI::App& pattern) {
         patterns::WriteOptions write_options;
         write_options.exr_compression = opt->compression;
         write_options.half_float = !opt->single_float;
-        patterns::write_pattern(opt->out, encoder, encoder.attributes(), write_options);
+        patterns::PatternAttributes attributes = encoder.attributes();
+        attributes.insert(printer_record.begin(), printer_record.end());
+        patterns::write_pattern(opt->out, encoder, attributes, write_options);
         const auto done = std::chrono::steady_clock::now();
         if (!opt->preview.empty()) patterns::write_preview(opt->out, opt->preview, 1600);
         const double prepare_s = std::chrono::duration<double>(prepared - start).count();
@@ -102,6 +132,7 @@ void add_encode_command(CLI::App& pattern) {
                 {"width", geometry.width},
                 {"height", geometry.height},
                 {"dpi", {geometry.dpi_x, geometry.dpi_y}},
+                {"printer", printer_record.empty() ? nlohmann::json(nullptr) : nlohmann::json(printer_record.at("printer"))},
                 {"size_mm", {geometry.size_mm().x(), geometry.size_mm().y()}},
                 {"lenslets", encoder.lattice().count_x() * encoder.lattice().count_y()},
                 {"field_directions_used", field.size()},
@@ -127,6 +158,9 @@ void add_encode_command(CLI::App& pattern) {
         std::printf("\n  field              %zu light direction(s) used, tilt %g deg, turn %g deg, angle scale %g\n",
                     field.size(), opt->tilt, opt->turn, opt->angle_scale);
         std::printf("  white              %.6g (the value printed as full transmittance)\n", encoder.white());
+        if (!printer_record.empty())
+            std::printf("  printer            %s (recorded: simulate and print sheet use it)\n",
+                        printer_record.at("printer").c_str());
         std::printf("  time               %.2f s to prepare, %.2f s to render and write (%.1f Mdots/s)\n", prepare_s,
                     write_s, dots / std::max(write_s, 1e-9) / 1e6);
     });

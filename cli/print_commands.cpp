@@ -10,7 +10,9 @@
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "optics/design.hpp"
+#include "patterns/raster.hpp"
 #include "print/moire.hpp"
+#include "print/printed.hpp"
 #include "print/printer.hpp"
 #include "print/sheet.hpp"
 
@@ -31,8 +33,8 @@ void add_sheet_command(CLI::App& print_cmd) {
     cmd->add_option("PATTERN", opt->pattern, "Pattern file (EXR/TIFF/PNG) at the printer's resolution")->required();
     cmd->add_option("--printer", opt->printer,
                     "Printer profile: a TOML file or a bundled name (epson_stylus_pro_4800, laser_1200, "
-                    "inkjet_720); its dpi overrides the design's. Default: the Epson's tone values at the "
-                    "design's dpi");
+                    "inkjet_720). Default: the one the pattern was encoded for, else the Epson's tone values at "
+                    "the pattern's dpi");
     cmd->add_option("--out", opt->out, "Output sheet, .tif/.tiff or .pdf")->required();
     cmd->add_flag("--mirror", opt->sheet.mirror, "The back sheet: the whole page mirrored left-right");
     cmd->add_option("--brightness", opt->sheet.brightness,
@@ -43,7 +45,8 @@ void add_sheet_command(CLI::App& print_cmd) {
     cmd->add_flag("--json", opt->json, "Machine-readable summary");
     cmd->callback([opt] {
         const optics::Design design = optics::load_design(opt->design);
-        const print::PrinterProfile printer = printer_for(design, opt->printer);
+        const print::PrinterProfile printer = print::printer_for_pattern(
+            design, patterns::read_pattern_info(opt->pattern), opt->pattern, opt->printer);
         const print::SheetReport r = print::write_sheet(opt->out, design, printer, opt->pattern, opt->sheet);
         const print::SheetLayout& l = r.layout;
         nlohmann::json markers = nlohmann::json::array();

@@ -437,4 +437,10 @@ void ConfigTable::finish() const {
     }
 }
 
+std::string toml_string(const std::string& text) {
+    std::ostringstream out;
+    out << toml::value<std::string>(text);
+    return out.str();
+}
+
 }  // namespace rfd

@@ -114,4 +114,7 @@ private:
     mutable std::set<std::string> read_;
 };
 
+/// `text` as a TOML basic string, quoted and escaped: for files that rfd writes and reads back.
+std::string toml_string(const std::string& text);
+
 }  // namespace rfd

@@ -36,6 +36,59 @@ patterns::PatternGeometry check_pattern(const optics::Design& design, const Prin
     return expected;
 }
 
+patterns::PatternAttributes printer_attributes(const PrinterProfile& printer) {
+    return {{"printer", printer.name}, {"printer_profile", printer_toml(printer)}};
+}
+
+std::optional<PrinterProfile> recorded_printer(const patterns::PatternFileInfo& info,
+                                               const std::filesystem::path& pattern_file) {
+    const auto record = info.attributes.find("printer_profile");
+    if (record == info.attributes.end()) return std::nullopt;
+    return parse_printer(record->second, pattern_file.string() + " (rfd:printer_profile)");
+}
+
+namespace {
+
+// What two profiles disagree on, for a message: "dpi, tone, sheets".
+std::string differences(const PrinterProfile& a, const PrinterProfile& b) {
+    std::vector<std::string> parts;
+    if (a.dpi_x.value != b.dpi_x.value || a.dpi_y.value != b.dpi_y.value)
+        parts.push_back("dpi " + format_number(a.dpi_x.value) + " x " + format_number(a.dpi_y.value) + " against " +
+                        format_number(b.dpi_x.value) + " x " + format_number(b.dpi_y.value));
+    if (a.gamma != b.gamma || a.max_density != b.max_density || a.black_level != b.black_level)
+        parts.push_back("tone values");
+    if (a.sheets != b.sheets)
+        parts.push_back(std::to_string(a.sheets) + " sheet(s) against " + std::to_string(b.sheets));
+    if (a.film != b.film) parts.push_back("film thickness");
+    if (a.paper.name != b.paper.name || a.paper.width != b.paper.width || a.paper.height != b.paper.height ||
+        a.paper.margin != b.paper.margin)
+        parts.push_back("paper");
+    if (parts.empty()) parts.push_back("name");
+    std::string text;
+    for (const std::string& part : parts) text += (text.empty() ? "" : ", ") + part;
+    return text;
+}
+
+}  // namespace
+
+PrinterProfile printer_for_pattern(const optics::Design& design, const patterns::PatternFileInfo& info,
+                                   const std::filesystem::path& pattern_file, const std::string& requested) {
+    const std::optional<PrinterProfile> recorded = recorded_printer(info, pattern_file);
+    if (requested.empty()) {
+        if (recorded) return *recorded;
+        if (info.dpi_x > 0.0 && info.dpi_y > 0.0) return default_printer(Dpi{info.dpi_x}, Dpi{info.dpi_y});
+        return default_printer(design.printer.dpi_x, design.printer.dpi_y);
+    }
+    PrinterProfile chosen = load_printer(requested);
+    if (recorded && printer_toml(*recorded) != printer_toml(chosen))
+        throw InputError(SourceLocation{pattern_file.string(), 0, 0, "rfd:printer"},
+                         "the pattern was encoded for printer '" + recorded->name + "', but --printer " + requested +
+                             " is '" + chosen.name + "' (" + differences(*recorded, chosen) +
+                             "): leave --printer out to use the pattern's, or encode the pattern again with --printer " +
+                             requested);
+    return chosen;
+}
+
 void check_tone_options(double brightness, int sheets) {
     if (!(brightness > 0.0) || !std::isfinite(brightness))
         throw InputError(SourceLocation{"", 0, 0, "--brightness"}, "expected a positive number, got " + format_number(brightness));

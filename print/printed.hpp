@@ -10,6 +10,8 @@
 //          DiffuserImage out = DisplaySimulator(design).simulate(t, lights, {});
 
 #include <filesystem>
+#include <optional>
+#include <string>
 
 #include "optics/design.hpp"
 #include "optics/display.hpp"
@@ -24,6 +26,23 @@ namespace rfd::print {
 patterns::PatternGeometry check_pattern(const optics::Design& design, const PrinterProfile& printer,
                                         const std::filesystem::path& pattern_file,
                                         const patterns::PatternFileInfo& info);
+
+/// The attributes that record in a pattern the printer it is encoded for: rfd:printer (the
+/// profile's name, for people) and rfd:printer_profile (printer_toml, the whole profile).
+patterns::PatternAttributes printer_attributes(const PrinterProfile& printer);
+
+/// The profile a pattern records (printer_attributes), if any; InputError naming the file
+/// and attribute when the record is damaged.
+std::optional<PrinterProfile> recorded_printer(const patterns::PatternFileInfo& info,
+                                               const std::filesystem::path& pattern_file);
+
+/// The printer that prints (and, for the simulator, has printed) `pattern_file`:
+///  - `requested` (a --printer value: a file or a bundled name) when given; InputError
+///    naming both profiles when the pattern records another one;
+///  - otherwise the profile the pattern records;
+///  - otherwise default_printer at the resolution the file records, or at the design's.
+PrinterProfile printer_for_pattern(const optics::Design& design, const patterns::PatternFileInfo& info,
+                                   const std::filesystem::path& pattern_file, const std::string& requested);
 
 /// --brightness (positive, finite) and --sheets (1, 2, or 0 for the profile's): InputError
 /// naming the option otherwise.

@@ -5,6 +5,7 @@
 
 #include "core/config.hpp"
 #include "core/error.hpp"
+#include "core/text.hpp"
 
 namespace rfd::print {
 namespace {
@@ -21,6 +22,7 @@ PrinterProfile read_profile(ConfigTable& root) {
         p.max_density = t.number("max_density", 0.01, 6.0);
         p.black_level = t.number("black_level", 0.0, 0.99);
         p.sheets = static_cast<int>(t.optional_integer("sheets", 1, 2).value_or(1));
+        p.film = t.optional_number("film_mm", 0.01, 2.0).value_or(p.film);
         if (p.black_level < p.ink_transmittance())
             t.fail("black_level", "black level " + std::to_string(p.black_level) +
                                       " is darker than full ink can print (max_density " +
@@ -58,6 +60,27 @@ double PrinterProfile::printer_value(double t) const {
 }
 
 std::filesystem::path bundled_printer_folder() { return RFD_PRINTERS_DIR; }
+
+std::string printer_toml(const PrinterProfile& p) {
+    // 17 significant digits: every double reads back to itself.
+    const auto number = [](double value) { return format_number(value, 17); };
+    const auto text = [](const std::string& value) { return toml_string(value); };
+    return "[printer]\nname = " + text(p.name) + "\ndpi_x = " + number(p.dpi_x.value) + "\ndpi_y = " +
+           number(p.dpi_y.value) + "\ngamma = " + number(p.gamma) + "\nmax_density = " + number(p.max_density) +
+           "\nblack_level = " + number(p.black_level) + "\nsheets = " + std::to_string(p.sheets) +
+           "\nfilm_mm = " + number(p.film) + "\n\n[paper]\nname = " + text(p.paper.name) +
+           "\nwidth_mm = " + number(p.paper.width) + "\nheight_mm = " + number(p.paper.height) +
+           "\nmargin_mm = " + number(p.paper.margin) + "\n";
+}
+
+PrinterProfile default_printer(Dpi dpi_x, Dpi dpi_y) {
+    PrinterProfile printer = load_printer("epson_stylus_pro_4800");
+    printer.dpi_x = dpi_x;
+    printer.dpi_y = dpi_y;
+    if (dpi_x.value != 2880.0 || dpi_y.value != 1440.0)
+        printer.name += " (default profile at " + format_number(dpi_x.value) + " x " + format_number(dpi_y.value) + " dpi)";
+    return printer;
+}
 
 PrinterProfile load_printer(const std::string& name_or_path) {
     std::filesystem::path path(name_or_path);

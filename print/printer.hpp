@@ -50,6 +50,7 @@ struct PrinterProfile {
     double max_density = 2.0;    ///< optical density of full ink, > 0 (T_ink = 10^-D)
     double black_level = 0.01;   ///< darkest transmittance aimed for per sheet, in [T_ink, 1)
     int sheets = 1;              ///< sheets stacked back to back by default (1 or 2)
+    double film = 0.1;           ///< mm, thickness of one printed transparency (the holder's pockets)
     Paper paper;
 
     /// Transmittance of full ink, 10^-max_density.
@@ -69,6 +70,12 @@ PrinterProfile load_printer(const std::string& name_or_path);
 PrinterProfile parse_printer(const std::string& toml_text, const std::string& name);
 /// Folder of the bundled profiles (the source tree's printers/).
 std::filesystem::path bundled_printer_folder();
+/// The profile as TOML with every key written: parse_printer reads it back to an equal
+/// profile, and two profiles print alike exactly when their texts are equal.
+std::string printer_toml(const PrinterProfile& printer);
+/// What prints a design when no profile is named: the bundled Epson's tone values and
+/// paper at `dpi_x` x `dpi_y` (the design's [printer] resolution, or a pattern's).
+PrinterProfile default_printer(Dpi dpi_x, Dpi dpi_y);
 
 /// The tone mapping of the header, for one pattern.
 struct ToneMap {

@@ -148,6 +148,39 @@ TEST(PrintedTransparency, APatternForAnotherResolutionIsRefused) {
                 HasSubstr("encode the pattern at the printer's resolution"));
 }
 
+TEST(PrinterForPattern, ThePatternsRecordUnlessAnotherIsAskedFor) {
+    const TempDir dir;
+    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const PrinterProfile inkjet = load_printer("inkjet_720");
+    auto attributes = printer_attributes(inkjet);
+    attributes["white"] = "0.8";
+    const auto recorded = write_test_pattern(dir, design, inkjet, 0.5f, attributes);
+    const auto info = [](const std::filesystem::path& file) { return patterns::read_pattern_info(file); };
+    // Nothing asked: the recorded profile, whole.
+    EXPECT_EQ(printer_toml(printer_for_pattern(design, info(recorded), recorded, "")), printer_toml(inkjet));
+    // The same profile asked for by name: accepted.
+    EXPECT_EQ(printer_for_pattern(design, info(recorded), recorded, "inkjet_720").name, inkjet.name);
+    // Another: an error naming both and what differs.
+    const std::string message =
+        error_of([&] { printer_for_pattern(design, info(recorded), recorded, "epson_stylus_pro_4800"); });
+    EXPECT_THAT(message, HasSubstr("rfd:printer: the pattern was encoded for printer 'generic 720 dpi inkjet', but "
+                                   "--printer epson_stylus_pro_4800 is 'Epson Stylus Pro 4800' (dpi 720 x 720 against "
+                                   "2880 x 1440, tone values, 1 sheet(s) against 2)"));
+    // A pattern without a record: the Epson's tone values at the resolution the file records.
+    const TempDir other;
+    const auto bare = write_test_pattern(other, design, inkjet, 0.5f);
+    const PrinterProfile fallback = printer_for_pattern(design, info(bare), bare, "");
+    EXPECT_EQ(fallback.dpi_x.value, 720);
+    EXPECT_EQ(fallback.dpi_y.value, 720);
+    EXPECT_EQ(fallback.gamma, load_printer("epson_stylus_pro_4800").gamma);
+    EXPECT_EQ(printer_for_pattern(design, info(bare), bare, "laser_1200").name, load_printer("laser_1200").name);
+    // A damaged record names the file and the attribute.
+    const TempDir damaged;
+    const auto broken = write_test_pattern(damaged, design, inkjet, 0.5f, {{"printer_profile", "[printer]\nname = 3\n"}});
+    EXPECT_THAT(error_of([&] { printer_for_pattern(design, info(broken), broken, ""); }),
+                HasSubstr("(rfd:printer_profile)"));
+}
+
 // ----------------------------------------------------------------------------- tone mapping
 
 TEST(PrinterProfile, ForwardModelInvertsExactly) {
@@ -204,6 +237,35 @@ TEST(PrinterProfile, BundledProfilesLoad) {
     EXPECT_EQ(load_printer("inkjet_720").dpi_x.value, 720);
     EXPECT_THAT(error_of([] { load_printer("no_such_printer"); }),
                 HasSubstr("no such file or bundled profile (bundled: "));
+}
+
+TEST(PrinterProfile, TomlReadsBackToTheSameProfile) {
+    for (const auto& entry : std::filesystem::directory_iterator(bundled_printer_folder())) {
+        const PrinterProfile bundled = load_printer(entry.path().string());
+        const PrinterProfile read = parse_printer(printer_toml(bundled), "round_trip.toml");
+        EXPECT_EQ(read.name, bundled.name);
+        EXPECT_EQ(read.dpi_x.value, bundled.dpi_x.value);
+        EXPECT_EQ(read.dpi_y.value, bundled.dpi_y.value);
+        EXPECT_EQ(read.gamma, bundled.gamma);
+        EXPECT_EQ(read.max_density, bundled.max_density);
+        EXPECT_EQ(read.black_level, bundled.black_level);
+        EXPECT_EQ(read.sheets, bundled.sheets);
+        EXPECT_EQ(read.film, bundled.film);
+        EXPECT_EQ(read.paper.name, bundled.paper.name);
+        EXPECT_EQ(read.paper.width, bundled.paper.width);
+        EXPECT_EQ(read.paper.height, bundled.paper.height);
+        EXPECT_EQ(read.paper.margin, bundled.paper.margin);
+        EXPECT_EQ(printer_toml(read), printer_toml(bundled)) << entry.path();
+    }
+    // Values that need every digit, and a name that needs escaping.
+    PrinterProfile odd = parse_printer(small_printer_toml(720, 360), "odd.toml");
+    odd.name = "say \"hi\"\\ \u00e9";
+    odd.gamma = 1.0 / 3.0;
+    odd.black_level = 0.1 + 0.2;
+    const PrinterProfile read = parse_printer(printer_toml(odd), "odd.toml");
+    EXPECT_EQ(read.name, odd.name);
+    EXPECT_EQ(read.gamma, odd.gamma);
+    EXPECT_EQ(read.black_level, odd.black_level);
 }
 
 TEST(PrinterProfile, BadKeysNameFileLineAndKey) {

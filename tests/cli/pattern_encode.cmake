@@ -30,6 +30,18 @@ if(NOT last_output MATCHES "\"width\": 794" OR NOT last_output MATCHES "\"height
 endif()
 run(0 print sheet ${DESIGN} ${OUT}/margin.exr --printer ${PRINTER} --out ${OUT}/margin.tif)
 
+# The printer travels with the pattern: encoded for the 720 dpi inkjet, it prints and
+# simulates at 720 dpi without --printer; another printer given by hand is refused, naming
+# both.
+run(0 pattern encode ${DESIGN} ${OUT}/bars --printer inkjet_720 --out ${OUT}/inkjet.exr)
+run(0 print sheet ${DESIGN} ${OUT}/inkjet.exr --out ${OUT}/inkjet.tif)
+expect("at 720 x 720 dpi")
+run(0 simulate ${DESIGN} ${OUT}/inkjet.exr --light 0,0 --out ${OUT}/inkjet.png)
+run(2 print sheet ${DESIGN} ${OUT}/inkjet.exr --printer epson_stylus_pro_4800 --out ${OUT}/never.tif)
+expect("encoded for printer 'generic 720 dpi inkjet', but --printer epson_stylus_pro_4800 is 'Epson Stylus Pro 4800'")
+run(2 pattern encode ${DESIGN} ${OUT}/bars --printer inkjet_720 --dpi 360 --out ${OUT}/never.exr)
+expect("--dpi 360 disagrees with --printer inkjet_720")
+
 # A narrow field: four lights near the zenith, rendered from the light file.
 run(0 capture render ${SCENE} --lights ${NARROW} --resolution 8x4 --samples-per-pixel 1 --out ${OUT}/narrow)
 run(2 pattern encode ${DESIGN} ${OUT}/narrow --dpi 360 --out ${OUT}/narrow.exr)
