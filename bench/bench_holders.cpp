@@ -30,7 +30,7 @@ fs::path scratch(int n) {
 
 void BM_HolderGenerate(benchmark::State& state) {
     const optics::Design design = preset(static_cast<int>(state.range(0)));
-    for (auto _ : state) benchmark::DoNotOptimize(to_scad(make_holder(design, HolderProfile{})));
+    for (auto _ : state) benchmark::DoNotOptimize(to_scad(make_holder(design, HolderProfile{}, PatternFilm{0.1, 2})));
 }
 
 std::vector<std::pair<PrintedPart, fs::path>> build_all(const Holder& holder, const fs::path& dir) {
@@ -51,7 +51,7 @@ void BM_HolderBuildStl(benchmark::State& state) {
         return;
     }
     const int n = static_cast<int>(state.range(0));
-    const Holder holder = make_holder(preset(n), HolderProfile{});
+    const Holder holder = make_holder(preset(n), HolderProfile{}, PatternFilm{0.1, 2});
     const fs::path dir = scratch(n);
     for (auto _ : state) benchmark::DoNotOptimize(build_all(holder, dir));
     state.counters["parts"] = static_cast<double>(holder.parts.size());
@@ -64,7 +64,7 @@ void BM_HolderCheck(benchmark::State& state) {
     }
     const int n = static_cast<int>(state.range(0));
     const optics::Design design = preset(n);
-    const Holder holder = make_holder(design, HolderProfile{});
+    const Holder holder = make_holder(design, HolderProfile{}, PatternFilm{0.1, 2});
     const auto stls = build_all(holder, scratch(n));
     std::size_t rays = 0;
     for (auto _ : state) rays = check_holder(holder, design, stls).clearance.rays;

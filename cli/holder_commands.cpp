@@ -14,12 +14,15 @@
 #include "core/error.hpp"
 #include "core/files.hpp"
 #include "core/progress.hpp"
+#include "core/text.hpp"
 #include "holders/checks.hpp"
 #include "holders/coupon.hpp"
 #include "holders/generate.hpp"
 #include "holders/openscad.hpp"
 #include "holders/profile.hpp"
 #include "optics/design.hpp"
+#include "patterns/raster.hpp"
+#include "print/printed.hpp"
 
 namespace rfd::cli {
 namespace {
@@ -118,7 +121,7 @@ void add_coupon_command(CLI::App& holder_cmd) {
         "coupon", "Fit-test coupon: seat rings (round and square) stepping the clearance, to calibrate a printer");
     cmd->add_option("--out", opt->out, "OpenSCAD file to write")->required();
     cmd->add_option("--stl", opt->stl, "Also build the STL here with openscad, and check it");
-    cmd->add_option("--printer-profile", opt->profile, "Printer profile TOML (holders/profiles/)");
+    cmd->add_option("--3d-printer,--printer-profile", opt->profile, "3D printer profile TOML (holders/profiles/)");
     cmd->add_option("--diameter", opt->diameter, "Diameter of the round part to fit, mm")->check(CLI::Range(2.0, 200.0));
     cmd->add_option("--square", opt->square, "Side of the square part (lenslet array) to fit, mm")->check(CLI::Range(2.0, 200.0));
     cmd->add_flag("--json", opt->json, "Machine-readable report on stdout");
@@ -166,7 +169,7 @@ void add_coupon_command(CLI::App& holder_cmd) {
 
 void add_holder_commands(CLI::App& app) {
     struct Options {
-        std::string design, out, stl, profile;
+        std::string design, out, stl, profile, printer, pattern;
         double time_limit = 300.0;
         bool json = false;
     };
@@ -177,7 +180,11 @@ void add_holder_commands(CLI::App& app) {
     cmd->add_option("--stl", opt->stl,
                     "Build the STLs with openscad: STEM.stl gives STEM_base.stl and STEM_lid.stl "
                     "(Design IV: STEM_bottom, STEM_middle, STEM_top); then check them");
-    cmd->add_option("--printer-profile", opt->profile, "Printer profile TOML (holders/profiles/)");
+    cmd->add_option("--3d-printer,--printer-profile", opt->profile, "3D printer profile TOML (holders/profiles/)");
+    cmd->add_option("--printer", opt->printer,
+                    "The film printer's profile (printers/, or a bundled name): its film thickness and sheets size the "
+                    "pattern's pocket. Default: the pattern's (--pattern), else the design's default printer");
+    cmd->add_option("--pattern", opt->pattern, "The pattern the holder is for: the printer it records");
     cmd->add_option("--time-limit", opt->time_limit, "Seconds openscad may take per part")->check(CLI::Range(1.0, 36000.0));
     cmd->add_flag("--json", opt->json, "Machine-readable report on stdout");
     add_coupon_command(*cmd);
@@ -187,10 +194,16 @@ void add_holder_commands(CLI::App& app) {
             throw InputError("rfd holder: give a design file and --out FILE.scad (or use `rfd holder coupon`)");
         const optics::Design design = optics::load_design(opt->design);
         const holders::HolderProfile profile = read_profile(opt->profile);
-        const holders::Holder holder = holders::make_holder(design, profile);
+        const print::PrinterProfile printer =
+            opt->pattern.empty()
+                ? printer_for(design, opt->printer)
+                : print::printer_for_pattern(design, patterns::read_pattern_info(opt->pattern), opt->pattern, opt->printer);
+        const holders::Holder holder = holders::make_holder(design, profile, {printer.film, printer.sheets});
         write_text_file(opt->out, holders::to_scad(holder));
         if (!opt->json) {
             std::printf("wrote %s: %s\n", opt->out.c_str(), holder.title.c_str());
+            std::printf("  pattern film: %d sheet(s) of %s mm, from printer '%s'\n", printer.sheets,
+                        format_number(printer.film).c_str(), printer.name.c_str());
             for (const auto& note : holder.notes) std::printf("  %s\n", note.c_str());
         }
         if (opt->stl.empty()) {

@@ -50,6 +50,7 @@ struct Slot {
 struct Builder {
     const optics::Design& design;
     const HolderProfile& profile;
+    const PatternFilm& pattern_film;
     Holder holder;
     Expr clearance, wall, seat, eps, margin, film, sheets;
     std::vector<Slot> slots;
@@ -71,8 +72,8 @@ struct Builder {
         seat = define("seat", profile.seat, "how far a seat reaches under a part's rim");
         margin = define("beam_margin", profile.beam_margin, "air between the light and the holder");
         eps = define("eps", 0.01, "overlap of touching cuts, so that no faces coincide");
-        const int s = profile.pattern_sheets > 0 ? profile.pattern_sheets : design.kind == DesignKind::I ? 2 : 1;
-        film = define("film", profile.film, "one printed transparency");
+        const int s = pattern_film.sheets;
+        film = define("film", pattern_film.thickness, "one printed transparency (the film printer's profile)");
         sheets = define("pattern_sheets", s, s == 2 ? "front sheet and mirrored back sheet" : "transparencies per pattern");
     }
 
@@ -619,8 +620,9 @@ struct Builder {
 
 }  // namespace
 
-Holder make_holder(const optics::Design& design, const HolderProfile& profile) {
-    Builder b{design, profile, {}, {}, {}, {}, {}, {}, {}, {}, {}};
+Holder make_holder(const optics::Design& design, const HolderProfile& profile, const PatternFilm& film) {
+    RFD_CHECK(film.sheets == 1 || film.sheets == 2);
+    Builder b{design, profile, film, {}, {}, {}, {}, {}, {}, {}, {}, {}};
     b.holder.design_name = design.name;
     b.holder.design_kind = std::string(optics::to_string(design.kind));
     b.build();

@@ -28,6 +28,8 @@ namespace rfd::holders {
 /// cannot be held: parts whose pockets overlap or leave less than the printable minimum
 /// between them, a part whose pocket and walls do not fit its macro-pixel, light that needs
 /// the room of a seat.
-Holder make_holder(const optics::Design& design, const HolderProfile& profile);
+/// `film`: the pattern's printed transparencies, which the pocket of the pattern's plane
+/// keeps room for.
+Holder make_holder(const optics::Design& design, const HolderProfile& profile, const PatternFilm& film);
 
 }  // namespace rfd::holders

@@ -23,8 +23,10 @@ HolderProfile read(ConfigTable root) {
         p.seat = t->optional_number("seat_mm", 0.2, 10.0).value_or(p.seat);
         p.baffle = t->optional_number("baffle_mm", 0.0, 5.0).value_or(p.baffle);
         p.beam_margin = t->optional_number("beam_margin_mm", 0.0, 5.0).value_or(p.beam_margin);
-        p.film = t->optional_number("film_mm", 0.0, 2.0).value_or(p.film);
-        p.pattern_sheets = static_cast<int>(t->optional_integer("pattern_sheets", 0, 2).value_or(0));
+        for (const char* moved : {"film_mm", "pattern_sheets"})
+            if (t->has(moved))
+                t->fail(moved, "the printed film is the film printer's: set film_mm and sheets in its profile "
+                               "(printers/*.toml), which prints the pattern and sizes the holder's pocket");
         p.privacy_filter = t->optional_number("privacy_filter_mm", 0.0, 5.0).value_or(0.0);
         t->finish();
     }

@@ -1,7 +1,7 @@
 #pragma once
 // What a 3D printer can make, and how the holder meets the parts it holds: the numbers
 // every holder and the fit-test coupon are built from. Read from a printer profile
-// (`--printer-profile FDM.toml`, holders/profiles/fdm_0.4mm.toml shows every key);
+// (`--3d-printer FDM.toml`, holders/profiles/fdm_0.4mm.toml shows every key);
 // every key is optional and defaults to a 0.4 mm nozzle FDM printer.
 //
 //   [printer]
@@ -15,9 +15,11 @@
 //   seat_mm = 0.8           # how far a seat reaches under the rim of a part
 //   baffle_mm = 1.0         # baffle wall between lenslets, at its thickest
 //   beam_margin_mm = 0.15   # air kept between the light and the holder
-//   film_mm = 0.1           # one printed transparency
-//   pattern_sheets = 0      # transparencies per pattern; 0: 2 for Design I, 1 otherwise
 //   privacy_filter_mm = 0   # Design I: a privacy-filter sheet behind the diffuser (0: none)
+//
+// The printed transparencies the holder keeps room for (their thickness and how many are
+// stacked) are the film printer's, not the 3D printer's: PatternFilm, from the printer
+// profile that prints the pattern (print/printer.hpp), so the two cannot disagree.
 //
 // Units: millimetres.
 
@@ -36,9 +38,13 @@ struct HolderProfile {
     double seat = 0.8;
     double baffle = 1.0;
     double beam_margin = 0.15;
-    double film = 0.1;
-    int pattern_sheets = 0;   ///< 0: the design's usual number (2 for Design I, else 1)
     double privacy_filter = 0.0;
+};
+
+/// The printed transparencies of a pattern, as the film printer's profile gives them.
+struct PatternFilm {
+    double thickness = 0.1;  ///< mm, one printed transparency
+    int sheets = 1;          ///< transparencies stacked back to back (1 or 2)
 };
 
 /// Reads a profile; unknown keys, and values out of their printable ranges, throw

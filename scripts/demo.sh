@@ -61,7 +61,7 @@ index_entry sheets/design1_moire.pdf "pitch calibration: print it, lay the lens 
 index_section holders "Lens holders"
 mkdir -p "$out/holders"
 for n in 1 2; do
-  "$rfd" holder designs/design$n.toml --printer-profile holders/profiles/fdm_0.4mm.toml \
+  "$rfd" holder designs/design$n.toml --3d-printer holders/profiles/fdm_0.4mm.toml \
     --out "$out/holders/design${n}_holder.scad" --stl "$out/holders/design${n}_holder.stl" \
     > "$out/holders/design${n}_holder.txt"
 done

@@ -25,12 +25,16 @@
 #include "holders/openscad.hpp"
 #include "holders/profile.hpp"
 #include "optics/design.hpp"
+#include "tests/support/error_of.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace rfd::holders {
 namespace {
 
 using ::testing::HasSubstr;
+
+// The film of the default printer (the Epson: two sheets back to back).
+const PatternFilm kFilm{0.1, 2};
 
 std::string preset(int n) { return std::string(RFD_SOURCE_DIR) + "/designs/design" + std::to_string(n) + ".toml"; }
 
@@ -118,6 +122,12 @@ TEST(HolderProfile, ReadsKeysAndRejectsUnknownOrUnprintableOnes) {
         EXPECT_THAT(e.what(), HasSubstr("clearence_mm"));
     }
     EXPECT_THROW(parse_profile("[printer]\nclearance_mm = -0.1\n", "fdm.toml"), InputError);
+    // The printed film is the film printer's: a 3D printer profile that sets it is told where it went.
+    EXPECT_THAT(testing::error_of([] { parse_profile("[holder]\nfilm_mm = 0.1\n", "fdm.toml"); }),
+                HasSubstr("fdm.toml:2:11: holder.film_mm: the printed film is the film printer's: set film_mm and "
+                          "sheets in its profile"));
+    EXPECT_THAT(testing::error_of([] { parse_profile("[holder]\npattern_sheets = 2\n", "fdm.toml"); }),
+                HasSubstr("holder.pattern_sheets: the printed film is the film printer's"));
     EXPECT_THROW(parse_profile("[printer]\nnozzle_mm = 0.4\n[holder]\nbaffle_mm = 0.2\n", "fdm.toml"), InputError);
 }
 
@@ -134,6 +144,22 @@ HolderCheck build_and_check(const Holder& holder, const optics::Design& design, 
     return check_holder(holder, design, stls);
 }
 
+TEST(HolderFilm, ThePatternPocketKeepsRoomForEverySheetOfFilm) {
+    // Design I's pattern sheets rest in front of the pattern face: the pocket's front moves
+    // forward by the thickness of the stack.
+    const optics::Design design = optics::load_design(preset(1));
+    const auto pattern_pocket_front = [&](const PatternFilm& film) {
+        const Holder holder = make_holder(design, HolderProfile{}, film);
+        for (const auto& entry : holder.parameters.entries())
+            if (entry.comment.rfind("the pattern sheets rest here", 0) == 0) return entry.definition.value;
+        ADD_FAILURE() << "no pocket for the pattern sheets";
+        return 0.0;
+    };
+    const double one_sheet = pattern_pocket_front({0.1, 1});
+    EXPECT_NEAR(one_sheet - pattern_pocket_front({0.1, 2}), 0.1, 1e-12);
+    EXPECT_NEAR(one_sheet - pattern_pocket_front({0.25, 2}), 2 * 0.25 - 0.1, 1e-12);
+}
+
 class PresetHolder : public ::testing::TestWithParam<int> {};
 
 TEST_P(PresetHolder, BuildsAndPassesEveryCheck) {
@@ -142,7 +168,7 @@ TEST_P(PresetHolder, BuildsAndPassesEveryCheck) {
     // of plate (bottom, middle, top) and every seam between cells.
     const optics::Design design = GetParam() == 4 ? edited_preset(4, "count = [7, 7]\npitch_mm", "count = [3, 3]\npitch_mm")
                                                   : optics::load_design(preset(GetParam()));
-    const Holder holder = make_holder(design, HolderProfile{});
+    const Holder holder = make_holder(design, HolderProfile{}, kFilm);
     const testing::TempDir dir;
     const HolderCheck check = build_and_check(holder, design, dir);
     EXPECT_THAT(check.problems(), ::testing::IsEmpty());
@@ -172,16 +198,17 @@ INSTANTIATE_TEST_SUITE_P(Designs, PresetHolder, ::testing::Values(1, 2, 3, 4),
 TEST(HolderSeats, LieWhereThePartsFacesMustBe) {
     // Independent of the generator's own numbers: the faces from the design's prescription.
     const optics::Design design = optics::load_design(preset(3));
-    const Holder holder = make_holder(design, HolderProfile{});
+    const Holder holder = make_holder(design, HolderProfile{}, kFilm);
     ASSERT_EQ(holder.seats.size(), 5u);
     EXPECT_NEAR(holder.seats[0].z, 0.0 + 5.3, 1e-9);  // main lens's flat back
     EXPECT_NEAR(holder.seats[1].z, 47.0154, 1e-9);    // field lens's flat front
     EXPECT_NEAR(holder.seats[2].z, 54.0154 + 2.0, 1e-9);  // meso array's flat back
     EXPECT_NEAR(holder.seats[4].z, 74.3334, 1e-9);    // projection array's flat front
     // The pair: the front array's outer lenslets, where their curved faces reach the seat
-    // band: the vertex plane plus the sag at 2.0 - 0.8 mm from a lenslet's axis.
-    const double r = 5.4915, rho = 2.0 - 0.8;
-    EXPECT_NEAR(holder.seats[3].z, 65.1466 - 0.05 - 2.0 + (r - std::sqrt(r * r - rho * rho)), 1e-9);
+    // band: the vertex plane plus the sag at 2.0 - 0.8 mm from a lenslet's axis, in front
+    // of the pattern by half the film stack between the flats.
+    const double r = 5.4915, rho = 2.0 - 0.8, half_stack = kFilm.sheets * kFilm.thickness / 2;
+    EXPECT_NEAR(holder.seats[3].z, 65.1466 - half_stack - 2.0 + (r - std::sqrt(r * r - rho * rho)), 1e-9);
 }
 
 TEST(HolderBeam, EnvelopeOverAnIntervalIsTheLargestAtAnyDepth) {
@@ -226,7 +253,7 @@ TEST(HolderBeam, EnvelopeOverAnIntervalIsTheLargestAtAnyDepth) {
 TEST(HolderChecks, FailWhenTheHolderIsWrong) {
     if (!find_openscad()) GTEST_SKIP() << "openscad is not installed";
     const optics::Design design = optics::load_design(preset(2));
-    Holder holder = make_holder(design, HolderProfile{});
+    Holder holder = make_holder(design, HolderProfile{}, kFilm);
     // Narrow the channel from the corrective pair to the diffuser: light must hit it.
     for (Section& s : holder.sections)
         if (s.module == "channel_B_C") {
@@ -246,7 +273,7 @@ TEST(HolderChecks, FailWhenTheHolderIsWrong) {
 TEST(HolderDesigns, BrokenDesignsAreRejectedBeforeOpenScad) {
     // Cells closer than the field lens's pocket and its walls: no wall between the cells.
     try {
-        make_holder(edited_preset(4, "pitch_mm = [34.0, 34.0]", "pitch_mm = [31.0, 31.0]"), HolderProfile{});
+        make_holder(edited_preset(4, "pitch_mm = [34.0, 34.0]", "pitch_mm = [31.0, 31.0]"), HolderProfile{}, kFilm);
         FAIL() << "a 30 mm field lens in 31 mm cells was accepted";
     } catch (const InputError& e) {
         EXPECT_THAT(e.what(), HasSubstr("macro-pixel pitch"));
@@ -254,7 +281,7 @@ TEST(HolderDesigns, BrokenDesignsAreRejectedBeforeOpenScad) {
     }
     // A diffuser whose pocket overlaps the corrective pair's, though the parts do not touch.
     try {
-        make_holder(edited_preset(2, "z_mm = 25.1278", "z_mm = 13.8"), HolderProfile{});
+        make_holder(edited_preset(2, "z_mm = 25.1278", "z_mm = 13.8"), HolderProfile{}, kFilm);
         FAIL() << "overlapping pockets were accepted";
     } catch (const InputError& e) {
         EXPECT_THAT(e.what(), HasSubstr("overlaps the pocket of plane B"));
@@ -264,7 +291,7 @@ TEST(HolderDesigns, BrokenDesignsAreRejectedBeforeOpenScad) {
 }
 
 TEST(HolderDesigns, DesignTwoBafflesThinTowardThePattern) {
-    const Holder holder = make_holder(optics::load_design(preset(2)), HolderProfile{});
+    const Holder holder = make_holder(optics::load_design(preset(2)), HolderProfile{}, kFilm);
     std::vector<const Section*> baffles;
     for (const Section& s : holder.sections)
         if (s.kind == Section::Kind::Cells) baffles.push_back(&s);
@@ -284,8 +311,8 @@ TEST(HolderDesigns, DesignTwoBafflesThinTowardThePattern) {
 
 TEST(HolderScad, IsDeterministicAndParametric) {
     const optics::Design design = optics::load_design(preset(1));
-    const std::string a = to_scad(make_holder(design, HolderProfile{}));
-    const std::string b = to_scad(make_holder(design, HolderProfile{}));
+    const std::string a = to_scad(make_holder(design, HolderProfile{}, kFilm));
+    const std::string b = to_scad(make_holder(design, HolderProfile{}, kFilm));
     EXPECT_EQ(a, b);
     EXPECT_THAT(a, HasSubstr("clearance = 0.2;"));
     EXPECT_THAT(a, HasSubstr("A_pocket_back = A_z + A_thickness;"));

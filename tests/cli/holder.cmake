@@ -1,7 +1,8 @@
 # rfd holder end to end: the Design I holder built and checked through the CLI (JSON
 # report: every part a single closed solid, seats within 0.05 mm, no ray blocked); a Design
 # II with overlapping pockets and a bad printer profile rejected with exit code 2 before
-# anything is written; a small fit-test coupon. (The unit tests build every design's
+# anything is written; the pattern's pocket sized by the film printer; a small fit-test
+# coupon. (The unit tests build every design's
 # holder and the full-size coupon; this checks what the command adds.)
 include(${CMAKE_CURRENT_LIST_DIR}/run_rfd.cmake)
 file(REMOVE_RECURSE ${OUT})
@@ -38,8 +39,23 @@ if(EXISTS ${OUT}/overlapping.scad OR EXISTS ${OUT}/overlapping_base.stl)
 endif()
 
 file(WRITE ${OUT}/profile.toml "[printer]\nclearance_mm = 0.2\nwall_mm = 2\n")
-run(2 holder ${DESIGN2} --out ${OUT}/p.scad --printer-profile ${OUT}/profile.toml)
+run(2 holder ${DESIGN2} --out ${OUT}/p.scad --3d-printer ${OUT}/profile.toml)
 expect("profile.toml:3.*wall_mm")
+
+# The pattern's pocket keeps room for the film printer's sheets: the Epson (the default)
+# prints two, the 720 dpi inkjet one; a pattern encoded for the inkjet carries it.
+run(0 holder ${DESIGN2} --out ${OUT}/epson.scad)
+expect("pattern film: 2 sheet\\(s\\) of 0.1 mm, from printer 'Epson Stylus Pro 4800'")
+file(READ ${OUT}/epson.scad scad)
+if(NOT scad MATCHES "\npattern_sheets = 2;")
+  message(FATAL_ERROR "the default holder does not keep room for two sheets")
+endif()
+run(0 holder ${DESIGN2} --printer inkjet_720 --out ${OUT}/inkjet.scad)
+expect("pattern film: 1 sheet\\(s\\) of 0.1 mm, from printer 'generic 720 dpi inkjet'")
+file(READ ${OUT}/inkjet.scad scad)
+if(NOT scad MATCHES "\npattern_sheets = 1;")
+  message(FATAL_ERROR "the inkjet's holder does not keep room for one sheet")
+endif()
 
 run(0 holder coupon --out ${OUT}/coupon.scad --stl ${OUT}/coupon.stl --diameter 6 --square 5)
 expect("9 seat rings")
