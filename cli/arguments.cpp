@@ -157,7 +157,7 @@ void add_print_options(CLI::App& command, PrintOptions& options) {
 print::PrintedTransparency printed_pattern(const optics::Design& design, const std::string& pattern_file,
                                            const PrintOptions& options) {
     const print::PrinterProfile printer =
-        print::printer_for_pattern(design, patterns::read_pattern_info(pattern_file), pattern_file, options.printer);
+        print::printer_for_pattern(design, pattern_file, options.printer);
     return print::PrintedTransparency(design, printer, pattern_file, options.brightness, options.sheets);
 }
 
@@ -166,10 +166,17 @@ patterns::AngularMapping read_pattern_mapping(const std::string& pattern_file) {
 }
 
 std::vector<optics::DisplayLight> to_display_lights(const std::vector<std::string>& texts,
-                                                 const patterns::AngularMapping& mapping) {
+                                                 const patterns::AngularMapping& mapping, predict::LightFrame frame) {
     std::vector<optics::DisplayLight> lights;
-    for (const std::string& text : texts) lights.push_back(predict::display_light(parse_light(text), mapping));
+    for (const std::string& text : texts)
+        lights.push_back(predict::display_light(predict::light_in_field_frame(parse_light(text), frame, mapping), mapping));
     return lights;
+}
+
+void add_frame_option(CLI::App& command, predict::LightFrame& frame) {
+    add_choice(command, "--frame", frame, predict::kLightFrameNames,
+               "The frame --light is named in: display (default: 0,0 is a lamp straight behind the display, THETA "
+               "the angle to its axis) or field (as the field was captured, before --tilt/--turn/--angle-scale)");
 }
 
 }  // namespace rfd::cli

@@ -94,9 +94,14 @@ print::PrintedTransparency printed_pattern(const optics::Design& design, const s
 /// where absent); InputError naming the file and attribute when one is not a number.
 patterns::AngularMapping read_pattern_mapping(const std::string& pattern_file);
 
-/// The field-frame lights of --light as the display meets them: through `mapping`, so a
-/// light at (theta, phi) shows what the field shows under a light from there.
+/// The lights of --light, named in `frame`, as the display meets them: a field-frame light
+/// at (theta, phi) goes through `mapping`, so it shows what the field shows under a light
+/// from there; a display-frame one is where the display meets it.
 std::vector<optics::DisplayLight> to_display_lights(const std::vector<std::string>& texts,
-                                                    const patterns::AngularMapping& mapping);
+                                                    const patterns::AngularMapping& mapping,
+                                                    predict::LightFrame frame = predict::LightFrame::Field);
+
+/// --frame display|field for --light (default display), with its help.
+void add_frame_option(CLI::App& command, predict::LightFrame& frame);
 
 }  // namespace rfd::cli

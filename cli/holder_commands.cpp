@@ -197,7 +197,7 @@ void add_holder_commands(CLI::App& app) {
         const print::PrinterProfile printer =
             opt->pattern.empty()
                 ? printer_for(design, opt->printer)
-                : print::printer_for_pattern(design, patterns::read_pattern_info(opt->pattern), opt->pattern, opt->printer);
+                : print::printer_for_pattern(design, opt->pattern, opt->printer);
         const holders::Holder holder = holders::make_holder(design, profile, {printer.film, printer.sheets});
         write_text_file(opt->out, holders::to_scad(holder));
         if (!opt->json) {

@@ -45,8 +45,7 @@ void add_sheet_command(CLI::App& print_cmd) {
     cmd->add_flag("--json", opt->json, "Machine-readable summary");
     cmd->callback([opt] {
         const optics::Design design = optics::load_design(opt->design);
-        const print::PrinterProfile printer = print::printer_for_pattern(
-            design, patterns::read_pattern_info(opt->pattern), opt->pattern, opt->printer);
+        const print::PrinterProfile printer = print::printer_for_pattern(design, opt->pattern, opt->printer);
         const print::SheetReport r = print::write_sheet(opt->out, design, printer, opt->pattern, opt->sheet);
         const print::SheetLayout& l = r.layout;
         nlohmann::json markers = nlohmann::json::array();

@@ -120,6 +120,10 @@ void simulate_observer_variant(const CLI::App& simulate, const SimulateOptions& 
         throw InputError(SourceLocation{design_file, 0, 0, "design.kind"},
                          "--rays, --lenslets and --pixels-per-lenslet are for Designs I and II; Designs III and IV "
                          "take --lens-rays, --view, --eye, --macro and --distribution");
+    if (simulate.count("--frame") > 0 && common.frame != predict::LightFrame::Field)
+        throw InputError(SourceLocation{design_file, 0, 0, "design.kind"},
+                         "Designs III and IV take --light in the field's frame (--frame field): their patterns "
+                         "have no tilt, and the field's directions are the cells' incident bins");
     for (const char* name : {"--front", "--diffuser-transmittance", "--diffuser-reflectance"})
         if (simulate.count(name) > 0)
             throw InputError(SourceLocation{design_file, 0, 0, "design.kind"},

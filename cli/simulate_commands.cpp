@@ -15,6 +15,7 @@
 #include "cli/simulate_options.hpp"
 #include "core/error.hpp"
 #include "core/image_io.hpp"
+#include "core/text.hpp"
 #include "core/units.hpp"
 #include "optics/display.hpp"
 #include "predict/display_lights.hpp"
@@ -24,6 +25,28 @@
 
 namespace rfd::cli {
 namespace {
+
+nlohmann::json light_checks_json(const std::vector<predict::LightCheck>& checks) {
+    nlohmann::json out = nlohmann::json::array();
+    for (const predict::LightCheck& c : checks)
+        out.push_back({{"display_deg", {c.display_theta_deg, c.display_phi_deg}},
+                       {"field_deg", {c.field_theta_deg, c.field_phi_deg}},
+                       {"angle_to_axis_deg", c.display_theta_deg},
+                       {"wrap_over_deg", json_or_null(c.wrap_over_deg)},
+                       {"crosstalk_onset_deg", json_or_null(c.crosstalk_deg)},
+                       {"warning", c.warning()}});
+    return out;
+}
+
+void print_light_check(const std::string& text, const predict::LightCheck& c) {
+    std::printf("               %s: display %s, field %s; %s deg from the axis (field of view to %s, crosstalk from "
+                "%s deg along its azimuth)\n",
+                text.c_str(), (format_fixed(c.display_theta_deg, 1) + "," + format_fixed(c.display_phi_deg, 1)).c_str(),
+                (format_fixed(c.field_theta_deg, 1) + "," + format_fixed(c.field_phi_deg, 1)).c_str(),
+                format_fixed(c.display_theta_deg, 1).c_str(),
+                c.wrap_over_deg ? format_fixed(*c.wrap_over_deg, 1).c_str() : "89+",
+                c.crosstalk_deg ? format_fixed(*c.crosstalk_deg, 1).c_str() : "89+");
+}
 
 CLI::App* add_simulate(CLI::App& app) {
     auto* cmd = app.add_subcommand(
@@ -37,8 +60,10 @@ CLI::App* add_simulate(CLI::App& app) {
     cmd->add_option("DESIGN", opt->design, "Design TOML file");
     cmd->add_option("PATTERN", opt->pattern, "Pattern file from `rfd pattern encode`");
     cmd->add_option("--light", opt->lights,
-                    std::string("A distant light behind the display, in the field's frame ") + kLightSyntax +
-                        "; repeat for several");
+                    std::string("A distant light behind the display, in the frame --frame names (default the "
+                                "display's: 0,0 is straight behind it) ") +
+                        kLightSyntax + "; repeat for several");
+    add_frame_option(*cmd, opt->frame);
     cmd->add_option("--envmap", opt->envmap,
                     "Light from an environment map: latitude-longitude radiance (.exr/.hdr) in the field's frame, "
                     "row 0 at the zenith, column W/2 facing +x; with or without --light");
@@ -88,7 +113,13 @@ CLI::App* add_simulate(CLI::App& app) {
         const print::PrintedTransparency pattern = printed_pattern(design, opt->pattern, opt->print);
 
         const patterns::AngularMapping mapping = read_pattern_mapping(opt->pattern);
-        std::vector<optics::DisplayLight> lights = to_display_lights(opt->lights, mapping);
+        std::vector<optics::DisplayLight> lights = to_display_lights(opt->lights, mapping, opt->frame);
+        // Each named light where the display meets it, and a warning where it shows badly.
+        std::vector<predict::LightCheck> checks;
+        for (const optics::DisplayLight& light : lights) checks.push_back(predict::check_light(simulator.optics(), light, mapping));
+        for (std::size_t k = 0; k < checks.size(); ++k)
+            if (const std::string warning = checks[k].warning(); !warning.empty())
+                std::fprintf(stderr, "rfd: warning: --light %s: %s\n", opt->lights[k].c_str(), warning.c_str());
         predict::EnvironmentSampling sampling;
         if (!opt->envmap.empty()) {
             const std::vector<optics::DisplayLight> sky = predict::environment_lights(
@@ -122,6 +153,8 @@ CLI::App* add_simulate(CLI::App& app) {
             {"model_choice", std::string(name_of(optics::kModelChoiceNames, opt->model))},
             {"paraxial_error_dots", json_or_null(choice.paraxial_error_dots)},
             {"lights", opt->lights.size()},
+            {"frame", std::string(name_of(predict::kLightFrameNames, opt->frame))},
+            {"light_checks", light_checks_json(checks)},
             {"directions", result.directions},
             {"rays_per_direction", result.rays_per_direction},
             {"rays", result.rays},
@@ -157,6 +190,7 @@ CLI::App* add_simulate(CLI::App& app) {
                     "%zu rays\n",
                     opt->lights.size(), opt->envmap.empty() ? "" : " and an environment map", result.directions,
                     result.rays_per_direction, result.rays);
+        for (std::size_t k = 0; k < checks.size(); ++k) print_light_check(opt->lights[k], checks[k]);
         if (!opt->envmap.empty()) print_environment_line(opt->envmap, sampling);
         std::printf("  efficiency   %.1f %% of the light entering the lenslets reaches the diffuser; "
                     "%.1f / %.1f / %.1f %% through the pattern (R/G/B)\n",

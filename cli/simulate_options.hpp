@@ -11,6 +11,7 @@
 #include "cli/arguments.hpp"
 #include "optics/display.hpp"
 #include "optics/model.hpp"
+#include "predict/display_lights.hpp"
 
 namespace rfd::cli {
 
@@ -19,6 +20,7 @@ struct SimulateOptions {
     optics::ModelChoice model = optics::ModelChoice::Auto;
     PrintOptions print;
     std::vector<std::string> lights;
+    predict::LightFrame frame = predict::LightFrame::Display;
     double tolerance_dots = 0.25, pixels_per_lenslet = 8.0;
     int rays = 8, area_samples = 5;
     std::size_t max_rays = 4096;

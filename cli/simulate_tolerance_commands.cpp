@@ -84,6 +84,7 @@ void add_simulate_tolerance_command(CLI::App& simulate) {
         std::string design, pattern, out, pitch_error;
         optics::ModelChoice model = optics::ModelChoice::Paraxial;
         std::vector<std::string> lights;
+        predict::LightFrame frame = predict::LightFrame::Display;
         std::optional<double> shift_mm, rotation_deg, spacer_mm;
         double threshold = 30.0, tolerance_dots = 0.25;
         int steps = 6, refinements = 4, rays = 8;
@@ -95,9 +96,10 @@ void add_simulate_tolerance_command(CLI::App& simulate) {
     cmd->add_option("--out", opt->out, "Output folder: a chart per error kind (CSV, .gp, SVG, PNG) and summary.txt")
         ->required();
     cmd->add_option("--light", opt->lights,
-                    std::string("A distant light in the field's frame ") + kLightSyntax +
+                    std::string("A distant light, in the frame --frame names (default the display's) ") + kLightSyntax +
                         "; repeat for several; each is compared on its own. Default: the axis and two "
                         "directions at half the wrap-over angle (along x and y)");
+    add_frame_option(*cmd, opt->frame);
     cmd->add_option("--shift", opt->shift_mm, "Largest pattern shift along x, mm (default half a lenslet pitch; 0 skips)");
     cmd->add_option("--rotation", opt->rotation_deg,
                     "Largest pattern rotation about the array's axis, degrees (default: half a pitch at the "
@@ -139,7 +141,7 @@ void add_simulate_tolerance_command(CLI::App& simulate) {
                                        .model;
         const std::vector<optics::DisplayLight> lights =
             opt->lights.empty() ? optics::default_tolerance_lights(simulator.optics(), options.simulation.model)
-                                : to_display_lights(opt->lights, read_pattern_mapping(opt->pattern));
+                                : to_display_lights(opt->lights, read_pattern_mapping(opt->pattern), opt->frame);
 
         const optics::ToleranceReport report = optics::sweep_tolerances(design, pattern, lights, options);
 

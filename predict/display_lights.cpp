@@ -7,7 +7,9 @@
 #include "core/error.hpp"
 #include "core/sequence.hpp"
 #include "core/sphere.hpp"
+#include "core/text.hpp"
 #include "core/units.hpp"
+#include "optics/analysis.hpp"
 
 namespace rfd::predict {
 namespace {
@@ -106,6 +108,57 @@ optics::DisplayLight display_light(const relight::Light& light, const AngularMap
     }
     d.colour = {colour.x(), colour.y(), colour.z()};
     return d;
+}
+
+relight::Light light_in_field_frame(const relight::Light& light, LightFrame frame, const AngularMapping& mapping) {
+    if (frame == LightFrame::Field) return light;
+    // Toward the light in the display's frame -> direction of travel -> the field direction
+    // the pattern shows for it.
+    const auto to_field = [&](const Eigen::Vector3d& toward) {
+        return mapping.field_direction(Eigen::Vector3d(-toward.x(), -toward.y(), toward.z()).normalized());
+    };
+    if (const auto* point = std::get_if<relight::DirectionalLight>(&light)) {
+        relight::DirectionalLight field = *point;
+        field.direction = to_field(point->direction);
+        return field;
+    }
+    if (const auto* disc = std::get_if<relight::DiskLight>(&light)) {
+        relight::DiskLight field = *disc;
+        field.direction = to_field(disc->direction);
+        field.radius = disc->radius * mapping.angle_scale;
+        return field;
+    }
+    throw InputError("an environment map is not a single light: sample it with environment_lights()");
+}
+
+std::string LightCheck::warning() const {
+    const std::string where = format_fixed(display_theta_deg, 1) + " deg from the display's axis";
+    if (from_front) return where + ": the light meets the display from the front, and the display shows nothing of it";
+    if (outside_field_of_view())
+        return where + ", outside its field of view (wrap-over at " + format_fixed(*wrap_over_deg, 1) +
+               " deg along this azimuth): each lenslet shows its neighbour's pattern";
+    if (beyond_crosstalk_onset())
+        return where + ", beyond the crosstalk onset (" + format_fixed(*crosstalk_deg, 1) +
+               " deg along this azimuth): part of the light reaches the diffuser through a neighbouring lenslet";
+    return {};
+}
+
+LightCheck check_light(const optics::DesignOptics& optics, const optics::DisplayLight& light,
+                       const AngularMapping& mapping) {
+    const Eigen::Vector3d travel = light.direction.normalized();
+    LightCheck check;
+    const SphericalAngles display = angles_of(Eigen::Vector3d(-travel.x(), -travel.y(), travel.z()));
+    const SphericalAngles field = angles_of(mapping.field_direction(travel));
+    check.display_theta_deg = radians_to_degrees(display.theta);
+    check.display_phi_deg = display.theta < 1e-12 ? 0.0 : radians_to_degrees(display.phi);  // no azimuth on the axis
+    check.field_theta_deg = radians_to_degrees(field.theta);
+    check.field_phi_deg = radians_to_degrees(field.phi);
+    check.from_front = travel.z() <= 0.0;
+    if (check.from_front) return check;
+    const double azimuth = std::atan2(travel.y(), travel.x());  // of the direction of travel
+    check.wrap_over_deg = optics::wrap_over_angle(optics, azimuth, optics::Model::Exact);
+    check.crosstalk_deg = optics::first_loss_angle(optics, azimuth, 15);
+    return check;
 }
 
 double display_resolution_rad(const optics::DesignOptics& optics, const AngularMapping& mapping) {

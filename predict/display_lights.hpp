@@ -22,11 +22,14 @@
 // Example: auto lights = environment_lights(read_image("sky.exr"), mapping, 0.003, 1024, &report);
 
 #include <cstddef>
+#include <array>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/image.hpp"
+#include "core/names.hpp"
 #include "optics/display.hpp"
 #include "patterns/encode.hpp"
 #include "relight/render.hpp"
@@ -34,6 +37,39 @@
 namespace rfd::predict {
 
 using patterns::AngularMapping;
+
+/// The frame a user names a light's direction in (THETA,PHI toward the light):
+///  - Display: z is the display's axis, x and y the field's at zero tilt and turn; 0,0 is a
+///    lamp straight behind the display, and THETA is the angle to its axis.
+///  - Field: the field's frame (core/sphere.hpp), as the field was captured or rendered.
+/// The two agree for a pattern encoded without --tilt, --turn or --angle-scale.
+enum class LightFrame { Display, Field };
+inline constexpr std::array kLightFrameNames{Named{LightFrame::Display, "display"}, Named{LightFrame::Field, "field"}};
+
+/// `light`, named in `frame`, in the field's frame (unchanged for LightFrame::Field). A
+/// display-frame light at THETA,PHI is the field light that the display meets along
+/// incident direction (-sin THETA cos PHI, -sin THETA sin PHI, cos THETA); a disc keeps its
+/// angular radius on the display. An environment map is refused (InputError).
+relight::Light light_in_field_frame(const relight::Light& light, LightFrame frame, const AngularMapping& mapping);
+
+/// Where a light meets a display, in both frames, and whether the display shows it cleanly:
+/// the wrap-over angle (the field of view's edge) and the crosstalk onset along the light's
+/// own azimuth, exact model (optics/analysis.hpp).
+struct LightCheck {
+    double display_theta_deg = 0, display_phi_deg = 0;  ///< toward the light; theta: angle to the axis
+    double field_theta_deg = 0, field_phi_deg = 0;
+    std::optional<double> wrap_over_deg;   ///< nullopt: none up to kWrapOverSearchLimitDeg
+    std::optional<double> crosstalk_deg;   ///< nullopt: none up to the same limit
+    bool from_front = false;               ///< the light meets the display from the front
+
+    bool outside_field_of_view() const { return from_front || (wrap_over_deg && display_theta_deg >= *wrap_over_deg); }
+    bool beyond_crosstalk_onset() const { return crosstalk_deg && display_theta_deg >= *crosstalk_deg; }
+    /// What is wrong, naming the angles ("" when nothing is), e.g. "25.0 deg from the
+    /// display's axis, outside its field of view (wrap-over at 21.8 deg along this azimuth)".
+    std::string warning() const;
+};
+LightCheck check_light(const optics::DesignOptics& optics, const optics::DisplayLight& light,
+                       const AngularMapping& mapping);
 
 /// A directional or disc light of the field's frame, for the display. An environment map
 /// is refused (InputError): use environment_lights().

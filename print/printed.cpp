@@ -71,15 +71,18 @@ std::string differences(const PrinterProfile& a, const PrinterProfile& b) {
 
 }  // namespace
 
-PrinterProfile printer_for_pattern(const optics::Design& design, const patterns::PatternFileInfo& info,
-                                   const std::filesystem::path& pattern_file, const std::string& requested) {
+PrinterProfile printer_for_pattern(const optics::Design& design, const std::filesystem::path& pattern_file,
+                                   const std::string& requested) {
+    const std::optional<PrinterProfile> chosen_first =
+        requested.empty() ? std::nullopt : std::optional<PrinterProfile>(load_printer(requested));
+    const patterns::PatternFileInfo info = patterns::read_pattern_info(pattern_file);
     const std::optional<PrinterProfile> recorded = recorded_printer(info, pattern_file);
-    if (requested.empty()) {
+    if (!chosen_first) {
         if (recorded) return *recorded;
         if (info.dpi_x > 0.0 && info.dpi_y > 0.0) return default_printer(Dpi{info.dpi_x}, Dpi{info.dpi_y});
         return default_printer(design.printer.dpi_x, design.printer.dpi_y);
     }
-    PrinterProfile chosen = load_printer(requested);
+    const PrinterProfile& chosen = *chosen_first;
     if (recorded && printer_toml(*recorded) != printer_toml(chosen))
         throw InputError(SourceLocation{pattern_file.string(), 0, 0, "rfd:printer"},
                          "the pattern was encoded for printer '" + recorded->name + "', but --printer " + requested +

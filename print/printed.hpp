@@ -41,8 +41,9 @@ std::optional<PrinterProfile> recorded_printer(const patterns::PatternFileInfo& 
 ///    naming both profiles when the pattern records another one;
 ///  - otherwise the profile the pattern records;
 ///  - otherwise default_printer at the resolution the file records, or at the design's.
-PrinterProfile printer_for_pattern(const optics::Design& design, const patterns::PatternFileInfo& info,
-                                   const std::filesystem::path& pattern_file, const std::string& requested);
+/// The requested profile is read before the pattern, so a bad --printer is reported first.
+PrinterProfile printer_for_pattern(const optics::Design& design, const std::filesystem::path& pattern_file,
+                                   const std::string& requested);
 
 /// --brightness (positive, finite) and --sheets (1, 2, or 0 for the profile's): InputError
 /// naming the option otherwise.

@@ -71,15 +71,16 @@ index_entry holders/design1_holder_base.stl "Design I's holder, base and lid (de
 index_entry holders/design2_holder_base.stl "Design II's housing with its baffles, base and lid"
 
 # What the displays will show (thesis 8.2), beside the same lights relighting the field in
-# software: on the display's axis (field theta 45, phi 90, with the 45-degree tilt) and 7
-# degrees off it, inside both designs' crosstalk-free cones.
+# software (so named in the field's frame, --frame field): on the display's axis (field
+# theta 45, phi 90, with the 45-degree tilt) and 7 degrees off it, inside both designs'
+# crosstalk-free cones.
 index_section predicted "The predicted display"
 mkdir -p "$out/predicted"
 for case in "axis:--light 45,90" "side:--light 45,80"; do
   name="${case%%:*}"
   for n in 1 2; do
     # shellcheck disable=SC2086 # the light is two words on purpose
-    "$rfd" simulate "designs/design$n.toml" "$out/patterns/design${n}_bottle.exr" ${case#*:} \
+    "$rfd" simulate "designs/design$n.toml" "$out/patterns/design${n}_bottle.exr" --frame field ${case#*:} \
       --out "$out/predicted/design${n}_${name}.png" > "$out/predicted/design${n}_${name}.txt"
   done
   # shellcheck disable=SC2086
@@ -104,7 +105,7 @@ for n in 1 2; do
   for case in "red_green:--light 45,75,1:0:0 --light 45,105,0:1:0" "disc:--light 45,90,8 --area-samples 3"; do
     name="${case%%:*}"
     # shellcheck disable=SC2086
-    "$rfd" simulate "designs/design$n.toml" "$out/patterns/design${n}_bottle.exr" ${case#*:} \
+    "$rfd" simulate "designs/design$n.toml" "$out/patterns/design${n}_bottle.exr" --frame field ${case#*:} \
       --out "$out/predicted/design${n}_${name}.png" > "$out/predicted/design${n}_${name}.txt"
   done
   "$rfd" simulate "designs/design$n.toml" "$out/patterns/design${n}_bottle.exr" --envmap "$out/predicted/window_room.exr" \

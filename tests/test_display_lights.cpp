@@ -1,4 +1,5 @@
-// Lights named in the field's frame as the display meets them (predict/display_lights.hpp):
+// Lights as the display meets them (predict/display_lights.hpp): named in the display's
+// frame or the field's; checked against the field of view and the crosstalk onset;
 // environment maps become one light per lit pixel carrying its power, from inside the
 // pixel; maps finer than the display resolves (or than the ray budget) are box-filtered
 // without losing power; light that meets the display from the front is dropped and
@@ -11,7 +12,10 @@
 #include <gtest/gtest.h>
 
 #include "core/sphere.hpp"
+#include "core/text.hpp"
 #include "core/units.hpp"
+#include "optics/analysis.hpp"
+#include "optics/design.hpp"
 #include "predict/display_lights.hpp"
 #include "tests/support/error_of.hpp"
 
@@ -30,6 +34,62 @@ Eigen::Vector3d total(const std::vector<optics::DisplayLight>& lights) {
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (const optics::DisplayLight& l : lights) sum += Eigen::Vector3d(l.colour[0], l.colour[1], l.colour[2]);
     return sum;
+}
+
+TEST(LightFrame, ALightOnTheDisplaysAxisIsTheTiltedAxisOfTheField) {
+    const AngularMapping tilted{45.0, 0.0, 1.0};
+    const relight::Light axis = relight::DirectionalLight{Eigen::Vector3d::UnitZ(), {1, 1, 1}};
+    const auto field = std::get<relight::DirectionalLight>(light_in_field_frame(axis, LightFrame::Display, tilted));
+    // --tilt 45 turns the display's axis toward the field's +y.
+    EXPECT_LT((field.direction - Eigen::Vector3d(0, std::sqrt(0.5), std::sqrt(0.5))).norm(), 1e-12);
+    EXPECT_LT((display_light(field, tilted).direction - Eigen::Vector3d::UnitZ()).norm(), 1e-12);
+    // The field frame is left as it is.
+    EXPECT_EQ(std::get<relight::DirectionalLight>(light_in_field_frame(axis, LightFrame::Field, tilted)).direction,
+              Eigen::Vector3d::UnitZ().eval());
+}
+
+TEST(LightFrame, DisplayFrameLightsMeetTheDisplayWhereTheySayUnderAnyMapping) {
+    const AngularMapping mapping{30.0, -50.0, 1.5};
+    for (const double theta_deg : {0.0, 5.0, 20.0, 40.0})
+        for (const double phi_deg : {0.0, 70.0, 200.0}) {
+            const Eigen::Vector3d toward = direction_from_angles(degrees_to_radians(theta_deg), degrees_to_radians(phi_deg));
+            const relight::Light disc = relight::DiskLight{toward, 0.05, {1, 1, 1}};
+            const optics::DisplayLight met = display_light(light_in_field_frame(disc, LightFrame::Display, mapping), mapping);
+            // Travelling away from the light: x and y reversed, z kept.
+            EXPECT_LT((met.direction - Eigen::Vector3d(-toward.x(), -toward.y(), toward.z())).norm(), 1e-9)
+                << theta_deg << "," << phi_deg;
+            EXPECT_NEAR(met.angular_radius_rad, 0.05, 1e-15);  // the disc keeps its size on the display
+        }
+}
+
+TEST(LightCheck, WarnsOutsideTheFieldOfViewAndPastTheCrosstalkOnsetNamingTheAngles) {
+    const optics::Design design = optics::load_design(std::string(RFD_SOURCE_DIR) + "/designs/design2.toml");
+    const optics::DesignOptics optics(design);
+    const optics::DesignSummary summary = optics::summarise(optics);
+    const double wrap_x = *summary.wrap_over_exact_deg.at(0).second, onset_x = *summary.crosstalk_exact_deg.at(0).second;
+    ASSERT_LT(onset_x, wrap_x);
+    const AngularMapping none;
+    // Along x (a display-frame light at phi 180 travels toward +x), the summary's angles.
+    const auto at = [&](double theta_deg) {
+        const relight::Light light =
+            relight::DirectionalLight{direction_from_angles(degrees_to_radians(theta_deg), kPi), {1, 1, 1}};
+        return check_light(optics, display_light(light, none), none);
+    };
+    const LightCheck on_axis = at(0.0);
+    EXPECT_EQ(on_axis.warning(), "");
+    const LightCheck inside = at(0.5 * onset_x);
+    EXPECT_NEAR(*inside.wrap_over_deg, wrap_x, 1e-6);
+    EXPECT_NEAR(*inside.crosstalk_deg, onset_x, 1e-6);
+    EXPECT_EQ(inside.warning(), "");
+    const LightCheck crossing = at(0.5 * (onset_x + wrap_x));
+    EXPECT_TRUE(crossing.beyond_crosstalk_onset() && !crossing.outside_field_of_view());
+    EXPECT_THAT(crossing.warning(), HasSubstr("beyond the crosstalk onset (" + format_fixed(onset_x, 1) + " deg"));
+    const LightCheck outside = at(wrap_x + 3.0);
+    EXPECT_THAT(outside.warning(), HasSubstr(format_fixed(wrap_x + 3.0, 1) + " deg from the display's axis, outside its "
+                                             "field of view (wrap-over at " + format_fixed(wrap_x, 1)));
+    EXPECT_NEAR(outside.display_theta_deg, wrap_x + 3.0, 1e-9);
+    const LightCheck front = check_light(optics, {Eigen::Vector3d(0, 0.3, -1).normalized(), {1, 1, 1}}, none);
+    EXPECT_THAT(front.warning(), HasSubstr("meets the display from the front"));
 }
 
 TEST(EnvironmentLights, OneLitPixelIsOneLightFromInsideItWithItsPower) {

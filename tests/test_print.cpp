@@ -155,29 +155,28 @@ TEST(PrinterForPattern, ThePatternsRecordUnlessAnotherIsAskedFor) {
     auto attributes = printer_attributes(inkjet);
     attributes["white"] = "0.8";
     const auto recorded = write_test_pattern(dir, design, inkjet, 0.5f, attributes);
-    const auto info = [](const std::filesystem::path& file) { return patterns::read_pattern_info(file); };
     // Nothing asked: the recorded profile, whole.
-    EXPECT_EQ(printer_toml(printer_for_pattern(design, info(recorded), recorded, "")), printer_toml(inkjet));
+    EXPECT_EQ(printer_toml(printer_for_pattern(design, recorded, "")), printer_toml(inkjet));
     // The same profile asked for by name: accepted.
-    EXPECT_EQ(printer_for_pattern(design, info(recorded), recorded, "inkjet_720").name, inkjet.name);
+    EXPECT_EQ(printer_for_pattern(design, recorded, "inkjet_720").name, inkjet.name);
     // Another: an error naming both and what differs.
     const std::string message =
-        error_of([&] { printer_for_pattern(design, info(recorded), recorded, "epson_stylus_pro_4800"); });
+        error_of([&] { printer_for_pattern(design, recorded, "epson_stylus_pro_4800"); });
     EXPECT_THAT(message, HasSubstr("rfd:printer: the pattern was encoded for printer 'generic 720 dpi inkjet', but "
                                    "--printer epson_stylus_pro_4800 is 'Epson Stylus Pro 4800' (dpi 720 x 720 against "
                                    "2880 x 1440, tone values, 1 sheet(s) against 2)"));
     // A pattern without a record: the Epson's tone values at the resolution the file records.
     const TempDir other;
     const auto bare = write_test_pattern(other, design, inkjet, 0.5f);
-    const PrinterProfile fallback = printer_for_pattern(design, info(bare), bare, "");
+    const PrinterProfile fallback = printer_for_pattern(design, bare, "");
     EXPECT_EQ(fallback.dpi_x.value, 720);
     EXPECT_EQ(fallback.dpi_y.value, 720);
     EXPECT_EQ(fallback.gamma, load_printer("epson_stylus_pro_4800").gamma);
-    EXPECT_EQ(printer_for_pattern(design, info(bare), bare, "laser_1200").name, load_printer("laser_1200").name);
+    EXPECT_EQ(printer_for_pattern(design, bare, "laser_1200").name, load_printer("laser_1200").name);
     // A damaged record names the file and the attribute.
     const TempDir damaged;
     const auto broken = write_test_pattern(damaged, design, inkjet, 0.5f, {{"printer_profile", "[printer]\nname = 3\n"}});
-    EXPECT_THAT(error_of([&] { printer_for_pattern(design, info(broken), broken, ""); }),
+    EXPECT_THAT(error_of([&] { printer_for_pattern(design, broken, ""); }),
                 HasSubstr("(rfd:printer_profile)"));
 }
 

@@ -1,7 +1,8 @@
 # `rfd simulate` end to end on Design II: a bars field encoded at the design's resolution,
 # predicted under a light (deterministic: twice gives byte-identical images), the per-lenslet
 # picture, and the errors a user meets: a light that does not reach the display from behind,
-# a pattern made at another resolution (Designs III and IV: simulate_angular.cmake).
+# a pattern made at another resolution than the printer's (Designs III and IV:
+# simulate_angular.cmake).
 file(REMOVE_RECURSE ${OUT})
 file(MAKE_DIRECTORY ${OUT})
 include(${CMAKE_CURRENT_LIST_DIR}/run_rfd.cmake)
@@ -25,6 +26,22 @@ if(NOT EXISTS ${OUT}/a_lenslets.exr)
   message(FATAL_ERROR "no per-lenslet picture")
 endif()
 
+# Lights in the display's frame by default: with the pattern tilted by 45 deg, 0,0 is the
+# display's axis (the field's 45,90); in the field's frame (--frame field) 0,0 is 45 deg off
+# the axis, outside the field of view, and says so.
+run(0 pattern encode ${DESIGN} ${OUT}/bars --tilt 45 --allow-partial --out ${OUT}/tilted.exr)
+run(0 simulate ${DESIGN} ${OUT}/tilted.exr --light 0,0 --out ${OUT}/tilted_axis.exr --json)
+string(JSON axis_angle GET "${last_output}" light_checks 0 angle_to_axis_deg)
+string(JSON field_theta GET "${last_output}" light_checks 0 field_deg 0)
+string(JSON field_phi GET "${last_output}" light_checks 0 field_deg 1)
+string(JSON warning GET "${last_output}" light_checks 0 warning)
+if(NOT axis_angle EQUAL 0 OR field_theta LESS 44.999 OR field_theta GREATER 45.001 OR field_phi LESS 89.999
+   OR field_phi GREATER 90.001 OR NOT warning STREQUAL "")
+  message(FATAL_ERROR "the display's axis is not the field's 45,90: ${last_output}")
+endif()
+run(0 simulate ${DESIGN} ${OUT}/tilted.exr --frame field --light 0,0 --out ${OUT}/tilted_field.exr)
+expect("warning: --light 0,0: 45.0 deg from the display's axis, outside its field of view \\(wrap-over at [0-9.]+ deg")
+
 # An environment map (a 16 x 8 latitude-longitude image: the bars field's first image).
 run(0 pattern field bars --resolution 16x8 --spread 8 --out ${OUT}/sky)
 run(0 simulate ${DESIGN} ${OUT}/bars.exr --envmap ${OUT}/sky/bars_0000.exr --out ${OUT}/env.exr --json)
@@ -47,8 +64,11 @@ run(2 simulate ${DESIGN} ${OUT}/bars.exr --light 90,0 --out ${OUT}/never.exr)
 if(NOT last_output MATCHES "light 1: a light must shine through the display from behind")
   message(FATAL_ERROR "unexpected message: ${last_output}")
 endif()
+# A pattern encoded at another resolution is printed at it (the one the file records);
+# with a printer of another resolution it is refused, giving both sizes.
 run(0 pattern encode ${DESIGN} ${OUT}/bars --dpi 360x180 --out ${OUT}/low.exr)
-run(2 simulate ${DESIGN} ${OUT}/low.exr --light 0,0 --out ${OUT}/never.exr)
+run(0 simulate ${DESIGN} ${OUT}/low.exr --light 0,0 --out ${OUT}/low_predicted.exr)
+run(2 simulate ${DESIGN} ${OUT}/low.exr --light 0,0 --printer epson_stylus_pro_4800 --out ${OUT}/never.exr)
 if(NOT last_output MATCHES "low\\.exr: the pattern is 341 x 171 dots at 360 x 180 dpi")
   message(FATAL_ERROR "unexpected message: ${last_output}")
 endif()

@@ -59,6 +59,8 @@ run(2 simulate ${OUT}/design3.toml ${OUT}/letters.exr --light 0,0 --rays 8 --out
 expect("--rays, --lenslets and --pixels-per-lenslet are for Designs I and II")
 run(2 simulate ${OUT}/design3.toml ${OUT}/letters.exr --light 0,0 --eye 0,0,-3 --out ${OUT}/never.exr)
 expect("view 1: an eye must be in front of the display")
+run(2 simulate ${OUT}/design3.toml ${OUT}/letters.exr --light 0,0 --frame display --out ${OUT}/never.exr)
+expect("Designs III and IV take --light in the field's frame \\(--frame field\\)")
 run(2 simulate ${OUT}/design3.toml ${OUT}/letters.exr --light 90,0 --out ${OUT}/never.exr)
 expect("light 1: a light must shine through the display from behind")
 run(2 simulate ${OUT}/design4.toml ${OUT}/letters.exr --light 0,0 --out ${OUT}/never.exr)
