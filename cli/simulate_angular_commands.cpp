@@ -217,11 +217,11 @@ void simulate_observer_variant(const CLI::App& simulate, const SimulateOptions& 
     for (std::size_t w = 0; w < result.views.size(); ++w) {
         const std::string suffix = "view" + std::to_string(w + 1);
         const std::filesystem::path path = several ? with_suffix(out, suffix) : std::filesystem::path(out);
-        write_image(path, zoomed(result.views[w], opt.zoom));
+        write_image(path, zoomed(result.views[w], opt.zoom).exposed(common.exposure));
         written.push_back(path.string());
         if (!opt.macro_out.empty()) {
             const std::filesystem::path macro = several ? with_suffix(opt.macro_out, suffix) : std::filesystem::path(opt.macro_out);
-            write_image(macro, zoomed(simulator.per_macro_pixel(result.views[w]), opt.zoom));
+            write_image(macro, zoomed(simulator.per_macro_pixel(result.views[w]), opt.zoom).exposed(common.exposure));
             written.push_back(macro.string());
         }
     }

@@ -70,6 +70,10 @@ CLI::App* add_simulate(CLI::App& app) {
     cmd->add_option("--out", opt->out, "Predicted diffuser image: .exr (linear) or .png (sRGB)");
     cmd->add_option("--lenslets", opt->lenslets,
                     "Also the picture at the display's resolution: the mean over each lenslet (.exr or .png)");
+    cmd->add_option("--exposure", opt->exposure,
+                    "Pictures (--out, --lenslets) multiplied by 2^STOPS, as a camera's exposure compensation: "
+                    "-1 halves, so two lights that add up stay below white (default 0)")
+        ->check(CLI::Range(-20.0, 20.0));
     add_model_option(*cmd, opt->model);
     cmd->add_option("--tolerance", opt->tolerance_dots,
                     "auto: largest paraxial error on the pattern plane, in print dots (default 0.25)")
@@ -140,9 +144,9 @@ CLI::App* add_simulate(CLI::App& app) {
                             opt->tolerance_dots);
         options.model = choice.model;
         const optics::DiffuserImage result = simulator.simulate(pattern, lights, options);
-        write_image(opt->out, result.image);
+        write_image(opt->out, result.image.exposed(opt->exposure));
         const Image picture = simulator.per_lenslet(result);
-        if (!opt->lenslets.empty()) write_image(opt->lenslets, picture);
+        if (!opt->lenslets.empty()) write_image(opt->lenslets, picture.exposed(opt->exposure));
         const optics::PictureContrast contrast = optics::picture_contrast(picture, opt->diffuser, opt->front);
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
@@ -164,6 +168,7 @@ CLI::App* add_simulate(CLI::App& app) {
             {"pattern_efficiency", result.pattern_efficiency},
             {"pixels", {result.image.width(), result.image.height()}},
             {"pixel_mm", result.pixel_mm},
+            {"exposure_stops", opt->exposure},
             {"seconds", seconds}};
         nlohmann::json front = nlohmann::json::array();
         for (const optics::FrontLightContrast& c : contrast.with_front)  // JSON has no infinity: null

@@ -21,7 +21,7 @@ struct SimulateOptions {
     PrintOptions print;
     std::vector<std::string> lights;
     predict::LightFrame frame = predict::LightFrame::Display;
-    double tolerance_dots = 0.25, pixels_per_lenslet = 8.0;
+    double tolerance_dots = 0.25, pixels_per_lenslet = 8.0, exposure = 0.0;
     int rays = 8, area_samples = 5;
     std::size_t max_rays = 4096;
     std::vector<double> front{0.0, 0.1, 0.3, 1.0};

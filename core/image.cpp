@@ -14,6 +14,13 @@ Image::Image(int width, int height, int channels, float fill)
     samples_.assign(pixel_count() * static_cast<std::size_t>(channels), fill);
 }
 
+Image Image::exposed(double stops) const {
+    Image out = *this;
+    const float factor = static_cast<float>(std::exp2(stops));
+    for (float& v : out.samples_) v *= factor;
+    return out;
+}
+
 Image luminance(const Image& image) {
     Image out(image.width(), image.height(), 1);
     auto dst = out.plane(0);

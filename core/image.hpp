@@ -43,6 +43,9 @@ public:
     std::span<float> samples() { return samples_; }
     std::span<const float> samples() const { return samples_; }
 
+    /// The image with every sample multiplied by 2^stops: a camera's exposure compensation.
+    Image exposed(double stops) const;
+
     friend bool operator==(const Image&, const Image&) = default;
 
 private:

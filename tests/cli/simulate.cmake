@@ -26,6 +26,15 @@ if(NOT EXISTS ${OUT}/a_lenslets.exr)
   message(FATAL_ERROR "no per-lenslet picture")
 endif()
 
+# --exposure -1: the same picture at half the value.
+run(0 simulate ${DESIGN} ${OUT}/bars.exr --light 10,180 --light 10,0,0:0:1 --exposure -1 --out ${OUT}/half.exr)
+find_program(OIIOTOOL oiiotool REQUIRED)
+execute_process(COMMAND ${OIIOTOOL} ${OUT}/a.exr --mulc 0.5 ${OUT}/half.exr --diff --fail 1e-6
+                RESULT_VARIABLE code OUTPUT_VARIABLE diff)
+if(NOT code EQUAL 0)
+  message(FATAL_ERROR "--exposure -1 is not half the picture: ${diff}")
+endif()
+
 # Lights in the display's frame by default: with the pattern tilted by 45 deg, 0,0 is the
 # display's axis (the field's 45,90); in the field's frame (--frame field) 0,0 is 45 deg off
 # the axis, outside the field of view, and says so.
