@@ -15,6 +15,10 @@ void Progress::set_quiet(bool quiet) { g_quiet = quiet; }
 
 bool Progress::enabled() { return !g_quiet && isatty(STDERR_FILENO) == 1; }
 
+void Progress::note(const std::string& text) {
+    if (!g_quiet) std::fprintf(stderr, "rfd: note: %s\n", text.c_str());
+}
+
 Progress::Progress(std::string label, std::size_t total)
     : label_(std::move(label)), total_(total), start_(std::chrono::steady_clock::now()) {}
 

@@ -23,6 +23,9 @@ public:
     /// Global switch, set once by the CLI from --quiet.
     static void set_quiet(bool quiet);
     static bool enabled();
+    /// A one-line remark on stderr ("rfd: note: ..."), unless --quiet: what rfd assumed
+    /// about an input, so the user can check it.
+    static void note(const std::string& text);
 
 private:
     void draw(std::size_t done);

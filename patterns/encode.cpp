@@ -306,7 +306,7 @@ relight::ReflectanceField load_field_for(const optics::Design& design, const std
         const relight::LightEntry& e = entries[i];
         Image image;
         try {
-            image = read_image(lp.parent_path() / e.file);
+            image = read_image(e.path);
         } catch (const Error& error) {
             rethrow_at(error, SourceLocation{lp.string(), e.line}, "image '" + e.file + "': " + error.what());
         }

@@ -2,13 +2,18 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cctype>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
+#include <tuple>
+#include <utility>
 
 #include "core/error.hpp"
 #include "core/files.hpp"
 #include "core/image_io.hpp"
+#include "core/progress.hpp"
 #include "core/units.hpp"
 
 namespace rfd::relight {
@@ -16,6 +21,50 @@ namespace {
 
 SourceLocation at(const std::filesystem::path& path, int line) {
     return SourceLocation{path.string(), line, 0, ""};
+}
+
+bool is_number(const std::string& word) {
+    char* end = nullptr;
+    std::strtod(word.c_str(), &end);
+    return end != word.c_str() && *end == '\0';
+}
+
+// The file name at the start of a light file's line, and the rest: the name's first word
+// and every following word that is not a number (names with spaces, as Windows tools
+// write them), kept with their spacing.
+std::pair<std::string, std::string> split_name(const std::string& line) {
+    std::size_t begin = line.find_first_not_of(" \t");
+    std::size_t end = line.find_first_of(" \t", begin);
+    while (end != std::string::npos) {
+        const std::size_t next = line.find_first_not_of(" \t", end);
+        if (next == std::string::npos) break;
+        const std::size_t next_end = line.find_first_of(" \t", next);
+        if (is_number(line.substr(next, next_end == std::string::npos ? std::string::npos : next_end - next))) break;
+        end = next_end;
+    }
+    if (end == std::string::npos) return {line.substr(begin), ""};
+    return {line.substr(begin, end - begin), line.substr(end)};
+}
+
+// RTIBuilder writes the absolute Windows path of each image on the machine that took the
+// capture: C:\Users\...\jpeg-exports\Bottle_001.jpg (or \\server\share\...).
+bool is_windows_path(const std::string& name) {
+    const bool drive = name.size() > 2 && std::isalpha(static_cast<unsigned char>(name[0])) && name[1] == ':' &&
+                       (name[2] == '\\' || name[2] == '/');
+    return drive || name.find('\\') != std::string::npos;
+}
+
+// Where the image a light file names is: relative to the light file's folder; a Windows
+// path by its file name, in the light file's jpeg-exports/ folder if it is there, else next
+// to the light file (where a reader that needs the image reports it missing). Light files
+// are also read for their directions alone, so a missing image is not an error here.
+std::filesystem::path image_path(const std::filesystem::path& folder, const std::string& name) {
+    if (!is_windows_path(name)) return folder / name;
+    const std::string file = name.substr(name.find_last_of("\\/") + 1);
+    std::error_code ec;
+    if (std::filesystem::is_regular_file(folder / file, ec)) return folder / file;
+    if (std::filesystem::is_regular_file(folder / "jpeg-exports" / file, ec)) return folder / "jpeg-exports" / file;
+    return folder / file;
 }
 
 }  // namespace
@@ -27,6 +76,7 @@ std::vector<LightEntry> read_light_file(const std::filesystem::path& lp_path) {
     int line_number = 0;
     long declared = -1;
     std::vector<LightEntry> entries;
+    int windows_names = 0;
     while (std::getline(in, line)) {
         ++line_number;
         if (!line.empty() && line.back() == '\r') line.pop_back();  // files from Windows tools
@@ -42,8 +92,11 @@ std::vector<LightEntry> read_light_file(const std::filesystem::path& lp_path) {
         }
         LightEntry entry;
         entry.line = line_number;
+        std::string rest;
+        std::tie(entry.file, rest) = split_name(line);
+        fields = std::istringstream(rest);
         double x = 0, y = 0, z = 0;
-        if (!(fields >> entry.file >> x >> y >> z))
+        if (!(fields >> x >> y >> z))
             throw InputError(at(lp_path, line_number),
                              "expected 'filename x y z [kernel_degrees]', got '" + line + "'");
         double kernel_degrees = 0.0;
@@ -69,8 +122,15 @@ std::vector<LightEntry> read_light_file(const std::filesystem::path& lp_path) {
         // Unit directions are kept bit for bit, so a written field reads back identically.
         entry.direction = std::abs(length - 1.0) > 1e-12 ? Eigen::Vector3d(d / length) : d;
         entry.kernel_radius = degrees_to_radians(kernel_degrees);
+        entry.path = image_path(lp_path.parent_path(), entry.file);
+        windows_names += is_windows_path(entry.file);
         entries.push_back(entry);
     }
+    if (windows_names > 0)
+        Progress::note(lp_path.string() + ": its image names are Windows paths (as RTIBuilder writes them); read by "
+                       "file name from " + (entries.front().path.parent_path().filename() == "jpeg-exports"
+                                                ? std::string("its jpeg-exports/ folder")
+                                                : std::string("its folder")));
     if (declared < 0) throw InputError(at(lp_path, line_number), "light file is empty");
     if (static_cast<long>(entries.size()) != declared)
         throw InputError(at(lp_path, 1), "declares " + std::to_string(declared) +
@@ -126,10 +186,9 @@ ReflectanceField read_field(const std::filesystem::path& field_path) {
     ReflectanceField field;
     bool any_kernel = false;
     for (const LightEntry& entry : entries) {
-        const std::filesystem::path image_path = lp.parent_path() / entry.file;
         Image image;
         try {
-            image = read_image(image_path);
+            image = read_image(entry.path);
         } catch (const Error& error) {
             rethrow_at(error, at(lp, entry.line), std::string("image '") + entry.file + "': " + error.what());
         }

@@ -15,6 +15,12 @@
 // the direction toward the light (normalised on reading) and optionally the kernel radius
 // in degrees. Lines starting with '#' are comments.
 //
+// Light files of the field's other tools read as they are: CRLF line ends; file names
+// with spaces (the last three numbers on a line are the direction); and RTIBuilder's
+// absolute Windows paths (C:\Users\...\jpeg-exports\Bottle_001.jpg), which name a
+// file on the machine that took the capture: rfd looks for that file name next to the
+// .lp, then in its jpeg-exports/ folder, and says so once.
+//
 // Example: ReflectanceField field = read_field("out/bottle"); field.size();
 
 #include <filesystem>
@@ -42,6 +48,7 @@ struct ReflectanceField {
 /// One line of a light file.
 struct LightEntry {
     std::string file;                   ///< as written in the .lp
+    std::filesystem::path path;         ///< the image it names (see the header)
     Eigen::Vector3d direction;          ///< normalised
     double kernel_radius = 0.0;         ///< radians
     int line = 0;                       ///< 1-based line in the .lp

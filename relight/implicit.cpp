@@ -540,7 +540,7 @@ bool is_image_file(const std::filesystem::path& path) {
 std::vector<std::filesystem::path> field_image_files(const std::filesystem::path& field) {
     const std::filesystem::path lp = light_file_of(field);
     std::vector<std::filesystem::path> files;
-    for (const auto& entry : read_light_file(lp)) files.push_back(lp.parent_path() / entry.file);
+    for (const auto& entry : read_light_file(lp)) files.push_back(entry.path);
     return files;
 }
 

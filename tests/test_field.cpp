@@ -11,6 +11,7 @@
 #include "core/error.hpp"
 #include "core/image_io.hpp"
 #include "core/sphere.hpp"
+#include "core/units.hpp"
 #include "relight/field.hpp"
 #include "tests/support/error_of.hpp"
 #include "tests/support/temp_dir.hpp"
@@ -105,6 +106,40 @@ TEST(Field, WriteThenReadIsIdentical) {
             EXPECT_TRUE(back.kernel_radii.empty());
         }
     }
+}
+
+TEST(Field, AnRtiBuilderCaptureReadsAsItIs) {
+    // CRLF line ends, absolute Windows paths of the capturing machine, a name with spaces,
+    // the JPEGs in jpeg-exports/ (tests/data/rtibuilder).
+    const std::filesystem::path folder = std::filesystem::path(RFD_SOURCE_DIR) / "tests/data/rtibuilder";
+    const std::vector<LightEntry> entries = read_light_file(folder / "Bottle.lp");
+    ASSERT_EQ(entries.size(), 3u);
+    EXPECT_EQ(entries[2].file, "C:\\Users\\Maker\\My Captures\\Bottle\\jpeg-exports\\Bottle 003.jpg");
+    EXPECT_EQ(entries[0].path, folder / "jpeg-exports" / "Bottle_001.jpg");
+    EXPECT_EQ(entries[2].path, folder / "jpeg-exports" / "Bottle 003.jpg");
+    const ReflectanceField field = read_field(folder);
+    ASSERT_EQ(field.size(), 3u);
+    EXPECT_LT((field.directions[1] - Eigen::Vector3d(0.5, 0.0, 0.866025).normalized()).norm(), 1e-12);
+    EXPECT_EQ(field.width(), 4);
+    EXPECT_EQ(field.height(), 3);
+    // Each image is the one its line names (they differ in red: 0.1, 0.2, 0.3, sRGB-coded).
+    EXPECT_LT(field.images[0].at(0, 0, 0), field.images[1].at(0, 0, 0));
+    EXPECT_LT(field.images[1].at(0, 0, 0), field.images[2].at(0, 0, 0));
+    // A Windows name whose file is nowhere near: the reader names the place it looked.
+    const TempDir dir;
+    {
+        std::ofstream lp(dir / "gone.lp");
+        lp << "1\r\nC:\\capture\\jpeg-exports\\gone.jpg 0 0 1\r\n";
+    }
+    EXPECT_THAT(error_of([&] { read_field(dir / "gone.lp"); }), HasSubstr("gone.lp:2: image 'C:\\capture\\jpeg-exports\\gone.jpg'"));
+    // Names with spaces do not swallow numbers: rfd's own five-value lines read as before.
+    {
+        std::ofstream lp(dir / "five.lp");
+        lp << "1\nname with spaces.exr 0 0 1 4\n";
+    }
+    const std::vector<LightEntry> five = read_light_file(dir / "five.lp");
+    EXPECT_EQ(five[0].file, "name with spaces.exr");
+    EXPECT_NEAR(five[0].kernel_radius, degrees_to_radians(4.0), 1e-15);
 }
 
 TEST(Field, WritingTwiceGivesIdenticalBytes) {
