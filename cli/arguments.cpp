@@ -173,6 +173,20 @@ std::vector<optics::DisplayLight> to_display_lights(const std::vector<std::strin
     return lights;
 }
 
+relight::ImageWindow WindowOptions::window() const {
+    relight::ImageWindow window = region.empty() ? relight::ImageWindow{} : relight::parse_region(region, "--region");
+    window.scale = scale;
+    return window;
+}
+
+void add_window_options(CLI::App& command, WindowOptions& options) {
+    command.add_option("--region", options.region,
+                       "Only this part of every image of the field, X,Y,W,H in pixels (leave out a capture's "
+                       "calibration spheres and frame)");
+    command.add_option("--scale", options.scale, "Scale every image of the field by this, after --region (0.5 halves)")
+        ->check(CLI::Range(0.01, 16.0));
+}
+
 void add_frame_option(CLI::App& command, predict::LightFrame& frame) {
     add_choice(command, "--frame", frame, predict::kLightFrameNames,
                "The frame --light is named in: display (default: 0,0 is a lamp straight behind the display, THETA "

@@ -17,6 +17,7 @@
 #include "predict/display_lights.hpp"
 #include "patterns/encode.hpp"
 #include "print/printed.hpp"
+#include "relight/field.hpp"
 #include "print/printer.hpp"
 #include "relight/interpolation.hpp"
 #include "relight/render.hpp"
@@ -100,6 +101,15 @@ patterns::AngularMapping read_pattern_mapping(const std::string& pattern_file);
 std::vector<optics::DisplayLight> to_display_lights(const std::vector<std::string>& texts,
                                                     const patterns::AngularMapping& mapping,
                                                     predict::LightFrame frame = predict::LightFrame::Field);
+
+/// --region X,Y,W,H and --scale S for a command that reads a field: filled into `window`
+/// when the command's callback runs (the region is parsed there).
+struct WindowOptions {
+    std::string region;
+    double scale = 1.0;
+    relight::ImageWindow window() const;
+};
+void add_window_options(CLI::App& command, WindowOptions& options);
 
 /// --frame display|field for --light (default display), with its help.
 void add_frame_option(CLI::App& command, predict::LightFrame& frame);

@@ -68,6 +68,7 @@ void add_encode_command(CLI::App& pattern) {
         patterns::ImageFit fit = patterns::ImageFit::Cover;
         double tilt = 0.0, turn = 0.0, angle_scale = 1.0, margin = 0.0;
         bool allow_partial = false, json = false, single_float = false;
+        WindowOptions window;
     };
     auto opt = std::make_shared<Options>();
     cmd->add_option("DESIGN", opt->design, "Design file (designs/design1.toml, design2.toml)")->required();
@@ -92,6 +93,7 @@ void add_encode_command(CLI::App& pattern) {
         ->check(CLI::IsMember({"none", "rle", "zips", "zip", "piz"}));
     cmd->add_option("--preview", opt->preview, "Also write a screen preview (PNG, 1600 px), scaled to the white");
     cmd->add_flag("--single-float", opt->single_float, "EXR: 32-bit floats instead of half floats (for values above 65504)");
+    add_window_options(*cmd, opt->window);
     cmd->add_flag("--allow-partial", opt->allow_partial, "Encode even where the field does not cover the display's range");
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
     cmd->callback([opt] {
@@ -107,6 +109,7 @@ void add_encode_command(CLI::App& pattern) {
         options.mapping = {opt->tilt, opt->turn, opt->angle_scale};
         options.allow_partial_coverage = opt->allow_partial;
         options.field_name = opt->field;
+        options.window = opt->window.window();
 
         const auto start = std::chrono::steady_clock::now();
         const relight::ReflectanceField field = patterns::load_field_for(design, opt->field, options);

@@ -41,9 +41,11 @@ void add_render(CLI::App& relight) {
         std::string field, envmap, out, interpolation = "delaunay";
         std::vector<std::string> lights;
         bool json = false;
+        WindowOptions window;
     };
     auto opt = std::make_shared<Options>();
     cmd->add_option("FIELD", opt->field, "Reflectance field folder or .lp file")->required();
+    add_window_options(*cmd, opt->window);
     auto* light = cmd->add_option("--light", opt->lights,
                                   std::string("A distant light ") + kLightSyntax +
                                       "; with RADIUS a disk of that angular radius; repeat to add lights")
@@ -75,7 +77,7 @@ void add_render(CLI::App& relight) {
             lights.push_back(relight::EnvironmentMap{std::move(map)});
         }
         const auto t0 = std::chrono::steady_clock::now();
-        const relight::ReflectanceField field = relight::read_field(opt->field);
+        const relight::ReflectanceField field = relight::read_field(opt->field, opt->window.window());
         const auto t1 = std::chrono::steady_clock::now();
         const relight::SphericalInterpolator interpolator(field.directions);
         const relight::LightCoefficients k = relight::light_coefficients(interpolator, lights, method);

@@ -306,7 +306,7 @@ relight::ReflectanceField load_field_for(const optics::Design& design, const std
         const relight::LightEntry& e = entries[i];
         Image image;
         try {
-            image = read_image(e.path);
+            image = relight::apply_window(read_image(e.path), options.window, e.path.string());
         } catch (const Error& error) {
             rethrow_at(error, SourceLocation{lp.string(), e.line}, "image '" + e.file + "': " + error.what());
         }
@@ -764,13 +764,19 @@ AngularMapping mapping_of(const PatternFileInfo& info, const std::string& file) 
 
 PatternAttributes encode_attributes(const EncodeOptions& options) {
     const auto number = [](double v) { return format_number(v, 6); };
-    return {{"model", std::string(optics::to_string(options.model))},
+    PatternAttributes attributes{{"model", std::string(optics::to_string(options.model))},
             {"field", options.field_name},
             {"tilt_deg", number(options.mapping.tilt_deg)},
             {"turn_deg", number(options.mapping.turn_deg)},
             {"angle_scale", number(options.mapping.angle_scale)},
             {"interpolation", std::string(name_of(relight::kInterpolationNames, options.interpolation))},
             {"fit", std::string(name_of(kImageFitNames, options.fit))}};
+    const relight::ImageWindow& w = options.window;
+    if (w.width > 0 || w.height > 0)
+        attributes["region"] = std::to_string(w.x) + "," + std::to_string(w.y) + "," + std::to_string(w.width) + "," +
+                               std::to_string(w.height);
+    if (w.scale != 1.0) attributes["scale"] = format_number(w.scale, 17);
+    return attributes;
 }
 
 EncodeOptions encode_options_of(const PatternFileInfo& info, const std::string& file) {
@@ -786,6 +792,9 @@ EncodeOptions encode_options_of(const PatternFileInfo& info, const std::string& 
     options.interpolation = value_of(relight::kInterpolationNames, text("interpolation", "delaunay"), where("interpolation"));
     options.fit = value_of(kImageFitNames, text("fit", "cover"), where("fit"));
     options.allow_partial_coverage = true;
+    if (const auto region = info.attributes.find("region"); region != info.attributes.end())
+        options.window = relight::parse_region(region->second, file + ": rfd:region");
+    options.window.scale = number_attribute(info, "scale", file, 1.0, NumberRange::Positive);
     return options;
 }
 

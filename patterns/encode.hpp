@@ -87,10 +87,13 @@ struct EncodeOptions {
     /// then extrapolates toward the horizon); otherwise that is an InputError.
     bool allow_partial_coverage = false;
     std::string field_name = "field";  ///< for messages
+    /// The part of each field image used (--region, --scale), applied as it is read.
+    relight::ImageWindow window;
 };
 
 /// The encoder's options as a pattern file's rfd: attributes record them, and back: model,
-/// field, tilt_deg, turn_deg, angle_scale, interpolation, fit. Numbers keep 6 significant
+/// field, tilt_deg, turn_deg, angle_scale, interpolation, fit, and region (X,Y,W,H) and
+/// scale when the field was read through a window. Numbers keep 6 significant
 /// digits. Reading: absent attributes take the defaults of files written before they were
 /// recorded (paraxial, no mapping, delaunay, cover); InputError naming `file` and the
 /// attribute for a value it cannot read. The options read back allow partial coverage: a
@@ -111,7 +114,8 @@ std::vector<std::size_t> needed_field_directions(const optics::Design& design,
                                                  const std::vector<Eigen::Vector3d>& field_directions,
                                                  const EncodeOptions& options);
 
-/// Loads a field from disk keeping only the images the encoder can need (see above).
+/// Loads a field from disk keeping only the images the encoder can need (see above), each
+/// through options.window as it is read.
 relight::ReflectanceField load_field_for(const optics::Design& design,
                                          const std::filesystem::path& field,
                                          const EncodeOptions& options);

@@ -14,6 +14,8 @@
 #include "core/files.hpp"
 #include "core/image_io.hpp"
 #include "core/progress.hpp"
+#include "core/text.hpp"
+#include "relight/vision.hpp"
 #include "core/units.hpp"
 
 namespace rfd::relight {
@@ -179,7 +181,48 @@ std::filesystem::path light_file_of(const std::filesystem::path& field) {
     return found.front();
 }
 
-ReflectanceField read_field(const std::filesystem::path& field_path) {
+ImageWindow parse_region(const std::string& text, const std::string& option) {
+    ImageWindow window;
+    char tail = 0;
+    if (std::sscanf(text.c_str(), "%d,%d,%d,%d%c", &window.x, &window.y, &window.width, &window.height, &tail) != 4 ||
+        window.x < 0 || window.y < 0 || window.width <= 0 || window.height <= 0)
+        throw InputError(option + ": expected X,Y,W,H in pixels (X, Y >= 0; W, H > 0), such as 120,40,800,600, got '" +
+                         text + "'");
+    return window;
+}
+
+Image apply_window(const Image& image, const ImageWindow& window, const std::string& name) {
+    if (window.whole()) return image;
+    if (!(window.scale > 0.0) || !std::isfinite(window.scale))
+        throw InputError("--scale: expected a positive number, got " + std::to_string(window.scale));
+    Image region = image;
+    if (window.width > 0 || window.height > 0) {
+        if (window.x + window.width > image.width() || window.y + window.height > image.height())
+            throw InputError(SourceLocation{name}, "--region " + std::to_string(window.x) + "," + std::to_string(window.y) +
+                                                       "," + std::to_string(window.width) + "," +
+                                                       std::to_string(window.height) + " reaches outside the " +
+                                                       std::to_string(image.width()) + " x " +
+                                                       std::to_string(image.height()) + " image");
+        region = Image(window.width, window.height, image.channels());
+        for (int c = 0; c < image.channels(); ++c)
+            for (int y = 0; y < window.height; ++y)
+                for (int x = 0; x < window.width; ++x) region.at(x, y, c) = image.at(window.x + x, window.y + y, c);
+    }
+    if (window.scale == 1.0) return region;
+    const PlaneSize from{region.width(), region.height()};
+    const PlaneSize to{static_cast<int>(std::lround(from.width * window.scale)),
+                       static_cast<int>(std::lround(from.height * window.scale))};
+    if (to.width < 1 || to.height < 1 || to.area() > (std::size_t{1} << 28))
+        throw InputError(SourceLocation{name}, "--scale " + format_number(window.scale) + " makes the " +
+                                                   std::to_string(from.width) + " x " + std::to_string(from.height) +
+                                                   " image " + std::to_string(to.width) + " x " +
+                                                   std::to_string(to.height) + " pixels");
+    Image scaled(to.width, to.height, region.channels());
+    for (int c = 0; c < region.channels(); ++c) vision().resize(from, region.plane(c), to, scaled.plane(c));
+    return scaled;
+}
+
+ReflectanceField read_field(const std::filesystem::path& field_path, const ImageWindow& window) {
     const std::filesystem::path lp = light_file_of(field_path);
     const std::vector<LightEntry> entries = read_light_file(lp);
     if (entries.empty()) throw InputError(at(lp, 1), "a field needs at least one image");
@@ -188,7 +231,7 @@ ReflectanceField read_field(const std::filesystem::path& field_path) {
     for (const LightEntry& entry : entries) {
         Image image;
         try {
-            image = read_image(entry.path);
+            image = apply_window(read_image(entry.path), window, entry.path.string());
         } catch (const Error& error) {
             rethrow_at(error, at(lp, entry.line), std::string("image '") + entry.file + "': " + error.what());
         }

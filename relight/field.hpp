@@ -45,6 +45,23 @@ struct ReflectanceField {
     double kernel_radius(std::size_t i) const { return kernel_radii.empty() ? 0.0 : kernel_radii[i]; }
 };
 
+/// The part of a capture's images a field is made of, applied as each image is read: a
+/// region of pixels (leaving out the calibration spheres and the frame a capture holds),
+/// then a scale (0.5 halves each side, averaging; sizes round to whole pixels).
+struct ImageWindow {
+    int x = 0, y = 0;             ///< the region's top-left pixel
+    int width = 0, height = 0;    ///< 0 x 0: the whole image
+    double scale = 1.0;           ///< > 0
+
+    bool whole() const { return width == 0 && height == 0 && scale == 1.0; }
+};
+/// --region X,Y,W,H and --scale S as the command line and project files spell them;
+/// InputError naming `option` otherwise.
+ImageWindow parse_region(const std::string& text, const std::string& option);
+/// `image` (named `name` in messages) through the window: InputError when the region
+/// reaches outside it or the scale leaves no pixel.
+Image apply_window(const Image& image, const ImageWindow& window, const std::string& name);
+
 /// One line of a light file.
 struct LightEntry {
     std::string file;                   ///< as written in the .lp
@@ -69,7 +86,8 @@ std::filesystem::path light_file_of(const std::filesystem::path& field);
 
 /// Reads a whole field. Throws for any malformed light file, a missing or unreadable image,
 /// images of different sizes, and non-finite samples, naming the file and the .lp line.
-ReflectanceField read_field(const std::filesystem::path& field);
+/// Each image goes through `window` as it is read.
+ReflectanceField read_field(const std::filesystem::path& field, const ImageWindow& window = {});
 
 /// Writes a field into `folder` one image at a time, for fields too large to hold: open
 /// (creates the folder and removes `<name>.lp` if an earlier run left one, since it would

@@ -88,6 +88,11 @@ public:
         cv::remap(view(size, in), target, view(size, map_x), view(size, map_y), cv::INTER_LINEAR, border_of(border),
                   0.0);
     }
+    void resize(PlaneSize in_size, std::span<const float> in, PlaneSize out_size, std::span<float> out) const override {
+        cv::Mat target = view(out_size, out);
+        const bool shrinking = out_size.width <= in_size.width && out_size.height <= in_size.height;
+        cv::resize(view(in_size, in), target, target.size(), 0.0, 0.0, shrinking ? cv::INTER_AREA : cv::INTER_LINEAR);
+    }
     void inpaint(PlaneSize size, std::span<const float> in, std::span<const std::uint8_t> mask, double radius,
                  std::span<float> out) const override {
         cv::Mat target = view(size, out);

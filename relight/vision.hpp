@@ -66,6 +66,9 @@ public:
     /// Farneback's dense optical flow: from(x) ~ to(x + flow(x)).
     virtual void optical_flow(PlaneSize size, std::span<const std::uint8_t> from, std::span<const std::uint8_t> to,
                               const FlowOptions& options, std::span<float> flow) const = 0;
+    /// `in` resampled to `out_size`: the mean over each output pixel's footprint when
+    /// shrinking (OpenCV's INTER_AREA), bilinear when growing.
+    virtual void resize(PlaneSize in_size, std::span<const float> in, PlaneSize out_size, std::span<float> out) const = 0;
     /// out(x, y) = in(map_x(x, y), map_y(x, y)), bilinear.
     virtual void remap(PlaneSize size, std::span<const float> in, std::span<const float> map_x,
                        std::span<const float> map_y, std::span<float> out, Border border) const = 0;

@@ -142,6 +142,8 @@ TEST(EncodeOptionsOf, RoundTripsTheEncodersAttributes) {
     options.interpolation = relight::Interpolation::Nearest;
     options.fit = ImageFit::Contain;
     options.mapping = {12.5, -30.0, 1.25};
+    options.window = relight::parse_region("120,40,800,600", "--region");
+    options.window.scale = 0.3;
     const PatternGeometry geometry = pattern_geometry(design, Dpi{360}, Dpi{360});
     const Encoder encoder(design, diamonds_field(), geometry, options);
     PatternFileInfo info;
@@ -154,6 +156,11 @@ TEST(EncodeOptionsOf, RoundTripsTheEncodersAttributes) {
     EXPECT_DOUBLE_EQ(read.mapping.turn_deg, -30.0);
     EXPECT_DOUBLE_EQ(read.mapping.angle_scale, 1.25);
     EXPECT_EQ(read.field_name, encoder.options().field_name);
+    EXPECT_EQ(read.window.x, 120);
+    EXPECT_EQ(read.window.y, 40);
+    EXPECT_EQ(read.window.width, 800);
+    EXPECT_EQ(read.window.height, 600);
+    EXPECT_EQ(read.window.scale, 0.3);
     EXPECT_EQ(encode_options_of(PatternFileInfo{}, "old.exr").model, optics::Model::Paraxial);
 
     // Patterns written before the two were recorded: the encoder's defaults.

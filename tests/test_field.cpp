@@ -142,6 +142,40 @@ TEST(Field, AnRtiBuilderCaptureReadsAsItIs) {
     EXPECT_NEAR(five[0].kernel_radius, degrees_to_radians(4.0), 1e-15);
 }
 
+TEST(ImageWindow, CropsThenAveragesAndRefusesWhatLiesOutside) {
+    Image image(6, 4, 2);
+    for (int c = 0; c < 2; ++c)
+        for (int y = 0; y < 4; ++y)
+            for (int x = 0; x < 6; ++x) image.at(x, y, c) = static_cast<float>(10 * c + x + 6 * y);
+    const ImageWindow region = parse_region("1,1,4,2", "--region");
+    const Image cropped = apply_window(image, region, "a.exr");
+    ASSERT_EQ(cropped.width(), 4);
+    ASSERT_EQ(cropped.height(), 2);
+    for (int c = 0; c < 2; ++c)
+        for (int y = 0; y < 2; ++y)
+            for (int x = 0; x < 4; ++x) EXPECT_EQ(cropped.at(x, y, c), image.at(x + 1, y + 1, c));
+    // Halving averages each 2 x 2 block of the region.
+    ImageWindow halved = region;
+    halved.scale = 0.5;
+    const Image small = apply_window(image, halved, "a.exr");
+    ASSERT_EQ(small.width(), 2);
+    ASSERT_EQ(small.height(), 1);
+    for (int c = 0; c < 2; ++c)
+        for (int x = 0; x < 2; ++x) {
+            const float mean = 0.25f * (image.at(1 + 2 * x, 1, c) + image.at(2 + 2 * x, 1, c) + image.at(1 + 2 * x, 2, c) +
+                                        image.at(2 + 2 * x, 2, c));
+            EXPECT_NEAR(small.at(x, 0, c), mean, 1e-4) << x << " " << c;
+        }
+    EXPECT_EQ(apply_window(image, ImageWindow{}, "a.exr"), image);
+    EXPECT_THAT(error_of([&] { apply_window(image, parse_region("3,0,4,4", "--region"), "a.exr"); }),
+                HasSubstr("a.exr: --region 3,0,4,4 reaches outside the 6 x 4 image"));
+    ImageWindow tiny;
+    tiny.scale = 0.01;
+    EXPECT_THAT(error_of([&] { apply_window(image, tiny, "a.exr"); }), HasSubstr("--scale 0.01 makes the 6 x 4 image 0 x 0"));
+    for (const char* bad : {"1,1,4", "1,1,0,2", "-1,0,2,2", "1,1,4,2,5", "a,b,c,d"})
+        EXPECT_THAT(error_of([&] { parse_region(bad, "--region"); }), HasSubstr("--region: expected X,Y,W,H")) << bad;
+}
+
 TEST(Field, WritingTwiceGivesIdenticalBytes) {
     TempDir dir;
     const ReflectanceField field = small_field(false);
