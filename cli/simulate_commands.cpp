@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,7 +19,10 @@
 #include "core/text.hpp"
 #include "core/units.hpp"
 #include "optics/display.hpp"
+#include "optics/analysis.hpp"
 #include "predict/display_lights.hpp"
+#include "predict/rti_export.hpp"
+#include "relight/field.hpp"
 #include "patterns/encode.hpp"
 #include "print/printed.hpp"
 #include "print/sheet.hpp"
@@ -219,10 +223,68 @@ CLI::App* add_simulate(CLI::App& app) {
     return cmd;
 }
 
+void add_rti_command(CLI::App& simulate) {
+    auto* cmd = simulate.add_subcommand(
+        "rti", "The predicted display as an RTI set (.lp and JPEGs, as CNR relight and RTIBuilder read them): one "
+               "picture per light direction over the display's field of view (Designs I and II)");
+    struct Options {
+        std::string design, pattern, out;
+        PrintOptions print;
+        optics::ModelChoice model = optics::ModelChoice::Auto;
+        std::size_t count = 64;
+        std::optional<double> max_angle_deg;
+        double exposure = 0.0;
+        int rays = 8;
+        bool full = false;
+    };
+    auto opt = std::make_shared<Options>();
+    cmd->add_option("DESIGN", opt->design, "Design TOML file (Design I or II)")->required();
+    cmd->add_option("PATTERN", opt->pattern, "Pattern file from `rfd pattern encode`")->required();
+    cmd->add_option("--out", opt->out, "Output folder: display.lp and display_NNNN.jpg")->required();
+    cmd->add_option("--count", opt->count, "Light directions (default 64)")->check(CLI::Range(1, 4096));
+    cmd->add_option("--max-angle", opt->max_angle_deg,
+                    "Largest angle to the display's axis, degrees (default: the field of view's edge, the smallest "
+                    "wrap-over angle)")
+        ->check(CLI::Range(0.1, 89.0));
+    cmd->add_option("--exposure", opt->exposure, "Pictures multiplied by 2^STOPS before they are coded (default 0)")
+        ->check(CLI::Range(-20.0, 20.0));
+    cmd->add_option("--rays", opt->rays, "Rays per side of each lenslet's grid (default 8)")->check(CLI::Range(1, 256));
+    cmd->add_flag("--full", opt->full, "The diffuser picture instead of one value per lenslet");
+    add_model_option(*cmd, opt->model);
+    add_print_options(*cmd, opt->print);
+    cmd->callback([opt] {
+        const optics::Design design = optics::load_design(opt->design);
+        const optics::DisplaySimulator simulator(design);
+        const print::PrintedTransparency pattern = printed_pattern(design, opt->pattern, opt->print);
+        double max_angle_deg = opt->max_angle_deg.value_or(0.0);
+        if (!opt->max_angle_deg) {
+            const optics::DesignSummary summary = optics::summarise(simulator.optics());
+            if (!summary.field_of_view_deg)
+                throw InputError(SourceLocation{opt->design}, "the design has no field of view edge: give --max-angle");
+            max_angle_deg = 0.5 * *summary.field_of_view_deg;
+        }
+        optics::SimulationOptions options;
+        options.rays_per_side = opt->rays;
+        options.model = optics::resolve(opt->model, simulator.optics(),
+                                        {pattern.geometry().dot_x, pattern.geometry().dot_y}, 0.25)
+                            .model;
+        const std::vector<Eigen::Vector3d> directions =
+            predict::cone_directions(opt->count, degrees_to_radians(max_angle_deg), 1);
+        relight::ReflectanceField shown = predict::predicted_field(simulator, pattern, directions, options, !opt->full);
+        for (Image& image : shown.images) image = image.exposed(opt->exposure);
+        relight::write_field(opt->out, shown, "display", ".jpg");
+        std::printf("wrote %s/display.lp: %zu pictures of %d x %d, lights up to %.1f deg from the display's axis "
+                    "(display frame), %s model\n",
+                    opt->out.c_str(), shown.size(), shown.width(), shown.height(), max_angle_deg,
+                    std::string(optics::to_string(options.model)).c_str());
+    });
+}
+
 }  // namespace
 
 void add_simulate_commands(CLI::App& app) {
     CLI::App* simulate = add_simulate(app);
+    add_rti_command(*simulate);
     add_simulate_tolerance_command(*simulate);
     add_simulate_compare_command(*simulate);
 }

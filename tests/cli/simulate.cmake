@@ -26,6 +26,12 @@ if(NOT EXISTS ${OUT}/a_lenslets.exr)
   message(FATAL_ERROR "no per-lenslet picture")
 endif()
 
+# The predicted display as an RTI set, read back by rfd's own light file reader.
+run(0 simulate rti ${DESIGN} ${OUT}/bars.exr --count 6 --out ${OUT}/rti)
+expect("wrote .*display.lp: 6 pictures of 6 x 5")
+run(0 relight render ${OUT}/rti --light 2,0 --out ${OUT}/rti_lit.png)
+expect("relit .*rti \\(6 images\\)")
+
 # --exposure -1: the same picture at half the value.
 run(0 simulate ${DESIGN} ${OUT}/bars.exr --light 10,180 --light 10,0,0:0:1 --exposure -1 --out ${OUT}/half.exr)
 find_program(OIIOTOOL oiiotool REQUIRED)
