@@ -122,6 +122,7 @@ struct EvalOptions {
     std::string field, reference, out, interpolation = "delaunay";
     std::vector<std::string> lights;
     bool json = false;
+    WindowOptions window;
 };
 
 // The JSON summary both kinds of evaluation share; `entries` is "per_direction" or "per_light".
@@ -184,6 +185,7 @@ void add_eval(CLI::App& relight) {
     auto opt = std::make_shared<EvalOptions>();
     cmd->add_option("FIELD", opt->field, "Sparse reflectance field (folder or .lp)")->required();
     cmd->add_option("--reference", opt->reference, "Reference field, same view and image size")->required();
+    add_window_options(*cmd, opt->window);
     cmd->add_option("--interpolation", opt->interpolation, "delaunay (default), solid-angle (eq. 4.6 as written) or nearest");
     cmd->add_option("--light", opt->lights,
                     std::string("Score under this light ") + kLightSyntax +
@@ -198,8 +200,10 @@ void add_eval(CLI::App& relight) {
         const relight::Interpolation method = parse_interpolation(opt->interpolation);
         std::vector<relight::Light> lights;
         for (const auto& text : opt->lights) lights.push_back(parse_light(text));
-        const relight::ReflectanceField sparse = relight::read_field(opt->field);
-        const relight::ReflectanceField reference = relight::read_field(opt->reference);
+        // The same part of the same view in both fields.
+        const relight::ImageWindow window = opt->window.window();
+        const relight::ReflectanceField sparse = relight::read_field(opt->field, window);
+        const relight::ReflectanceField reference = relight::read_field(opt->reference, window);
         if (!lights.empty()) {
             evaluate_under_lights(*opt, sparse, reference, lights, method);
             return;

@@ -22,9 +22,11 @@ void add_upsample_command(CLI::App& relight) {
         int levels = 1;
         relight::UpsampleOptions upsample;
         bool json = false;
+        WindowOptions window;
     };
     auto opt = std::make_shared<Options>();
     cmd->add_option("FIELD", opt->field, "Reflectance field (folder or .lp)")->required();
+    add_window_options(*cmd, opt->window);
     cmd->add_option("--levels", opt->levels,
                     "Rounds of subdivision: each adds the midpoints of every Delaunay edge (about 3x the directions "
                     "so far); 1 or 2 are typical")
@@ -72,7 +74,7 @@ void add_upsample_command(CLI::App& relight) {
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
     cmd->callback([opt] {
         const auto t0 = std::chrono::steady_clock::now();
-        const relight::ReflectanceField field = relight::read_field(opt->field);
+        const relight::ReflectanceField field = relight::read_field(opt->field, opt->window.window());
         const auto t1 = std::chrono::steady_clock::now();
         const relight::UpsampledField up = relight::upsample_field(field, opt->levels, opt->upsample);
         const auto t2 = std::chrono::steady_clock::now();
