@@ -115,7 +115,7 @@ relight::Light light_in_field_frame(const relight::Light& light, LightFrame fram
     // Toward the light in the display's frame -> direction of travel -> the field direction
     // the pattern shows for it.
     const auto to_field = [&](const Eigen::Vector3d& toward) {
-        return mapping.field_direction(Eigen::Vector3d(-toward.x(), -toward.y(), toward.z()).normalized());
+        return mapping.field_direction(travel_from(toward).normalized());
     };
     if (const auto* point = std::get_if<relight::DirectionalLight>(&light)) {
         relight::DirectionalLight field = *point;
@@ -147,7 +147,7 @@ LightCheck check_light(const optics::DesignOptics& optics, const optics::Display
                        const AngularMapping& mapping) {
     const Eigen::Vector3d travel = light.direction.normalized();
     LightCheck check;
-    const SphericalAngles display = angles_of(Eigen::Vector3d(-travel.x(), -travel.y(), travel.z()));
+    const SphericalAngles display = angles_of(travel_from(travel));
     const SphericalAngles field = angles_of(mapping.field_direction(travel));
     check.display_theta_deg = radians_to_degrees(display.theta);
     check.display_phi_deg = display.theta < 1e-12 ? 0.0 : radians_to_degrees(display.phi);  // no azimuth on the axis

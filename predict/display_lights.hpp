@@ -46,6 +46,10 @@ using patterns::AngularMapping;
 enum class LightFrame { Display, Field };
 inline constexpr std::array kLightFrameNames{Named{LightFrame::Display, "display"}, Named{LightFrame::Field, "field"}};
 
+/// The direction of travel of light from `toward` (display frame, toward the light), and
+/// back: x and y reversed, z kept.
+inline Eigen::Vector3d travel_from(const Eigen::Vector3d& toward) { return {-toward.x(), -toward.y(), toward.z()}; }
+
 /// `light`, named in `frame`, in the field's frame (unchanged for LightFrame::Field). A
 /// display-frame light at THETA,PHI is the field light that the display meets along
 /// incident direction (-sin THETA cos PHI, -sin THETA sin PHI, cos THETA); a disc keeps its

@@ -7,6 +7,7 @@
 #include "core/sphere.hpp"
 #include "core/text.hpp"
 #include "core/units.hpp"
+#include "predict/display_lights.hpp"
 #include "relight/sampling.hpp"
 
 namespace rfd::predict {
@@ -34,7 +35,7 @@ relight::ReflectanceField predicted_field(const optics::DisplaySimulator& simula
         if (!(unit.z() > 0.0))
             throw InputError("a light of the display's frame must shine from behind it (z > 0), got " +
                              format_direction(unit));
-        const optics::DisplayLight light{{-unit.x(), -unit.y(), unit.z()}, {1.0, 1.0, 1.0}};
+        const optics::DisplayLight light{travel_from(unit), {1.0, 1.0, 1.0}};
         const optics::DiffuserImage shown = simulator.simulate(pattern, {light}, options);
         field.images.push_back(per_lenslet ? simulator.per_lenslet(shown) : shown.image);
         field.directions.push_back(unit);

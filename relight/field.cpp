@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cctype>
 #include <cstdio>
-#include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <tuple>
@@ -13,6 +12,7 @@
 #include "core/error.hpp"
 #include "core/files.hpp"
 #include "core/image_io.hpp"
+#include "core/number.hpp"
 #include "core/progress.hpp"
 #include "core/text.hpp"
 #include "relight/vision.hpp"
@@ -25,12 +25,6 @@ SourceLocation at(const std::filesystem::path& path, int line) {
     return SourceLocation{path.string(), line, 0, ""};
 }
 
-bool is_number(const std::string& word) {
-    char* end = nullptr;
-    std::strtod(word.c_str(), &end);
-    return end != word.c_str() && *end == '\0';
-}
-
 // The file name at the start of a light file's line, and the rest: the name's first word
 // and every following word that is not a number (names with spaces, as Windows tools
 // write them), kept with their spacing.
@@ -41,7 +35,7 @@ std::pair<std::string, std::string> split_name(const std::string& line) {
         const std::size_t next = line.find_first_not_of(" \t", end);
         if (next == std::string::npos) break;
         const std::size_t next_end = line.find_first_of(" \t", next);
-        if (is_number(line.substr(next, next_end == std::string::npos ? std::string::npos : next_end - next))) break;
+        if (finite_number(line.substr(next, next_end == std::string::npos ? std::string::npos : next_end - next))) break;
         end = next_end;
     }
     if (end == std::string::npos) return {line.substr(begin), ""};
