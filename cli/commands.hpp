@@ -43,4 +43,7 @@ void add_simulate_compare_command(CLI::App& simulate);
 /// `holder`: the lens holder as OpenSCAD, its STLs and their checks; `holder coupon`.
 void add_holder_commands(CLI::App& app);
 
+/// `make`: a project file into every output (project/make.hpp).
+void add_make_command(CLI::App& app);
+
 }  // namespace rfd::cli

@@ -45,6 +45,7 @@ int main(int argc, char** argv) {
     rfd::cli::add_print_commands(app);
     rfd::cli::add_simulate_commands(app);
     rfd::cli::add_holder_commands(app);
+    rfd::cli::add_make_command(app);
     add_shared_rules(app, quiet);
     try {
         app.parse(argc, argv);

@@ -94,7 +94,8 @@ void add_moire_command(CLI::App& print_cmd) {
     };
     auto opt = std::make_shared<Options>();
     cmd->add_option("DESIGN", opt->design, "Design TOML file")->required();
-    cmd->add_option("--pitch", opt->pitch, "Pitch hypotheses along a row, FROM:TO:STEPS in mm")->required();
+    cmd->add_option("--pitch", opt->pitch,
+                    "Pitch hypotheses along a row, FROM:TO:STEPS in mm (default: the design's pitch +-0.4 %, 9 steps)");
     cmd->add_option("--pitch-y", opt->pitch_y,
                     "Rectangular arrays: row-spacing hypotheses FROM:TO:STEPS (default: --pitch scaled by the "
                     "design's pitch_y / pitch_x)");
@@ -102,13 +103,14 @@ void add_moire_command(CLI::App& print_cmd) {
     cmd->add_option("--out", opt->out, "Output PDF")->required();
     cmd->add_flag("--json", opt->json, "Machine-readable list of bands");
     cmd->callback([opt] {
-        print::MoireOptions options;
-        options.x = print::parse_pitch_range(opt->pitch, "--pitch");
-        if (!opt->pitch_y.empty()) options.y = print::parse_pitch_range(opt->pitch_y, "--pitch-y");
         const std::filesystem::path out(opt->out);
         if (out.extension() != ".pdf")
             throw InputError(SourceLocation{opt->out, 0, 0, "--out"}, "expected a .pdf file");
         const optics::Design design = optics::load_design(opt->design);
+        print::MoireOptions options;
+        options.x = opt->pitch.empty() ? print::default_pitch_range(design)
+                                       : print::parse_pitch_range(opt->pitch, "--pitch");
+        if (!opt->pitch_y.empty()) options.y = print::parse_pitch_range(opt->pitch_y, "--pitch-y");
         const print::PrinterProfile printer = printer_for(design, opt->printer);
         const auto bands = print::write_moire_pdf(out, design, printer, options);
         if (opt->json) {

@@ -9,6 +9,8 @@ find_package(OpenImageIO 2.4 REQUIRED CONFIG)
 # Cairo: PDF print sheets (print/) and the glyphs of procedural letter fields (patterns/).
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(Cairo REQUIRED IMPORTED_TARGET cairo)
+# XXH3 content hashes for rfd make's manifest (project/manifest.cpp).
+pkg_check_modules(xxhash REQUIRED IMPORTED_TARGET libxxhash)
 # CGAL is header-only here (5.x); relight/ uses its Delaunay triangulations.
 find_package(CGAL 5 REQUIRED CONFIG)
 # Embree 3: the CPU ray tracing kernels of the virtual light stage (relight/ray_scene).

@@ -395,6 +395,18 @@ std::vector<double> ConfigTable::numbers(const std::string& key, std::size_t cou
     return result;
 }
 
+std::vector<std::string> ConfigTable::strings(const std::string& key) {
+    const toml::array* array = require(key).as_array();
+    if (!array) fail(key, "expected an array of strings");
+    std::vector<std::string> result;
+    for (const toml::node& element : *array) {
+        const auto* text = element.as_string();
+        if (!text) fail(key, "expected an array of strings, found " + type_name(element) + " in it");
+        result.push_back(text->get());
+    }
+    return result;
+}
+
 ConfigTable ConfigTable::table(const std::string& key) {
     const toml::node& node = require(key);
     const toml::table* sub = node.as_table();

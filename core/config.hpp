@@ -78,6 +78,9 @@ public:
     std::vector<double> numbers(const std::string& key, std::size_t count, double min,
                                 double max);
 
+    /// Required array of strings, possibly empty (`formats = ["pdf", "tif"]`).
+    std::vector<std::string> strings(const std::string& key);
+
     /// Required sub-table.
     ConfigTable table(const std::string& key);
     std::optional<ConfigTable> optional_table(const std::string& key);

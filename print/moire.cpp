@@ -63,6 +63,12 @@ PitchRange parse_pitch_range(const std::string& text, const std::string& option)
     return range;
 }
 
+PitchRange default_pitch_range(const optics::Design& design) {
+    constexpr double kRelativeSpread = 0.004;
+    const double pitch = array_lattice(design).pitch_x();
+    return {pitch * (1.0 - kRelativeSpread), pitch * (1.0 + kRelativeSpread), 9};
+}
+
 std::vector<MoireBand> write_moire_pdf(const std::filesystem::path& out, const optics::Design& design,
                                        const PrinterProfile& printer, const MoireOptions& options) {
     const optics::Lattice& lattice = array_lattice(design);

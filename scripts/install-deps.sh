@@ -23,6 +23,8 @@ packages=(
   # Embree 3: ray intersection for the virtual light stage (relight/ray_scene.cpp).
   libembree-dev
   libtomlplusplus-dev libcli11-dev nlohmann-json3-dev
+  # xxHash: content hashes of rfd make's manifest, fast enough to re-hash a pattern each run.
+  libxxhash-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   openscad gnuplot-nox
   # pdftoppm and pdftocairo: the test that a PDF sheet's tile joins do not show renders it

@@ -639,6 +639,15 @@ TEST(Moire, PitchRangeParsing) {
             << bad;
 }
 
+// Design I's lenslets: 20.77 per cm^2 on a hexagonal lattice, pitch sqrt(200 / (sqrt(3) 20.77)).
+TEST(Moire, DefaultHypothesesAreCentredOnTheDesignsPitch) {
+    const PitchRange r = default_pitch_range(optics::load_design(kDesigns / "design1.toml"));
+    const double pitch = std::sqrt(200.0 / (std::sqrt(3.0) * 20.77));
+    ASSERT_EQ(r.steps, 9);
+    EXPECT_NEAR(r.values()[4], pitch, 1e-9);
+    EXPECT_NEAR(r.to / r.from, 1.004 / 0.996, 1e-12);
+}
+
 TEST(Moire, BandsForEveryHypothesisOnPaperSizedPages) {
     TempDir dir;
     const optics::Design design = optics::load_design(kDesigns / "design1.toml");

@@ -1,0 +1,184 @@
+#include "project/index.hpp"
+
+#include <algorithm>
+#include <string>
+#include <system_error>
+
+#include "core/files.hpp"
+#include "core/text.hpp"
+#include "optics/design.hpp"
+#include "print/printer.hpp"
+#include "holders/profile.hpp"
+
+namespace rfd::project {
+namespace {
+
+namespace fs = std::filesystem;
+
+// One instruction: what to do, and the files it is about (relative to the output folder).
+struct Item {
+    std::string text;
+    std::vector<std::string> files;
+};
+struct Section {
+    std::string title;
+    std::vector<Item> items;
+};
+
+bool made(const fs::path& out, const std::string& file) {
+    std::error_code ec;
+    return fs::exists(out / file, ec);
+}
+
+std::vector<std::string> files_with_extension(const fs::path& folder, const fs::path& out, const std::string& ext) {
+    std::vector<std::string> files;
+    std::error_code ec;
+    for (const auto& entry : fs::directory_iterator(folder, ec))
+        if (entry.path().extension() == ext) files.push_back(fs::relative(entry.path(), out).generic_string());
+    std::sort(files.begin(), files.end());
+    return files;
+}
+
+std::vector<Section> instructions(const Project& project, const fs::path& out) {
+    const optics::Design design = optics::load_design(project.design);
+    const print::PrinterProfile printer = print::load_printer(project.printer);
+    const std::string film_printer = printer.name + " (" + format_number(printer.dpi_x.value) + " x " +
+                                     format_number(printer.dpi_y.value) + " dpi)";
+    std::vector<Section> sections;
+
+    Section print_first{"1. Calibrate", {}};
+    if (made(out, "print/moire.pdf"))
+        print_first.items.push_back(
+            {"Print moire.pdf on transparency film with " + film_printer +
+                 ", at 100 % (no scaling, no colour adjustment). Lay the lens array on it: the band whose fringes "
+                 "vanish or are widest has the array's true pitch. If it is not the design's, put it into the "
+                 "design's lattice and run rfd make again.",
+             {"print/moire.pdf"}});
+    if (made(out, "print/wedge.pdf"))
+        print_first.items.push_back(
+            {"Print wedge.pdf the same way and measure its steps (docs/formats.md, printer profiles): the "
+             "printer profile's gamma, max_density and black_level come from it.",
+             {"print/wedge.pdf"}});
+    print_first.items.push_back(
+        {"If you do not know your 3D printer's clearance, print the fit-test coupon first: "
+         "rfd holder coupon --out coupon.scad --stl coupon.stl",
+         {}});
+    sections.push_back(print_first);
+
+    Section holder{"2. Print the holder", {}};
+    if (made(out, "holder")) {
+        const holders::HolderProfile profile = holders::load_profile(project.printer_3d);
+        holder.items.push_back({"3D-print these parts with " + profile.name +
+                                    ". holder.txt in logs/ lists the seats and the checks they passed; holder.scad "
+                                    "is the OpenSCAD source.",
+                                files_with_extension(out / "holder", out, ".stl")});
+    }
+    sections.push_back(holder);
+
+    Section film{"3. Print the pattern", {}};
+    std::vector<std::string> fronts, backs;
+    for (const char* format : {"pdf", "tif"}) {
+        if (made(out, std::string("print/front.") + format)) fronts.push_back(std::string("print/front.") + format);
+        if (made(out, std::string("print/back.") + format)) backs.push_back(std::string("print/back.") + format);
+    }
+    film.items.push_back({"Print the front sheet on transparency film with " + film_printer +
+                              ", at 100 %, no colour adjustment (the PDF and the TIFF are the same page; use "
+                              "the one your printer driver takes at its true resolution).",
+                          fronts});
+    if (!backs.empty())
+        film.items.push_back({"Print the mirrored back sheet the same way. Lay it behind the front sheet, ink "
+                              "to ink, registration markers on markers: two sheets double the density.",
+                              backs});
+    sections.push_back(film);
+
+    Section assemble{"4. Assemble", {}};
+    assemble.items.push_back(
+        {"Lay the pattern (" + std::to_string(printer.sheets) + " sheet(s)) into the holder's pattern pocket and "
+         "each lens part into the base, pressed against its seat (the seats are listed in logs/holder.txt), then "
+         "close the lid. " +
+             std::string(design.kind == optics::DesignKind::I
+                             ? "Look through the corner sight windows: the registration markers must sit "
+                               "centred under their lenslets."
+                             : "The registration markers lie under the corner lenslets: centre them."),
+         {}});
+    assemble.items.push_back(
+        {"Light it from behind with a small lamp; the picture changes as the lamp moves.", {}});
+    sections.push_back(assemble);
+
+    Section predicted{"What it will show", {}};
+    if (made(out, "predict/compare/psnr.png"))
+        predicted.items.push_back({"The predicted display against the field relit in software, PSNR against the "
+                                   "light's angle (pictures per light in the folder; summary in logs/compare.txt).",
+                                   {"predict/compare/psnr.png"}});
+    if (made(out, "predict/tolerance"))
+        predicted.items.push_back({"How precisely to assemble it (summary.txt and a chart per error).",
+                                   {"predict/tolerance/summary.txt"}});
+    predicted.items.push_back({"The pattern, scaled down for the screen.", {"pattern.png"}});
+    sections.push_back(predicted);
+    return sections;
+}
+
+std::string html_escaped(const std::string& text) {
+    std::string out;
+    for (char c : text) {
+        switch (c) {
+        case '&': out += "&amp;"; break;
+        case '<': out += "&lt;"; break;
+        case '>': out += "&gt;"; break;
+        case '"': out += "&quot;"; break;
+        default: out += c;
+        }
+    }
+    return out;
+}
+
+bool is_picture(const std::string& file) { return file.ends_with(".png"); }
+
+}  // namespace
+
+void write_index(const Project& project, const fs::path& out, const std::vector<Step>& steps) {
+    const std::vector<Section> sections = instructions(project, out);
+    const std::string title = project.name + ": a passive reflectance-field display";
+
+    std::string text = title + "\nMade by rfd make from " + project.file.string() + ". Paths are relative to this folder.\n";
+    for (const Section& section : sections) {
+        if (section.items.empty()) continue;
+        text += "\n" + section.title + "\n";
+        for (const Item& item : section.items) {
+            text += "- " + item.text + "\n";
+            for (const std::string& file : item.files) text += "    " + file + "\n";
+        }
+    }
+    text += "\nHow each file was made (run `rfd make` again to re-make only what changed; any line alone to vary "
+            "it)\n";
+    for (const Step& step : steps) text += "- " + step.title + "\n    " + command_line(step) + "\n";
+    write_text_file(out / "README.txt", text);
+
+    std::string html = "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>" +
+                       html_escaped(title) +
+                       "</title>\n<style>\nbody{font-family:sans-serif;max-width:60em;margin:2em auto;padding:0 1em;"
+                       "line-height:1.4}\nimg{max-width:100%;border:1px solid #ccc}\ncode{font-size:90%}\n</style>\n"
+                       "</head>\n<body>\n<h1>" +
+                       html_escaped(title) + "</h1>\n<p>Made by <code>rfd make</code> from <code>" +
+                       html_escaped(project.file.string()) + "</code>.</p>\n";
+    for (const Section& section : sections) {
+        if (section.items.empty()) continue;
+        html += "<h2>" + html_escaped(section.title) + "</h2>\n<ul>\n";
+        for (const Item& item : section.items) {
+            html += "<li>" + html_escaped(item.text);
+            for (const std::string& file : item.files)
+                html += is_picture(file) ? "<br><img src=\"" + html_escaped(file) + "\" alt=\"" + html_escaped(file) + "\">"
+                                         : " <a href=\"" + html_escaped(file) + "\">" + html_escaped(file) + "</a>";
+            html += "</li>\n";
+        }
+        html += "</ul>\n";
+    }
+    html += "<h2>How each file was made</h2>\n<ul>\n";
+    for (const Step& step : steps)
+        html += "<li>" + html_escaped(step.title) + " (<a href=\"logs/" + html_escaped(step.name) +
+                ".txt\">report</a>)<br><code>" + html_escaped(command_line(step)) + "</code></li>\n";
+    html += "</ul>\n</body>\n</html>\n";
+    write_text_file(out / "index.html", html);
+}
+
+}  // namespace rfd::project

@@ -1,0 +1,17 @@
+#pragma once
+// What `rfd make` writes for people: DIR/README.txt (what to send to which printer, in
+// which order, how to assemble, and the command of every step) and DIR/index.html (the
+// same as a page, with the pictures).
+
+#include <filesystem>
+#include <vector>
+
+#include "project/make.hpp"
+#include "project/project.hpp"
+
+namespace rfd::project {
+
+/// Writes README.txt and index.html into `out` for the steps made there.
+void write_index(const Project& project, const std::filesystem::path& out, const std::vector<Step>& steps);
+
+}  // namespace rfd::project

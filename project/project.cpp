@@ -1,0 +1,161 @@
+#include "project/project.hpp"
+
+#include <system_error>
+
+#include "core/config.hpp"
+#include "core/error.hpp"
+#include "core/names.hpp"
+#include "optics/design.hpp"
+#include "optics/model.hpp"
+#include "patterns/encode.hpp"
+#include "print/printer.hpp"
+#include "relight/interpolation.hpp"
+
+namespace rfd::project {
+namespace {
+
+namespace fs = std::filesystem;
+
+bool is_file(const fs::path& path) {
+    std::error_code ec;
+    return fs::is_regular_file(path, ec);
+}
+
+// A bundled name ("design1") or a path relative to the project file; the key's location
+// and what is bundled in the message when neither exists.
+fs::path resolve(ConfigTable& table, const std::string& key, const fs::path& project_folder,
+                 const fs::path& bundled_folder, const std::string& what) {
+    const std::string value = table.string(key);
+    if (value.empty()) table.fail(key, "expected " + what + ", got an empty name");
+    const fs::path relative = project_folder / value;
+    if (is_file(relative)) return relative.lexically_normal();
+    const fs::path bundled = bundled_folder / (value + ".toml");
+    if (value.find('/') == std::string::npos && is_file(bundled)) return bundled;
+    table.fail(key, "cannot open " + what + " '" + value + "': no such file (relative to the project file) or "
+                    "bundled name in " + bundled_folder.string());
+}
+
+fs::path existing(ConfigTable& table, const std::string& key, const fs::path& project_folder) {
+    const fs::path path = (project_folder / table.string(key)).lexically_normal();
+    std::error_code ec;
+    if (!fs::exists(path, ec)) table.fail(key, "cannot open '" + path.string() + "': no such file or folder");
+    return path;
+}
+
+template <class Enum, std::size_t N>
+std::string choice(ConfigTable& table, const std::string& key, const std::string& fallback,
+                   const std::array<Named<Enum>, N>& names) {
+    if (!table.has(key)) return fallback;
+    return table.choice(key, names_of(names));
+}
+
+Source read_source(ConfigTable& table, const fs::path& folder) {
+    Source source;
+    const int kinds = int(table.has("field")) + int(table.has("scene")) + int(table.has("procedural"));
+    if (kinds != 1)
+        table.fail(table.has("scene") ? "scene" : "field",
+                   "expected exactly one of field (a field folder or .lp file), scene (a scene to render) and "
+                   "procedural (a test field)");
+    if (table.has("field")) source.field = existing(table, "field", folder);
+    if (table.has("scene")) {
+        source.scene = existing(table, "scene", folder);
+        source.lights = static_cast<int>(table.optional_integer("lights", 3, 100000).value_or(source.lights));
+    }
+    if (table.has("procedural")) {
+        source.procedural = table.choice("procedural", {"letters", "bars", "diamonds"});
+        source.text = table.optional_string("text").value_or(source.text);
+        if (source.text.empty()) table.fail("text", "expected at least one letter");
+    }
+    if (table.has("resolution")) {
+        if (source.field) table.fail("resolution", "a field has its own resolution (scale it with scale)");
+        const auto size = table.integer_pair("resolution", 1, 16384);
+        source.resolution = std::array<int, 2>{static_cast<int>(size[0]), static_cast<int>(size[1])};
+    }
+    if (table.has("region")) {
+        const auto r = table.numbers("region", 4, 0, 1e6);
+        for (double v : r)
+            if (v != static_cast<int>(v)) table.fail("region", "expected whole pixels [x, y, width, height]");
+        if (r[2] < 1 || r[3] < 1) table.fail("region", "expected a width and height of at least one pixel");
+        source.region = std::array<int, 4>{static_cast<int>(r[0]), static_cast<int>(r[1]), static_cast<int>(r[2]),
+                                           static_cast<int>(r[3])};
+    }
+    source.scale = table.optional_number("scale", 0.01, 1.0);
+    return source;
+}
+
+Encoding read_encoding(ConfigTable& table) {
+    Encoding e;
+    e.tilt_deg = table.optional_number("tilt_deg", -90, 90).value_or(e.tilt_deg);
+    e.turn_deg = table.optional_number("turn_deg", -360, 360).value_or(e.turn_deg);
+    e.angle_scale = table.optional_number("angle_scale", 0.05, 20).value_or(e.angle_scale);
+    e.margin_mm = table.optional_number("margin_mm", 0, 100).value_or(e.margin_mm);
+    e.model = choice(table, "model", e.model, optics::kModelChoiceNames);
+    e.interpolation = choice(table, "interpolation", e.interpolation, relight::kInterpolationNames);
+    e.fit = choice(table, "fit", e.fit, patterns::kImageFitNames);
+    return e;
+}
+
+Outputs read_outputs(ConfigTable& table) {
+    Outputs o;
+    if (table.has("sheets")) {
+        o.sheet_formats = table.strings("sheets");
+        for (const std::string& format : o.sheet_formats)
+            if (format != "pdf" && format != "tif")
+                table.fail("sheets", "expected formats \"pdf\" and/or \"tif\", got \"" + format + "\"");
+    }
+    o.moire = table.optional_boolean("moire").value_or(o.moire);
+    o.wedge = table.optional_boolean("wedge").value_or(o.wedge);
+    o.holder = table.optional_boolean("holder").value_or(o.holder);
+    o.compare_sweep = static_cast<int>(table.optional_integer("compare_sweep", 0, 1000).value_or(o.compare_sweep));
+    o.tolerance = table.optional_boolean("tolerance").value_or(o.tolerance);
+    return o;
+}
+
+}  // namespace
+
+fs::path bundled_design_folder() { return RFD_DESIGNS_DIR; }
+fs::path bundled_holder_profile_folder() { return RFD_HOLDER_PROFILES_DIR; }
+
+Project load_project(const fs::path& file) {
+    ConfigTable root = ConfigTable::parse_file(file);
+    const fs::path folder = file.parent_path().empty() ? fs::path(".") : file.parent_path();
+    Project project;
+    project.file = file;
+
+    ConfigTable head = root.table("project");
+    project.name = head.optional_string("name").value_or(file.stem().string());
+    project.design = resolve(head, "design", folder, bundled_design_folder(), "design");
+    const optics::Design design = optics::load_design(project.design);
+    if (design.kind != optics::DesignKind::I && design.kind != optics::DesignKind::II)
+        head.fail("design", "rfd make builds Designs I and II; " + design.name +
+                                " is Design " + std::string(optics::to_string(design.kind)) +
+                                " (use rfd pattern encode-angular and rfd simulate for it)");
+    // A bundled printer is passed on by name, so the pattern records the name users know.
+    const std::string printer = head.optional_string("printer").value_or("epson_stylus_pro_4800");
+    if (is_file(folder / printer)) project.printer = (folder / printer).lexically_normal().string();
+    else if (printer.find('/') == std::string::npos && is_file(print::bundled_printer_folder() / (printer + ".toml")))
+        project.printer = printer;
+    else
+        head.fail("printer", "cannot open printer profile '" + printer + "': no such file (relative to the project "
+                             "file) or bundled name in " + print::bundled_printer_folder().string());
+    project.printer_3d = head.has("printer_3d")
+                             ? resolve(head, "printer_3d", folder, bundled_holder_profile_folder(), "3D printer profile")
+                             : bundled_holder_profile_folder() / "fdm_0.4mm.toml";
+    head.finish();
+
+    ConfigTable source = root.table("source");
+    project.source = read_source(source, folder);
+    source.finish();
+    if (auto encode = root.optional_table("encode")) {
+        project.encoding = read_encoding(*encode);
+        encode->finish();
+    }
+    if (auto make = root.optional_table("make")) {
+        project.outputs = read_outputs(*make);
+        make->finish();
+    }
+    root.finish();
+    return project;
+}
+
+}  // namespace rfd::project

@@ -1,0 +1,71 @@
+#pragma once
+// The project file: everything `rfd make` needs to go from a reflectance field to what a
+// maker prints and builds, in one TOML file (docs/formats.md, "Project files").
+//
+//   [project]  name, design, printer, printer_3d   (bundled names or paths)
+//   [source]   field (a folder or .lp), scene + lights + resolution, or procedural + text +
+//              resolution; region, scale
+//   [encode]   tilt_deg, turn_deg, angle_scale, model, interpolation, fit, margin_mm
+//   [make]     sheets, moire, holder, compare_sweep, tolerance
+//
+// Paths are relative to the project file. Every key is checked like every other input
+// file: an unknown key or a value out of range is an error naming file, line and key.
+
+#include <array>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace rfd::project {
+
+/// Where the reflectance field comes from: a field on disk, a scene rendered on the virtual
+/// light stage, or a procedural test field (`rfd pattern field`).
+struct Source {
+    std::optional<std::filesystem::path> field;   ///< folder or .lp file
+    std::optional<std::filesystem::path> scene;   ///< scene TOML
+    std::optional<std::string> procedural;        ///< "letters", "bars" or "diamonds"
+    std::string text = "SIG08";                   ///< procedural letters: one per light
+    int lights = 400;                             ///< scene: light directions to render
+    std::optional<std::array<int, 2>> resolution; ///< scene, procedural: image size (default: their own)
+    std::optional<std::array<int, 4>> region;     ///< x, y, width, height of the object, pixels
+    std::optional<double> scale;                  ///< applied after the region
+};
+
+/// The encoder's options, as `rfd pattern encode` names them.
+struct Encoding {
+    double tilt_deg = 0.0, turn_deg = 0.0, angle_scale = 1.0, margin_mm = 0.0;
+    std::string model = "auto", interpolation = "delaunay", fit = "cover";
+};
+
+/// What to make besides the pattern.
+struct Outputs {
+    std::vector<std::string> sheet_formats{"pdf", "tif"};  ///< of the front (and back) sheets
+    bool moire = true;        ///< the pitch calibration sheet
+    bool wedge = true;        ///< the step wedge that measures the printer's tone curve
+    bool holder = true;       ///< the holder's .scad and STLs with their checks
+    int compare_sweep = 9;    ///< predicted against relit at this many lights (0: none)
+    bool tolerance = true;    ///< assembly tolerances
+};
+
+struct Project {
+    std::filesystem::path file;      ///< the project file itself
+    std::string name;
+    std::filesystem::path design;    ///< resolved design file
+    std::string printer;             ///< film printer: a bundled name or a resolved path
+    std::filesystem::path printer_3d;///< resolved 3D printer profile
+    Source source;
+    Encoding encoding;
+    Outputs outputs;
+};
+
+/// Reads and checks a project file. Bundled names: designs ("design1": designs/design1.toml),
+/// film printers (printers/), 3D printers (holders/profiles/). InputError naming the file,
+/// line and key for anything wrong, including a design `rfd make` cannot build (III, IV).
+Project load_project(const std::filesystem::path& file);
+
+/// The source tree's folders of bundled designs and 3D printer profiles.
+std::filesystem::path bundled_design_folder();
+std::filesystem::path bundled_holder_profile_folder();
+
+}  // namespace rfd::project
