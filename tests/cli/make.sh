@@ -1,0 +1,125 @@
+#!/usr/bin/env bash
+# `rfd make` end to end, as a user runs it:
+#  1. a project on a field folder: everything made, a second run makes nothing, a changed
+#     field re-makes only what reads it (not the moire sheet), and the pattern records the
+#     project's printer;
+#  2. an RTIBuilder-style capture (absolute Windows paths, CRLF, JPEGs in jpeg-exports/, a
+#     bright "sphere" in a corner outside the object) made through a `region`, no edits;
+#  3. a project that names an unknown key: exit 2, the file and line, nothing made.
+# Usage: make.sh RFD OIIOTOOL SOURCE_DIR WORK_DIR
+set -euo pipefail
+rfd="$1"
+oiiotool="$2"
+source_dir="$3"
+work="$4"
+rm -rf "$work"
+mkdir -p "$work"
+fail() {
+  echo "FAIL: $1" >&2
+  exit 1
+}
+expect_line() {  # expect_line FILE STEP STATE
+  grep -Eq "\] $2 +$3" "$1" || fail "step $2 was not '$3': $(cat "$1")"
+}
+
+"$rfd" --quiet pattern field letters --text SIG08 --resolution 24x20 --out "$work/field" > /dev/null
+# A coarse printer on A5, so the sheets stay small.
+cat > "$work/a5_printer.toml" <<TOML
+[printer]
+name = "coarse A5 test printer"
+dpi_x = 360
+dpi_y = 360
+gamma = 2.2
+max_density = 2.0
+black_level = 0.012
+sheets = 1
+
+[paper]
+name = "A5"
+width_mm = 148
+height_mm = 210
+margin_mm = 3
+TOML
+cat > "$work/letters.toml" <<TOML
+[project]
+name = "letters on a test card"
+design = "design2"
+printer = "a5_printer.toml"
+
+[source]
+field = "field"
+
+[encode]
+interpolation = "nearest"
+
+[make]
+sheets = ["pdf", "tif"]
+holder = false
+compare_sweep = 3
+TOML
+"$rfd" make "$work/letters.toml" --out "$work/out" > "$work/run1.txt"
+for file in pattern.exr pattern.png print/front.pdf print/front.tif print/moire.pdf predict/compare/psnr.png \
+            predict/tolerance/summary.txt README.txt index.html manifest.json logs/pattern.txt; do
+  [ -s "$work/out/$file" ] || fail "run 1 did not write $file"
+done
+grep -q "6 step(s) made, 0 up to date" "$work/run1.txt" || fail "run 1: $(cat "$work/run1.txt")"
+grep -q "coarse A5 test printer" "$work/out/logs/pattern.txt" || fail "the pattern does not record the project's printer"
+grep -q "rfd print sheet .*pattern.exr --out .*front.tif" "$work/out/README.txt" || fail "README.txt lacks the commands"
+
+"$rfd" make "$work/letters.toml" --out "$work/out" > "$work/run2.txt"
+grep -q "0 step(s) made, 6 up to date" "$work/run2.txt" || fail "run 2 made something: $(cat "$work/run2.txt")"
+
+"$rfd" --quiet pattern field letters --text GRAPH --resolution 24x20 --out "$work/field" > /dev/null
+"$rfd" make "$work/letters.toml" --out "$work/out" > "$work/run3.txt"
+expect_line "$work/run3.txt" pattern made
+expect_line "$work/run3.txt" sheet_front_pdf made
+expect_line "$work/run3.txt" compare made
+expect_line "$work/run3.txt" moire "up to date"
+
+# 2. The capture as RTIBuilder leaves it: spheres.toml rendered, each picture pasted into a
+# larger frame with a white calibration "sphere" in its top-left corner, saved as JPEG.
+"$rfd" --quiet capture render "$source_dir/scenes/spheres.toml" --lights 40 --resolution 48x36 \
+  --out "$work/render" > /dev/null
+mkdir -p "$work/capture/jpeg-exports"
+printf '40\r\n' > "$work/capture/Bottle.lp"
+n=0
+while read -r file x y z; do
+  n=$((n + 1))
+  name=$(printf 'Bottle_%03d.jpg' "$n")
+  # --paste puts the image below the top of the stack onto the top one.
+  "$oiiotool" "$work/render/$file" --pattern constant:color=0.02,0.02,0.02 72x56 3 --paste +16+12 \
+    --pattern constant:color=1,1,1 8x8 3 --swap --paste +2+2 -d uint8 -o "$work/capture/jpeg-exports/$name"
+  printf 'C:\\Users\\Maker\\Documents\\Bottle\\jpeg-exports\\%s %s %s %s\r\n' "$name" "$x" "$y" "$z" \
+    >> "$work/capture/Bottle.lp"
+done < <(tail -n +2 "$work/render/field.lp")
+cat > "$work/capture.toml" <<TOML
+[project]
+design = "design2"
+printer = "a5_printer.toml"
+
+[source]
+field = "capture/Bottle.lp"
+region = [16, 12, 48, 36]
+
+[make]
+sheets = ["pdf"]
+moire = false
+holder = false
+compare_sweep = 3
+tolerance = false
+TOML
+"$rfd" make "$work/capture.toml" --out "$work/capture_out" > "$work/capture.txt" \
+  || fail "the RTIBuilder capture did not go through: $(cat "$work/capture.txt")"
+grep -q "region" "$work/out/README.txt" && fail "the letters project should have no region"
+grep -q -- "--region 16,12,48,36" "$work/capture_out/README.txt" || fail "the capture's region is not passed on"
+
+# 3. A mistake in the project file.
+printf '[project]\ndesign = "design2"\ncolour = "red"\n[source]\nfield = "field"\n' > "$work/bad.toml"
+set +e
+"$rfd" make "$work/bad.toml" --out "$work/bad_out" > /dev/null 2> "$work/bad.txt"
+code=$?
+set -e
+[ "$code" = 2 ] || fail "a bad project file exited $code"
+grep -q "bad.toml:3:.*project.colour: unknown key" "$work/bad.txt" || fail "message: $(cat "$work/bad.txt")"
+[ ! -e "$work/bad_out" ] || fail "a bad project file made something"
+echo "rfd make: all checks passed"
