@@ -15,6 +15,7 @@
 #include "print/printed.hpp"
 #include "print/printer.hpp"
 #include "print/sheet.hpp"
+#include "print/wedge.hpp"
 
 namespace rfd::cli {
 namespace {
@@ -130,13 +131,48 @@ void add_moire_command(CLI::App& print_cmd) {
     });
 }
 
+void add_wedge_command(CLI::App& print_cmd) {
+    auto* cmd = print_cmd.add_subcommand(
+        "wedge", "Step-wedge sheet (PDF): patches from bare film to full ink, to measure the printer's tone curve "
+                 "for its profile");
+    struct Options {
+        std::string printer = "epson_stylus_pro_4800", out;
+        int steps = 21;
+        bool json = false;
+    };
+    auto opt = std::make_shared<Options>();
+    cmd->add_option("--printer", opt->printer, "Printer profile: a TOML file or a bundled name (default epson_stylus_pro_4800)");
+    cmd->add_option("--steps", opt->steps, "Patches from code 255 (no ink) to 0 (full ink), default 21")
+        ->check(CLI::Range(2, 256));
+    cmd->add_option("--out", opt->out, "Output PDF")->required();
+    cmd->add_flag("--json", opt->json, "Machine-readable list of patches");
+    cmd->callback([opt] {
+        if (std::filesystem::path(opt->out).extension() != ".pdf")
+            throw InputError(SourceLocation{opt->out, 0, 0, "--out"}, "expected a .pdf file");
+        const print::PrinterProfile printer = print::load_printer(opt->printer);
+        const auto patches = print::write_wedge_pdf(opt->out, printer, opt->steps);
+        if (opt->json) {
+            nlohmann::json list = nlohmann::json::array();
+            for (const auto& p : patches)
+                list.push_back({{"code", p.code}, {"ink", p.ink}, {"transmittance", p.transmittance}, {"page", p.page + 1}});
+            std::printf("%s\n", nlohmann::json{{"out", opt->out}, {"printer", printer.name}, {"patches", list}}.dump(2).c_str());
+            return;
+        }
+        std::printf("%s: %zu patches for %s on %d page(s)\n", opt->out.c_str(), patches.size(), printer.name.c_str(),
+                    patches.back().page + 1);
+        for (const auto& p : patches)
+            std::printf("  code %3d  ink %.3f  predicted transmittance %.4f\n", p.code, p.ink, p.transmittance);
+    });
+}
+
 }  // namespace
 
 void add_print_commands(CLI::App& app) {
-    auto* print_cmd = app.add_subcommand("print", "Printable sheets: patterns for a printer, pitch calibration");
+    auto* print_cmd = app.add_subcommand("print", "Printable sheets: patterns for a printer, pitch calibration, the step wedge");
     print_cmd->require_subcommand(1);
     add_sheet_command(*print_cmd);
     add_moire_command(*print_cmd);
+    add_wedge_command(*print_cmd);
 }
 
 }  // namespace rfd::cli

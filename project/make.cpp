@@ -140,6 +140,11 @@ std::vector<Step> plan(const Project& p, const fs::path& out) {
                          {"print", "moire", design, "--printer", p.printer, "--out", o + "print/moire.pdf"},
                          {p.design, printer},
                          {"print/moire.pdf"}});
+    if (p.outputs.wedge)
+        steps.push_back({"wedge", "the step wedge that measures the printer's tone curve (wedge.pdf)",
+                         {"print", "wedge", "--printer", p.printer, "--out", o + "print/wedge.pdf"},
+                         {printer},
+                         {"print/wedge.pdf"}});
     if (p.outputs.holder)
         steps.push_back({"holder", "the lens holder: OpenSCAD source, STLs to 3D-print, and their checks",
                          {"holder", design, "--3d-printer", p.printer_3d.string(), "--printer", p.printer, "--out",

@@ -19,6 +19,7 @@
 #include "print/printed.hpp"
 #include "print/printer.hpp"
 #include "print/sheet.hpp"
+#include "print/wedge.hpp"
 #include "tests/support/error_of.hpp"
 #include "tests/support/temp_dir.hpp"
 
@@ -621,6 +622,40 @@ TEST(Sheet, BadOptionsAndAttributes) {
     EXPECT_THAT(error_of([&] { write_sheet(dir / "s.tif", big, coarse, big_pattern, {}); }),
                 MatchesRegex(".*coarse\\.toml.*the pattern \\(1[45][0-9]\\.[0-9] x 1[45][0-9]\\.[0-9] mm\\).*do not fit "
                              "the printable area of test paper \\(48\\.0 x 58\\.0 mm\\).*"));
+}
+
+// ----------------------------------------------------------------------------- wedge
+
+// The wedge's codes run from bare film to full ink, and the profile's prediction under each
+// is T(v) from the header's formula; rendered by poppler, every patch's centre holds its code
+// (the patch is an image, printed as patterns are, so no colour conversion changed it).
+TEST(Wedge, PatchesCarryTheirCodesAndTheProfilesPrediction) {
+    const PrinterProfile printer = load_printer("inkjet_720");
+    const auto patches = wedge_patches(printer, 6);
+    ASSERT_EQ(patches.size(), 6u);
+    EXPECT_EQ(patches.front().code, 255);
+    EXPECT_EQ(patches[1].code, 204);
+    EXPECT_EQ(patches.back().code, 0);
+    EXPECT_DOUBLE_EQ(patches.front().transmittance, 1.0);
+    EXPECT_NEAR(patches.back().transmittance, std::pow(10.0, -printer.max_density), 1e-15);
+    const double t_ink = std::pow(10.0, -printer.max_density);
+    EXPECT_NEAR(patches[2].transmittance, t_ink + (1 - t_ink) * std::pow(153.0 / 255.0, printer.gamma), 1e-15);
+    EXPECT_THAT(error_of([&] { wedge_patches(printer, 1); }), HasSubstr("expected 2 to 256"));
+
+    const std::string pdftoppm = RFD_PDFTOPPM;
+    if (pdftoppm.empty()) GTEST_SKIP() << "poppler-utils (pdftoppm) not installed";
+    TempDir dir;
+    const auto placed = write_wedge_pdf(dir / "wedge.pdf", printer, 21);
+    const std::string command = pdftoppm + " -r 50 -png -singlefile " + (dir / "wedge.pdf").string() + " " +
+                                (dir / "view").string();
+    ASSERT_EQ(std::system(command.c_str()), 0) << command;
+    const Page view = read_page(dir / "view.png");
+    for (const WedgePatch& patch : placed) {
+        const int x = static_cast<int>((patch.left + 8.0) * 50 / 25.4), y = static_cast<int>((patch.top + 8.0) * 50 / 25.4);
+        EXPECT_NEAR(view.code(x, y), patch.code, 1.0) << "patch of code " << patch.code;
+    }
+    EXPECT_THAT(error_of([&] { write_wedge_pdf(dir / "w.pdf", parse_printer(small_printer_toml(720, 720, 10, 10), "tiny.toml"), 5); }),
+                HasSubstr("does not fit"));
 }
 
 // ----------------------------------------------------------------------------- moire

@@ -158,7 +158,7 @@ TEST(ProjectPlan, EveryStepReadsOnlyWhatEarlierStepsOrTheUserMade) {
         for (const fs::path& output : step.outputs) made.insert(output);
     }
     // inkjet_720 prints one sheet: no back sheet.
-    EXPECT_THAT(names, ::testing::ElementsAre("pattern", "sheet_front_pdf", "moire", "holder", "compare", "tolerance"));
+    EXPECT_THAT(names, ::testing::ElementsAre("pattern", "sheet_front_pdf", "moire", "wedge", "holder", "compare", "tolerance"));
 }
 
 TEST(Make, ASecondRunSkipsEveryStepAndAChangedFieldRemakesOnlyWhatDependsOnIt) {
@@ -167,7 +167,7 @@ TEST(Make, ASecondRunSkipsEveryStepAndAChangedFieldRemakesOnlyWhatDependsOnIt) {
     write(dir / "p.toml", kProject);
     const Project project = load_project(dir / "p.toml");
     FakeRfd rfd;
-    EXPECT_EQ(run_make(project, dir / "out", rfd).ran.size(), 6u);
+    EXPECT_EQ(run_make(project, dir / "out", rfd).ran.size(), 7u);
     EXPECT_TRUE(fs::exists(dir / "out/README.txt"));
     EXPECT_TRUE(fs::exists(dir / "out/index.html"));
     EXPECT_TRUE(run_make(project, dir / "out", rfd).ran.empty());
@@ -182,7 +182,7 @@ TEST(Make, ASecondRunSkipsEveryStepAndAChangedFieldRemakesOnlyWhatDependsOnIt) {
     EXPECT_THAT(run_make(project, dir / "out", rfd).ran, UnorderedElementsAre("moire"));
     fs::remove(dir / "out/pattern.png");
     EXPECT_THAT(run_make(project, dir / "out", rfd).ran, UnorderedElementsAre("pattern"));
-    EXPECT_EQ(run_make(project, dir / "out", rfd, true).ran.size(), 6u);
+    EXPECT_EQ(run_make(project, dir / "out", rfd, true).ran.size(), 7u);
 }
 
 TEST(Make, AFailingStepSaysWhichAndKeepsTheStepsBeforeIt) {
@@ -201,7 +201,7 @@ TEST(Make, AFailingStepSaysWhichAndKeepsTheStepsBeforeIt) {
     rfd.fail_on.clear();
     rfd.calls.clear();
     EXPECT_THAT(run_make(project, dir / "out", rfd).ran,
-                UnorderedElementsAre("sheet_front_pdf", "moire", "holder", "compare", "tolerance"));
+                UnorderedElementsAre("sheet_front_pdf", "moire", "wedge", "holder", "compare", "tolerance"));
 }
 
 TEST(Make, ADamagedManifestRemakesEverythingAfterANote) {
@@ -212,7 +212,7 @@ TEST(Make, ADamagedManifestRemakesEverythingAfterANote) {
     FakeRfd rfd;
     run_make(project, dir / "out", rfd);
     write(dir / "out/manifest.json", "{\"steps\": 3");
-    EXPECT_EQ(run_make(project, dir / "out", rfd).ran.size(), 6u);
+    EXPECT_EQ(run_make(project, dir / "out", rfd).ran.size(), 7u);
     EXPECT_TRUE(run_make(project, dir / "out", rfd).ran.empty());
 }
 

@@ -58,16 +58,16 @@ holder = false
 compare_sweep = 3
 TOML
 "$rfd" make "$work/letters.toml" --out "$work/out" > "$work/run1.txt"
-for file in pattern.exr pattern.png print/front.pdf print/front.tif print/moire.pdf predict/compare/psnr.png \
+for file in pattern.exr pattern.png print/front.pdf print/front.tif print/moire.pdf predict/compare/psnr.png print/wedge.pdf \
             predict/tolerance/summary.txt README.txt index.html manifest.json logs/pattern.txt; do
   [ -s "$work/out/$file" ] || fail "run 1 did not write $file"
 done
-grep -q "6 step(s) made, 0 up to date" "$work/run1.txt" || fail "run 1: $(cat "$work/run1.txt")"
+grep -q "7 step(s) made, 0 up to date" "$work/run1.txt" || fail "run 1: $(cat "$work/run1.txt")"
 grep -q "coarse A5 test printer" "$work/out/logs/pattern.txt" || fail "the pattern does not record the project's printer"
 grep -q "rfd print sheet .*pattern.exr --out .*front.tif" "$work/out/README.txt" || fail "README.txt lacks the commands"
 
 "$rfd" make "$work/letters.toml" --out "$work/out" > "$work/run2.txt"
-grep -q "0 step(s) made, 6 up to date" "$work/run2.txt" || fail "run 2 made something: $(cat "$work/run2.txt")"
+grep -q "0 step(s) made, 7 up to date" "$work/run2.txt" || fail "run 2 made something: $(cat "$work/run2.txt")"
 
 "$rfd" --quiet pattern field letters --text GRAPH --resolution 24x20 --out "$work/field" > /dev/null
 "$rfd" make "$work/letters.toml" --out "$work/out" > "$work/run3.txt"
@@ -75,6 +75,7 @@ expect_line "$work/run3.txt" pattern made
 expect_line "$work/run3.txt" sheet_front_pdf made
 expect_line "$work/run3.txt" compare made
 expect_line "$work/run3.txt" moire "up to date"
+expect_line "$work/run3.txt" wedge "up to date"
 
 # 2. The capture as RTIBuilder leaves it: spheres.toml rendered, each picture pasted into a
 # larger frame with a white calibration "sphere" in its top-left corner, saved as JPEG.
@@ -104,6 +105,7 @@ region = [16, 12, 48, 36]
 [make]
 sheets = ["pdf"]
 moire = false
+wedge = false
 holder = false
 compare_sweep = 3
 tolerance = false

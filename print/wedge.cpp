@@ -1,0 +1,119 @@
+#include "print/wedge.hpp"
+
+#include <cmath>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include <cairo.h>
+
+#include "core/error.hpp"
+#include "core/text.hpp"
+#include "core/units.hpp"
+#include "print/pdf_file.hpp"
+
+namespace rfd::print {
+namespace {
+
+constexpr double kPatch = 16.0;   // mm, side of a patch
+constexpr double kGap = 4.0;      // mm between patches, across
+constexpr double kLabel = 10.0;   // mm below a patch for its label
+constexpr double kHeader = 20.0;  // mm for the instructions at the top of each page
+
+// One patch: a 1 x 1 image of `code` on every channel, drawn over the square without
+// smoothing, the way sheets draw patterns.
+void draw_patch(cairo_t* cr, int code, double left, double top) {
+    std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> dot(
+        cairo_image_surface_create(CAIRO_FORMAT_RGB24, 1, 1), &cairo_surface_destroy);
+    cairo_surface_flush(dot.get());
+    const auto c = static_cast<std::uint32_t>(code);
+    *reinterpret_cast<std::uint32_t*>(cairo_image_surface_get_data(dot.get())) = (c << 16) | (c << 8) | c;
+    cairo_surface_mark_dirty(dot.get());
+    cairo_save(cr);
+    cairo_translate(cr, left, top);
+    cairo_scale(cr, kPatch, kPatch);
+    cairo_set_source_surface(cr, dot.get(), 0, 0);
+    cairo_pattern_set_filter(cairo_get_source(cr), CAIRO_FILTER_NEAREST);
+    cairo_rectangle(cr, 0, 0, 1, 1);
+    cairo_fill(cr);
+    cairo_restore(cr);
+    // A thin outline, so the bare-film patch has an edge.
+    cairo_set_line_width(cr, 0.1);
+    cairo_rectangle(cr, left, top, kPatch, kPatch);
+    cairo_stroke(cr);
+}
+
+}  // namespace
+
+std::vector<WedgePatch> wedge_patches(const PrinterProfile& printer, int steps) {
+    if (steps < 2 || steps > 256) throw InputError("wedge steps: expected 2 to 256, got " + std::to_string(steps));
+    std::vector<WedgePatch> patches;
+    for (int k = 0; k < steps; ++k) {
+        WedgePatch patch;
+        patch.code = static_cast<int>(std::lround(255.0 * (1.0 - static_cast<double>(k) / (steps - 1))));
+        patch.ink = 1.0 - patch.code / 255.0;
+        patch.transmittance = printer.transmittance(patch.ink);
+        patches.push_back(patch);
+    }
+    return patches;
+}
+
+std::vector<WedgePatch> write_wedge_pdf(const std::filesystem::path& out, const PrinterProfile& printer, int steps) {
+    std::vector<WedgePatch> patches = wedge_patches(printer, steps);
+    const Paper& paper = printer.paper;
+    const int columns = static_cast<int>(std::floor((paper.width - 2 * paper.margin + kGap) / (kPatch + kGap)));
+    const int rows = static_cast<int>(std::floor((paper.height - 2 * paper.margin - kHeader) / (kPatch + kLabel)));
+    if (columns < 1 || rows < 1)
+        throw InputError(SourceLocation{printer.file, 0, 0, "paper"},
+                         "a wedge patch (" + format_number(kPatch) + " mm and its label) does not fit the printable "
+                         "area of " + paper.name + " paper");
+    for (std::size_t k = 0; k < patches.size(); ++k) {
+        const int slot = static_cast<int>(k);
+        patches[k].page = slot / (columns * rows);
+        patches[k].left = paper.margin + (slot % columns) * (kPatch + kGap);
+        patches[k].top = paper.margin + kHeader + ((slot / columns) % rows) * (kPatch + kLabel);
+    }
+
+    constexpr double kPointsPerMm = 72.0 / kMillimetresPerInch;
+    PdfFile pdf(out, paper.width * kPointsPerMm, paper.height * kPointsPerMm, "step wedge");
+    {
+        std::unique_ptr<cairo_t, decltype(&cairo_destroy)> owner(cairo_create(pdf.surface()), &cairo_destroy);
+        cairo_t* cr = owner.get();
+        cairo_scale(cr, kPointsPerMm, kPointsPerMm);
+        cairo_select_font_face(cr, "DejaVu Sans", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+        const int pages = patches.back().page + 1;
+        for (int page = 0; page < pages; ++page) {
+            cairo_set_source_rgb(cr, 0, 0, 0);
+            cairo_set_font_size(cr, 2.6);
+            const std::string header[] = {
+                "Step wedge - " + printer.name + " - " + format_number(printer.dpi_x.value) + " x " +
+                    format_number(printer.dpi_y.value) + " dpi - page " + std::to_string(page + 1) + " of " +
+                    std::to_string(pages),
+                "Print on your film at 100 %, colour management off, as you print patterns. Measure each patch's",
+                "transmittance against bare film (code 255). max_density = -log10(T of code 0); fit gamma to",
+                "T(v) = T_ink + (1 - T_ink)(1 - v)^gamma. Under each patch: code, ink v, and T the profile predicts."};
+            for (std::size_t k = 0; k < std::size(header); ++k) {
+                cairo_move_to(cr, paper.margin, paper.margin + 3.0 + 3.2 * static_cast<double>(k));
+                cairo_show_text(cr, header[k].c_str());
+            }
+            for (const WedgePatch& patch : patches) {
+                if (patch.page != page) continue;
+                cairo_set_source_rgb(cr, 0, 0, 0);
+                draw_patch(cr, patch.code, patch.left, patch.top);
+                cairo_set_source_rgb(cr, 0, 0, 0);
+                cairo_set_font_size(cr, 2.2);
+                cairo_move_to(cr, patch.left, patch.top + kPatch + 2.8);
+                cairo_show_text(cr, ("code " + std::to_string(patch.code)).c_str());
+                cairo_move_to(cr, patch.left, patch.top + kPatch + 5.2);
+                cairo_show_text(cr, ("v " + format_fixed(patch.ink, 3)).c_str());
+                cairo_move_to(cr, patch.left, patch.top + kPatch + 7.6);
+                cairo_show_text(cr, ("T " + format_fixed(patch.transmittance, 4)).c_str());
+            }
+            cairo_show_page(cr);
+        }
+    }
+    pdf.finish();
+    return patches;
+}
+
+}  // namespace rfd::print

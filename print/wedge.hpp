@@ -1,0 +1,34 @@
+#pragma once
+// The step wedge: patches of evenly spaced printer codes, from bare film (code 255, no
+// ink) to full ink (code 0), to measure a printer's tone curve on its film (docs/formats.md,
+// "Printer profiles"): measure each patch's transmittance against bare film, read
+// max_density from the full-ink patch and fit gamma to the rest. Each patch is printed as
+// an image, as patterns are, so the driver treats it alike; its label gives the code, the
+// ink value v = 1 - code/255 and the transmittance the profile predicts for it.
+//
+// Example: write_wedge_pdf("wedge.pdf", load_printer("inkjet_720"), 21);
+
+#include <filesystem>
+#include <vector>
+
+#include "print/printer.hpp"
+
+namespace rfd::print {
+
+struct WedgePatch {
+    int code = 255;               ///< what the sheet file holds, 0..255 (255: no ink)
+    double ink = 0.0;             ///< the printer value v = 1 - code / 255
+    double transmittance = 1.0;   ///< the profile's T(v)
+    int page = 0;                 ///< 0-based
+    double left = 0.0, top = 0.0; ///< page frame, mm
+};
+
+/// The `steps` codes (2..256) from 255 down to 0, rounded to whole codes, with what the
+/// profile predicts for each.
+std::vector<WedgePatch> wedge_patches(const PrinterProfile& printer, int steps);
+
+/// Writes the wedge as a PDF on the profile's paper (temporary file + rename) and returns
+/// its patches. InputError when the paper cannot hold one patch; IoError when it cannot write.
+std::vector<WedgePatch> write_wedge_pdf(const std::filesystem::path& out, const PrinterProfile& printer, int steps);
+
+}  // namespace rfd::print
