@@ -40,6 +40,9 @@ void add_simulate_tolerance_command(CLI::App& simulate);
 /// `simulate compare`: predicted output against the software relighting of the same field.
 void add_simulate_compare_command(CLI::App& simulate);
 
+/// `simulate verdict`: go / check / no-go from compare's and tolerance's summaries.
+void add_simulate_verdict_command(CLI::App& simulate);
+
 /// `holder`: the lens holder as OpenSCAD, its STLs and their checks; `holder coupon`.
 void add_holder_commands(CLI::App& app);
 

@@ -2,9 +2,12 @@
 // predicted display, skipping what is up to date (project/make.hpp).
 
 #include <cstdio>
+#include <fstream>
 #include <filesystem>
 #include <memory>
 #include <string>
+
+#include <nlohmann/json.hpp>
 
 #include "cli/commands.hpp"
 #include "core/command.hpp"
@@ -64,7 +67,8 @@ void add_make_command(CLI::App& app) {
         std::fflush(stdout);
         project::MakeListener listener;
         listener.starting = [](const project::Step& step, int index, int count) {
-            std::printf("  [%d/%d] %-16s ", index + 1, count, step.name.c_str());
+            const int digits = count >= 10 ? 2 : 1;
+            std::printf("  [%*d/%d] %-16s ", digits, index + 1, count, step.name.c_str());
             std::fflush(stdout);
         };
         listener.finished = [](const project::StepOutcome& step) {
@@ -78,6 +82,11 @@ void add_make_command(CLI::App& app) {
         } catch (const Error&) {
             std::printf("failed\n");
             throw;
+        }
+        std::ifstream verdict(fs::path(opt->out) / "verdict.json");
+        if (verdict) {
+            const nlohmann::json v = nlohmann::json::parse(verdict, nullptr, false);
+            if (!v.is_discarded() && v.contains("line")) std::printf("verdict: %s\n", v["line"].get<std::string>().c_str());
         }
         int ran = 0;
         for (const auto& step : outcomes) ran += step.ran ? 1 : 0;

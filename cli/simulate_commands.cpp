@@ -287,6 +287,7 @@ void add_simulate_commands(CLI::App& app) {
     add_rti_command(*simulate);
     add_simulate_tolerance_command(*simulate);
     add_simulate_compare_command(*simulate);
+    add_simulate_verdict_command(*simulate);
 }
 
 }  // namespace rfd::cli

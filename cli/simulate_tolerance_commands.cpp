@@ -93,7 +93,7 @@ void add_simulate_tolerance_command(CLI::App& simulate) {
     auto opt = std::make_shared<Options>();
     cmd->add_option("DESIGN", opt->design, "Design TOML file (Design I or II)")->required();
     cmd->add_option("PATTERN", opt->pattern, "Pattern file from `rfd pattern encode`")->required();
-    cmd->add_option("--out", opt->out, "Output folder: a chart per error kind (CSV, .gp, SVG, PNG) and summary.txt")
+    cmd->add_option("--out", opt->out, "Output folder: a chart per error kind (CSV, .gp, SVG, PNG), summary.txt and summary.json")
         ->required();
     cmd->add_option("--light", opt->lights,
                     std::string("A distant light, in the frame --frame names (default the display's) ") + kLightSyntax +
@@ -214,15 +214,16 @@ void add_simulate_tolerance_command(CLI::App& simulate) {
                 << " light(s), " << optics::to_string(options.simulation.model) << " model):\n"
                 << table.str() << sentence << ".\n";
         write_text_file(out / "summary.txt", summary.str());
+        const nlohmann::json json = {{"design", design.name},
+                                     {"threshold_db", opt->threshold},
+                                     {"model", std::string(optics::to_string(options.simulation.model))},
+                                     {"lights", lights.size()},
+                                     {"nominal_peak", report.nominal_peak},
+                                     {"summary", sentence},
+                                     {"curves", curves},
+                                     {"seconds", seconds}};
+        write_text_file(out / "summary.json", json.dump(2) + "\n");
         if (opt->json) {
-            const nlohmann::json json = {{"design", design.name},
-                                         {"threshold_db", opt->threshold},
-                                         {"model", std::string(optics::to_string(options.simulation.model))},
-                                         {"lights", lights.size()},
-                                         {"nominal_peak", report.nominal_peak},
-                                         {"summary", sentence},
-                                         {"curves", curves},
-                                         {"seconds", seconds}};
             std::printf("%s\n", json.dump(2).c_str());
             return;
         }

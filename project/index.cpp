@@ -1,8 +1,11 @@
 #include "project/index.hpp"
 
 #include <algorithm>
+#include <fstream>
 #include <string>
 #include <system_error>
+
+#include <nlohmann/json.hpp>
 
 #include "core/files.hpp"
 #include "core/text.hpp"
@@ -134,13 +137,49 @@ std::string html_escaped(const std::string& text) {
 
 bool is_picture(const std::string& file) { return file.ends_with(".png"); }
 
+// The verdict step's result: its one line and the figures under it, empty when the step
+// was not made (or its file is not what it wrote).
+struct VerdictText {
+    std::string call, line;
+    std::vector<std::string> figures;
+};
+VerdictText read_verdict(const fs::path& out) {
+    std::ifstream in(out / "verdict.json");
+    if (!in) return {};
+    const nlohmann::json v = nlohmann::json::parse(in, nullptr, false);
+    if (v.is_discarded() || !v.contains("line")) return {};
+    VerdictText text{v.value("call", ""), v.value("line", ""), {}};
+    const auto number = [](const nlohmann::json& value, const std::string& unit) {
+        return value.is_number() ? format_fixed(value.get<double>(), 2) + unit : std::string("-");
+    };
+    text.figures.push_back("predicted PSNR over the field of view: mean " + number(v["psnr_mean_in_fov_db"], " dB") +
+                           ", min " + number(v["psnr_min_in_fov_db"], " dB") + " (against the field's brightest)");
+    text.figures.push_back("crosstalk-free cone " + number(v["crosstalk_free_cone_deg"], " deg") + " (PSNR " +
+                           number(v["psnr_mean_crosstalk_free_db"], " dB") + "), field of view " +
+                           number(v["field_of_view_deg"], " deg"));
+    if (v["tolerances"].is_object()) {
+        const nlohmann::json& t = v["tolerances"];
+        text.figures.push_back("assemble within: shift " + number(t["shift_mm"], " mm") + ", rotation " +
+                               number(t["rotation_deg"], " deg") + ", pitch " + number(t["pitch_error_ppm"], " ppm") +
+                               ", spacer " + number(t["spacer_mm"], " mm"));
+    }
+    for (const auto& warning : v.value("warnings", nlohmann::json::array()))
+        if (warning.is_string()) text.figures.push_back("design warning: " + warning.get<std::string>());
+    return text;
+}
+
 }  // namespace
 
 void write_index(const Project& project, const fs::path& out, const std::vector<Step>& steps) {
     const std::vector<Section> sections = instructions(project, out);
     const std::string title = project.name + ": a passive reflectance-field display";
 
+    const VerdictText verdict = read_verdict(out);
     std::string text = title + "\nMade by rfd make from " + project.file.string() + ". Paths are relative to this folder.\n";
+    if (!verdict.line.empty()) {
+        text += "\nVerdict: " + verdict.line + "\n";
+        for (const std::string& figure : verdict.figures) text += "  " + figure + "\n";
+    }
     for (const Section& section : sections) {
         if (section.items.empty()) continue;
         text += "\n" + section.title + "\n";
@@ -157,10 +196,16 @@ void write_index(const Project& project, const fs::path& out, const std::vector<
     std::string html = "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>" +
                        html_escaped(title) +
                        "</title>\n<style>\nbody{font-family:sans-serif;max-width:60em;margin:2em auto;padding:0 1em;"
-                       "line-height:1.4}\nimg{max-width:100%;border:1px solid #ccc}\ncode{font-size:90%}\n</style>\n"
+                       "line-height:1.4}\nimg{max-width:100%;border:1px solid #ccc}\ncode{font-size:90%}\n.verdict{padding:0.5em 1em;border-left:6px solid #c90}\n.verdict.go{border-color:#393}\n.verdict.no-go{border-color:#c33}\n</style>\n"
                        "</head>\n<body>\n<h1>" +
                        html_escaped(title) + "</h1>\n<p>Made by <code>rfd make</code> from <code>" +
                        html_escaped(project.file.string()) + "</code>.</p>\n";
+    if (!verdict.line.empty()) {
+        html += "<div class=\"verdict " + html_escaped(verdict.call) + "\"><strong>" + html_escaped(verdict.line) +
+                "</strong><ul>\n";
+        for (const std::string& figure : verdict.figures) html += "<li>" + html_escaped(figure) + "</li>\n";
+        html += "</ul></div>\n";
+    }
     for (const Section& section : sections) {
         if (section.items.empty()) continue;
         html += "<h2>" + html_escaped(section.title) + "</h2>\n<ul>\n";

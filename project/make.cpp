@@ -165,6 +165,17 @@ std::vector<Step> plan(const Project& p, const fs::path& out) {
                          {"simulate", "tolerance", design, pattern, "--out", o + "predict/tolerance"},
                          {p.design, out / "pattern.exr"},
                          {"predict/tolerance"}});
+    if (p.outputs.compare_sweep > 0) {
+        Step verdict{"verdict", "the verdict: go, check or no-go, and the figures it rests on (verdict.json)",
+                     {"simulate", "verdict", design, "--compare", o + "predict/compare", "--out", o + "verdict.json"},
+                     {p.design, out / "predict/compare"},
+                     {"verdict.json"}};
+        if (p.outputs.tolerance) {
+            verdict.arguments.insert(verdict.arguments.end(), {"--tolerance", o + "predict/tolerance"});
+            verdict.inputs.push_back(out / "predict/tolerance");
+        }
+        steps.push_back(std::move(verdict));
+    }
     return steps;
 }
 

@@ -158,7 +158,7 @@ TEST(ProjectPlan, EveryStepReadsOnlyWhatEarlierStepsOrTheUserMade) {
         for (const fs::path& output : step.outputs) made.insert(output);
     }
     // inkjet_720 prints one sheet: no back sheet.
-    EXPECT_THAT(names, ::testing::ElementsAre("pattern", "sheet_front_pdf", "moire", "wedge", "holder", "compare", "tolerance"));
+    EXPECT_THAT(names, ::testing::ElementsAre("pattern", "sheet_front_pdf", "moire", "wedge", "holder", "compare", "tolerance", "verdict"));
 }
 
 TEST(Make, ASecondRunSkipsEveryStepAndAChangedFieldRemakesOnlyWhatDependsOnIt) {
@@ -167,7 +167,7 @@ TEST(Make, ASecondRunSkipsEveryStepAndAChangedFieldRemakesOnlyWhatDependsOnIt) {
     write(dir / "p.toml", kProject);
     const Project project = load_project(dir / "p.toml");
     FakeRfd rfd;
-    EXPECT_EQ(run_make(project, dir / "out", rfd).ran.size(), 7u);
+    EXPECT_EQ(run_make(project, dir / "out", rfd).ran.size(), 8u);
     EXPECT_TRUE(fs::exists(dir / "out/README.txt"));
     EXPECT_TRUE(fs::exists(dir / "out/index.html"));
     EXPECT_TRUE(run_make(project, dir / "out", rfd).ran.empty());
@@ -175,14 +175,14 @@ TEST(Make, ASecondRunSkipsEveryStepAndAChangedFieldRemakesOnlyWhatDependsOnIt) {
     fs::remove_all(dir / "field");
     write_small_field(dir / "field", 0.75f);
     EXPECT_THAT(run_make(project, dir / "out", rfd).ran,
-                UnorderedElementsAre("pattern", "sheet_front_pdf", "compare", "tolerance"));
+                UnorderedElementsAre("pattern", "sheet_front_pdf", "compare", "tolerance", "verdict"));
 
     // An output removed by hand is made again; what reads it is not, as it comes out the same.
     fs::remove(dir / "out/print/moire.pdf");
     EXPECT_THAT(run_make(project, dir / "out", rfd).ran, UnorderedElementsAre("moire"));
     fs::remove(dir / "out/pattern.png");
     EXPECT_THAT(run_make(project, dir / "out", rfd).ran, UnorderedElementsAre("pattern"));
-    EXPECT_EQ(run_make(project, dir / "out", rfd, true).ran.size(), 7u);
+    EXPECT_EQ(run_make(project, dir / "out", rfd, true).ran.size(), 8u);
 }
 
 TEST(Make, AFailingStepSaysWhichAndKeepsTheStepsBeforeIt) {
@@ -201,7 +201,7 @@ TEST(Make, AFailingStepSaysWhichAndKeepsTheStepsBeforeIt) {
     rfd.fail_on.clear();
     rfd.calls.clear();
     EXPECT_THAT(run_make(project, dir / "out", rfd).ran,
-                UnorderedElementsAre("sheet_front_pdf", "moire", "wedge", "holder", "compare", "tolerance"));
+                UnorderedElementsAre("sheet_front_pdf", "moire", "wedge", "holder", "compare", "tolerance", "verdict"));
 }
 
 TEST(Make, ADamagedManifestRemakesEverythingAfterANote) {
@@ -212,7 +212,7 @@ TEST(Make, ADamagedManifestRemakesEverythingAfterANote) {
     FakeRfd rfd;
     run_make(project, dir / "out", rfd);
     write(dir / "out/manifest.json", "{\"steps\": 3");
-    EXPECT_EQ(run_make(project, dir / "out", rfd).ran.size(), 7u);
+    EXPECT_EQ(run_make(project, dir / "out", rfd).ran.size(), 8u);
     EXPECT_TRUE(run_make(project, dir / "out", rfd).ran.empty());
 }
 

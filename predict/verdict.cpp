@@ -1,0 +1,117 @@
+#include "predict/verdict.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/text.hpp"
+
+namespace rfd::predict {
+namespace {
+
+std::string db(double value) { return format_fixed(value, 1) + " dB"; }
+
+// The first tolerance finer than assembly by hand (or than a calibrated pitch), worded.
+std::optional<std::string> tight_tolerance(const AssemblyTolerances& t, const VerdictRules& rules) {
+    if (t.shift_mm && *t.shift_mm < rules.hand_shift_mm)
+        return "the pattern shift must stay under " + format_number(*t.shift_mm, 3) + " mm, finer than registration by hand (" +
+               format_number(rules.hand_shift_mm) + " mm)";
+    if (t.rotation_deg && *t.rotation_deg < rules.hand_rotation_deg)
+        return "the pattern rotation must stay under " + format_number(*t.rotation_deg, 3) +
+               " deg, finer than registration by hand (" + format_number(rules.hand_rotation_deg) + " deg)";
+    if (t.spacer_mm && *t.spacer_mm < rules.hand_spacer_mm)
+        return "the spacer must be within " + format_number(*t.spacer_mm, 3) + " mm, finer than a printed part (" +
+               format_number(rules.hand_spacer_mm) + " mm)";
+    if (t.pitch_ppm && *t.pitch_ppm < rules.calibrated_pitch_ppm)
+        return "the lenslet pitch must be known to " + format_number(*t.pitch_ppm, 3) +
+               " ppm, finer than the moire sheet calibrates it (" + format_number(rules.calibrated_pitch_ppm) + " ppm)";
+    return std::nullopt;
+}
+
+}  // namespace
+
+std::string_view to_string(Call call) {
+    switch (call) {
+    case Call::Go: return "go";
+    case Call::Check: return "check";
+    case Call::NoGo: return "no-go";
+    }
+    return "check";
+}
+
+std::string Verdict::line() const { return std::string(to_string(call)) + ": " + reason; }
+
+Verdict judge(const VerdictInputs& inputs, const VerdictRules& rules) {
+    Verdict v;
+    v.inputs = inputs;
+    double field_peak = 0.0;
+    for (const ComparedDirection& d : inputs.directions) field_peak = std::max(field_peak, d.peak);
+    // PSNR against the field's brightest value; a perfect match counts as 100 dB so that
+    // means stay finite.
+    const auto psnr = [&](const ComparedDirection& d) {
+        return d.mse > 0.0 ? std::min(100.0, 10.0 * std::log10(field_peak * field_peak / d.mse)) : 100.0;
+    };
+    double sum_fov = 0.0, sum_free = 0.0, min_fov = 1e300;
+    const ComparedDirection* worst = nullptr;
+    for (const ComparedDirection& d : inputs.directions) {
+        if (!d.inside_fov) continue;
+        const double p = psnr(d);
+        ++v.directions_in_fov;
+        sum_fov += p;
+        if (p < min_fov) {
+            min_fov = p;
+            worst = &d;
+        }
+        if (d.crosstalk_free) {
+            ++v.directions_crosstalk_free;
+            sum_free += p;
+        }
+    }
+    if (field_peak <= 0.0 || v.directions_in_fov == 0) {
+        v.call = Call::Check;
+        v.reason = field_peak <= 0.0 ? "the field is black in every compared direction: nothing to judge"
+                                     : "no compared light lies inside the field of view: nothing to judge";
+        return v;
+    }
+    v.psnr_mean_in_fov_db = sum_fov / v.directions_in_fov;
+    v.psnr_min_in_fov_db = min_fov;
+    if (v.directions_crosstalk_free > 0) v.psnr_mean_crosstalk_free_db = sum_free / v.directions_crosstalk_free;
+
+    if (*v.psnr_mean_in_fov_db < rules.poor_db) {
+        v.call = Call::NoGo;
+        v.reason = "the predicted display matches the field by only " + db(*v.psnr_mean_in_fov_db) +
+                   " over the field of view (below " + db(rules.poor_db) + "): the picture would be hard to recognise";
+        return v;
+    }
+    v.call = Call::Check;
+    if (inputs.tolerances)
+        if (auto tight = tight_tolerance(*inputs.tolerances, rules)) {
+            v.reason = *tight;
+            return v;
+        }
+    if (!v.psnr_mean_crosstalk_free_db) {
+        v.reason = "no compared light lies inside the crosstalk-free cone";
+        return v;
+    }
+    if (*v.psnr_mean_crosstalk_free_db < rules.good_db) {
+        v.reason = "the crosstalk-free cone shows the field at " + db(*v.psnr_mean_crosstalk_free_db) + " (below " +
+                   db(rules.good_db) + "): look at the predicted pictures before printing";
+        return v;
+    }
+    if (min_fov < rules.poor_db) {
+        v.reason = "at " + format_fixed(worst->display_angle_deg, 1) + " deg from the axis the prediction falls to " +
+                   db(min_fov) + ": that part of the field of view will look wrong";
+        return v;
+    }
+    if (!inputs.warnings.empty()) {
+        v.reason = "design warning: " + inputs.warnings.front() +
+                   (inputs.warnings.size() > 1 ? " (and " + std::to_string(inputs.warnings.size() - 1) + " more)" : "");
+        return v;
+    }
+    v.call = Call::Go;
+    v.reason = "predicted " + db(*v.psnr_mean_crosstalk_free_db) + " in the crosstalk-free cone and at least " +
+               db(min_fov) + " over the field of view" +
+               (inputs.tolerances ? ", with tolerances assembly by hand meets" : "") + ", no design warnings";
+    return v;
+}
+
+}  // namespace rfd::predict

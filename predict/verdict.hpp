@@ -1,0 +1,72 @@
+#pragma once
+// The verdict: is this display, for this field and printer, worth printing? One line
+// (go / check / no-go and the reason) over the figures it rests on: the predicted PSNR over
+// the field of view, the crosstalk-free cone, the assembly tolerances and the design-rule
+// warnings (docs/methods.md, "The verdict").
+//
+// PSNR here is against the brightest value the field shows in any of the compared
+// directions, not each direction's own peak: a direction where the field is dark (a test
+// field lights one letter per direction) must not count a faint residue as a failure.
+//
+// Example:
+//   const Verdict v = judge(inputs);
+//   std::puts(v.line().c_str());     // "check: the pattern shift must stay under 0.08 mm ..."
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace rfd::predict {
+
+/// One light direction of `rfd simulate compare`.
+struct ComparedDirection {
+    double display_angle_deg = 0.0;
+    bool inside_fov = false;
+    bool crosstalk_free = false;
+    double mse = 0.0;    ///< mean squared error against the relit field
+    double peak = 0.0;   ///< the relit field's largest value in this direction
+};
+
+/// What `rfd simulate tolerance` found: the largest errors that keep PSNR above its
+/// threshold (nullopt: the sweep never fell below it).
+struct AssemblyTolerances {
+    std::optional<double> shift_mm, rotation_deg, pitch_ppm, spacer_mm;
+};
+
+struct VerdictInputs {
+    std::string design;
+    std::optional<double> field_of_view_deg;         ///< full cone without wrap-over
+    std::optional<double> crosstalk_free_cone_deg;   ///< full cone without crosstalk
+    std::vector<ComparedDirection> directions;
+    std::optional<AssemblyTolerances> tolerances;
+    std::vector<std::string> warnings;               ///< the design's rules broken
+};
+
+enum class Call { Go, Check, NoGo };
+
+/// The thresholds the verdict applies, named so docs and messages quote one place.
+struct VerdictRules {
+    double good_db = 30.0;          ///< mean PSNR in the crosstalk-free cone for "go"
+    double poor_db = 20.0;          ///< mean PSNR in the field of view below which "no-go"
+    double hand_shift_mm = 0.1;     ///< registration by eye through a loupe, markers on lenslets
+    double hand_rotation_deg = 0.25;
+    double hand_spacer_mm = 0.1;    ///< a printed spacer's thickness, FDM layer-level
+    double calibrated_pitch_ppm = 500.0;  ///< half a step of the default moire sheet (0.1 %)
+};
+
+struct Verdict {
+    Call call = Call::Check;
+    std::string reason;
+    std::optional<double> psnr_mean_in_fov_db, psnr_min_in_fov_db, psnr_mean_crosstalk_free_db;
+    int directions_in_fov = 0, directions_crosstalk_free = 0;
+    VerdictInputs inputs;
+
+    /// "go: ..." / "check: ..." / "no-go: ...".
+    std::string line() const;
+};
+
+Verdict judge(const VerdictInputs& inputs, const VerdictRules& rules = {});
+
+std::string_view to_string(Call call);
+
+}  // namespace rfd::predict
