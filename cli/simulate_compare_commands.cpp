@@ -124,7 +124,6 @@ void add_simulate_compare_command(CLI::App& simulate) {
         const optics::Design design = optics::load_design(opt->design);
         const optics::DisplaySimulator simulator(design);
         const print::PrintedTransparency pattern = printed_pattern(design, opt->pattern, opt->print);
-        const patterns::PatternFileInfo info = patterns::read_pattern_info(opt->pattern);
         if (opt->sweep == 0 && opt->lights.empty()) throw InputError("--sweep 0 needs at least one --light");
         std::vector<predict::AccuracyModel> accuracy_models;
         std::vector<int> accuracy_rays;
@@ -147,23 +146,8 @@ void add_simulate_compare_command(CLI::App& simulate) {
         }
 
         // The field as the encoder saw it: same options, same lenslet samples.
-        patterns::EncodeOptions encode_options = patterns::encode_options_of(info, opt->pattern);
-        encode_options.field_name = opt->field;
-        const relight::ReflectanceField field = patterns::load_field_for(design, opt->field, encode_options);
-        if (field.channels() != info.channels)
-            throw InputError(SourceLocation{opt->field},
-                             "the field has " + std::to_string(field.channels()) + " channel(s), the pattern '" +
-                                 opt->pattern + "' " + std::to_string(info.channels) + ": not the field it was encoded from");
-        const patterns::Encoder encoder(design, field, pattern.geometry(), encode_options);
-        // The pattern records the white its encoder found; the same field and options find
-        // the same one, another field almost never does.
-        const double white = pattern.tone().white;
-        if (std::abs(encoder.white() - white) > 1e-3 * white)
-            throw InputError(SourceLocation{opt->field},
-                             "not the field the pattern '" + opt->pattern + "' was encoded from: its white is " +
-                                 format_number(encoder.white()) + ", the pattern's rfd:white " + format_number(white) +
-                                 " (pattern field '" + (info.attributes.count("field") ? info.attributes.at("field") : "?") +
-                                 "')");
+        const predict::EncodedField reference(design, opt->pattern, pattern.geometry(), pattern.tone().white, opt->field);
+        const patterns::Encoder& encoder = reference.encoder();
         const predict::DisplayComparison comparison(simulator, pattern, encoder, pattern.tone());
 
         std::vector<Eigen::Vector3d> directions = comparison.sweep(opt->sweep);

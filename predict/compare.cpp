@@ -7,6 +7,8 @@
 #include <numbers>
 
 #include "core/error.hpp"
+#include "core/text.hpp"
+#include "patterns/raster.hpp"
 #include "core/progress.hpp"
 #include "core/sphere.hpp"
 #include "core/units.hpp"
@@ -81,6 +83,28 @@ ImageComparison compare_images(const Image& prediction, const Image& reference) 
     out.fitted_mse = fitted / n;
     out.psnr_fitted_db = psnr_of(out.peak, out.fitted_mse);
     return out;
+}
+
+EncodedField::EncodedField(const optics::Design& design, const std::string& pattern_file,
+                           const patterns::PatternGeometry& geometry, double pattern_white,
+                           const std::string& field_path) {
+    const patterns::PatternFileInfo info = patterns::read_pattern_info(pattern_file);
+    patterns::EncodeOptions options = patterns::encode_options_of(info, pattern_file);
+    options.field_name = field_path;
+    field_ = patterns::load_field_for(design, field_path, options);
+    if (field_.channels() != info.channels)
+        throw InputError(SourceLocation{field_path},
+                         "the field has " + std::to_string(field_.channels()) + " channel(s), the pattern '" +
+                             pattern_file + "' " + std::to_string(info.channels) + ": not the field it was encoded from");
+    encoder_ = std::make_unique<patterns::Encoder>(design, field_, geometry, options);
+    // The pattern records the white its encoder found; the same field and options find the
+    // same one, another field almost never does.
+    if (std::abs(encoder_->white() - pattern_white) > 1e-3 * pattern_white)
+        throw InputError(SourceLocation{field_path},
+                         "not the field the pattern '" + pattern_file + "' was encoded from: its white is " +
+                             format_number(encoder_->white()) + ", the pattern's rfd:white " +
+                             format_number(pattern_white) + " (pattern field '" +
+                             (info.attributes.count("field") ? info.attributes.at("field") : "?") + "')");
 }
 
 DisplayComparison::DisplayComparison(const optics::DisplaySimulator& simulator, const optics::Transparency& pattern,

@@ -51,6 +51,7 @@
 //          DirectionComparison r = cmp.compare(direction_from_angles(0.1, 0.0), {});
 
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -106,6 +107,24 @@ struct DirectionComparison {
     ImageComparison cell_comparison;
     std::size_t rays = 0;            ///< rays the simulation traced
     double seconds = 0.0;            ///< wall time of the simulation and the reference
+};
+
+/// The field a pattern was encoded from, read as its encoder read it (the options the
+/// pattern records), and that encoder: the reference side of a comparison. InputError,
+/// naming the field, when it is not the pattern's field (other channels or another white).
+/// Not movable: the encoder keeps the field by reference.
+class EncodedField {
+public:
+    EncodedField(const optics::Design& design, const std::string& pattern_file, const patterns::PatternGeometry& geometry,
+                 double pattern_white, const std::string& field_path);
+    EncodedField(const EncodedField&) = delete;
+    EncodedField& operator=(const EncodedField&) = delete;
+    const patterns::Encoder& encoder() const { return *encoder_; }
+    const relight::ReflectanceField& field() const { return field_; }
+
+private:
+    relight::ReflectanceField field_;
+    std::unique_ptr<patterns::Encoder> encoder_;
 };
 
 class DisplayComparison {
