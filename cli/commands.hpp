@@ -43,6 +43,9 @@ void add_simulate_compare_command(CLI::App& simulate);
 /// `simulate verdict`: go / check / no-go from compare's and tolerance's summaries.
 void add_simulate_verdict_command(CLI::App& simulate);
 
+/// `simulate preview`: the precomputed pictures of rfd make's preview page.
+void add_simulate_preview_command(CLI::App& simulate);
+
 /// `holder`: the lens holder as OpenSCAD, its STLs and their checks; `holder coupon`.
 void add_holder_commands(CLI::App& app);
 

@@ -288,6 +288,7 @@ void add_simulate_commands(CLI::App& app) {
     add_simulate_tolerance_command(*simulate);
     add_simulate_compare_command(*simulate);
     add_simulate_verdict_command(*simulate);
+    add_simulate_preview_command(*simulate);
 }
 
 }  // namespace rfd::cli

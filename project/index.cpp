@@ -12,6 +12,7 @@
 #include "optics/design.hpp"
 #include "print/printer.hpp"
 #include "holders/profile.hpp"
+#include "project/preview.hpp"
 
 namespace rfd::project {
 namespace {
@@ -196,7 +197,9 @@ void write_index(const Project& project, const fs::path& out, const std::vector<
     std::string html = "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>" +
                        html_escaped(title) +
                        "</title>\n<style>\nbody{font-family:sans-serif;max-width:60em;margin:2em auto;padding:0 1em;"
-                       "line-height:1.4}\nimg{max-width:100%;border:1px solid #ccc}\ncode{font-size:90%}\n.verdict{padding:0.5em 1em;border-left:6px solid #c90}\n.verdict.go{border-color:#393}\n.verdict.no-go{border-color:#c33}\n</style>\n"
+                       "line-height:1.4}\nimg{max-width:100%;border:1px solid #ccc}\ncode{font-size:90%}\n.verdict{padding:0.5em 1em;border-left:6px solid #c90}\n.verdict.go{border-color:#393}\n.verdict.no-go{border-color:#c33}\n.viewer{display:flex;flex-wrap:wrap;gap:1em;align-items:flex-start}\n"
+                       "figure{margin:0}\ncanvas.picture{width:220px;image-rendering:pixelated;background:#000}\n"
+                       "#light-disc{cursor:crosshair;touch-action:none}\n#light-readout{width:220px;font-size:90%}\n#holder-view{min-height:2em}\n</style>\n"
                        "</head>\n<body>\n<h1>" +
                        html_escaped(title) + "</h1>\n<p>Made by <code>rfd make</code> from <code>" +
                        html_escaped(project.file.string()) + "</code>.</p>\n";
@@ -205,6 +208,33 @@ void write_index(const Project& project, const fs::path& out, const std::vector<
                 "</strong><ul>\n";
         for (const std::string& figure : verdict.figures) html += "<li>" + html_escaped(figure) + "</li>\n";
         html += "</ul></div>\n";
+    }
+    if (made(out, "preview/data.js")) {
+        const std::vector<fs::path> stls = [&] {
+            std::vector<fs::path> files;
+            for (const std::string& file : files_with_extension(out / "holder", out, ".stl")) files.push_back(out / file);
+            return files;
+        }();
+        const bool three = write_preview_assets(out / "preview", stls);
+        html += R"(<h2>Move the light</h2>
+<p>Drag the point on the disc (or focus it and use the arrow keys): the centre is a lamp straight behind the
+display, the rim the edge of the range. Inside the yellow line no light crosses into a neighbouring lenslet;
+the red dashed line is the edge of the field of view.</p>
+<div class="viewer">
+<div><canvas id="light-disc" width="220" height="220" tabindex="0" aria-label="light direction"></canvas>
+<div id="light-readout"></div></div>
+<figure><canvas id="relit" class="picture"></canvas><figcaption>the field relit in software</figcaption></figure>
+<figure><canvas id="predicted" class="picture"></canvas><figcaption>the predicted display</figcaption></figure>
+<figure><canvas id="difference" class="picture"></canvas><figcaption>|difference| &times; 4</figcaption></figure>
+</div>
+<h2>The holder</h2>
+<div id="holder-view"></div>
+)";
+        if (three)
+            html += "<script src=\"preview/vendor/three.min.js\"></script>\n<script src=\"preview/vendor/STLLoader.js\">"
+                    "</script>\n<script src=\"preview/vendor/OrbitControls.js\"></script>\n";
+        if (!stls.empty()) html += "<script src=\"preview/holder.js\"></script>\n";
+        html += "<script src=\"preview/data.js\"></script>\n<script src=\"preview/preview.js\"></script>\n";
     }
     for (const Section& section : sections) {
         if (section.items.empty()) continue;

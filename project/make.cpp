@@ -165,6 +165,14 @@ std::vector<Step> plan(const Project& p, const fs::path& out) {
                          {"simulate", "tolerance", design, pattern, "--out", o + "predict/tolerance"},
                          {p.design, out / "pattern.exr"},
                          {"predict/tolerance"}});
+    if (p.outputs.preview_lights > 0) {
+        steps.push_back({"preview", "the preview page's pictures: predicted and relit over the field of view",
+                         {"simulate", "preview", design, pattern, field.string(), "--count",
+                          std::to_string(p.outputs.preview_lights), "--out", o + "preview"},
+                         {p.design, out / "pattern.exr"},
+                         {"preview/data.js", "preview/predicted.png", "preview/relit.png"}});
+        steps.back().inputs.insert(steps.back().inputs.end(), field_inputs.begin(), field_inputs.end());
+    }
     if (p.outputs.compare_sweep > 0) {
         Step verdict{"verdict", "the verdict: go, check or no-go, and the figures it rests on (verdict.json)",
                      {"simulate", "verdict", design, "--compare", o + "predict/compare", "--out", o + "verdict.json"},

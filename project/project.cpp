@@ -108,6 +108,8 @@ Outputs read_outputs(ConfigTable& table) {
     o.holder = table.optional_boolean("holder").value_or(o.holder);
     o.compare_sweep = static_cast<int>(table.optional_integer("compare_sweep", 0, 1000).value_or(o.compare_sweep));
     o.tolerance = table.optional_boolean("tolerance").value_or(o.tolerance);
+    o.preview_lights = static_cast<int>(table.optional_integer("preview_lights", 0, 1024).value_or(o.preview_lights));
+    if (o.preview_lights > 0 && o.preview_lights < 3) table.fail("preview_lights", "expected 0 (none) or 3 to 1024");
     return o;
 }
 

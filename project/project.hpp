@@ -6,7 +6,7 @@
 //   [source]   field (a folder or .lp), scene + lights + resolution, or procedural + text +
 //              resolution; region, scale
 //   [encode]   tilt_deg, turn_deg, angle_scale, model, interpolation, fit, margin_mm
-//   [make]     sheets, moire, holder, compare_sweep, tolerance
+//   [make]     sheets, moire, wedge, holder, compare_sweep, tolerance, preview_lights
 //
 // Paths are relative to the project file. Every key is checked like every other input
 // file: an unknown key or a value out of range is an error naming file, line and key.
@@ -46,6 +46,7 @@ struct Outputs {
     bool holder = true;       ///< the holder's .scad and STLs with their checks
     int compare_sweep = 9;    ///< predicted against relit at this many lights (0: none)
     bool tolerance = true;    ///< assembly tolerances
+    int preview_lights = 96;  ///< directions precomputed for the preview page (0: no light control)
 };
 
 struct Project {

@@ -30,6 +30,10 @@ packages=(
   # pdftoppm and pdftocairo: the test that a PDF sheet's tile joins do not show renders it
   # as viewers do (tests/test_print.cpp).
   poppler-utils
+  # three.js: the holder's 3D view on rfd make's preview page, vendored into each output.
+  libjs-three
+  # Headless Chromium: the preview page's browser test (tests/cli/preview.sh).
+  chromium
 )
 
 missing=()
