@@ -12,7 +12,7 @@ work="$3"
 
 rm -rf "$work"
 mkdir -p "$work"
-for data in designs scenes printers holders; do ln -s "$src/$data" "$work/$data"; done
+for data in designs scenes printers holders examples; do ln -s "$src/$data" "$work/$data"; done
 ln -s "$build" "$work/build"
 
 # One file per ```sh block, numbered from 1.
