@@ -43,6 +43,7 @@ void add_sheet_command(CLI::App& print_cmd) {
     cmd->add_option("--sheets", opt->sheet.sheets,
                     "Sheets stacked back to back (1 or 2; 2 prints each at the square root); default: the profile's");
     cmd->add_option("--bits", opt->sheet.bits, "TIFF bits per channel, 8 or 16");
+    cmd->add_option("--preview", opt->sheet.preview, "Also a small PNG of the page (800 pixels along its longer side)");
     cmd->add_flag("--json", opt->json, "Machine-readable summary");
     cmd->callback([opt] {
         const optics::Design design = optics::load_design(opt->design);

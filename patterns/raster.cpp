@@ -268,24 +268,11 @@ PatternFileInfo read_pattern_info(const std::filesystem::path& path) {
     return PatternReader(path).info();
 }
 
-void write_preview(const std::filesystem::path& pattern, const std::filesystem::path& preview, int max_side,
-                   double white) {
-    RFD_CHECK(max_side > 0);
+Image box_averaged(const std::filesystem::path& pattern, int width, int height) {
+    RFD_CHECK(width > 0 && height > 0);
     PatternReader reader(pattern);
     const PatternFileInfo& info = reader.info();
-    if (!(white > 0.0)) {
-        const auto it = info.attributes.find("white");
-        white = it != info.attributes.end() ? std::atof(it->second.c_str()) : 1.0;
-        if (!(white > 0.0)) white = 1.0;
-    }
-    // Physical aspect: dots are 1/dpi_x by 1/dpi_y inches.
-    const double width_in = info.dpi_x > 0 ? info.width / info.dpi_x : info.width;
-    const double height_in = info.dpi_y > 0 ? info.height / info.dpi_y : info.height;
-    // No preview pixel smaller than a dot, so that every one averages at least one.
-    const double scale = std::min({max_side / std::max(width_in, height_in), info.width / width_in, info.height / height_in});
-    const int w = std::max(1, static_cast<int>(std::lround(width_in * scale)));
-    const int h = std::max(1, static_cast<int>(std::lround(height_in * scale)));
-    const int channels = info.channels;
+    const int w = width, h = height, channels = info.channels;
     std::vector<double> sum(static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * static_cast<std::size_t>(channels), 0.0);
     std::vector<double> count(static_cast<std::size_t>(w) * static_cast<std::size_t>(h), 0.0);
     const std::size_t row_floats = static_cast<std::size_t>(info.width) * static_cast<std::size_t>(channels);
@@ -312,8 +299,29 @@ void write_preview(const std::filesystem::path& pattern, const std::filesystem::
             const std::size_t p = static_cast<std::size_t>(y) * static_cast<std::size_t>(w) + static_cast<std::size_t>(x);
             for (int c = 0; c < channels; ++c)
                 image.at(x, y, c) = static_cast<float>(sum[p * static_cast<std::size_t>(channels) + static_cast<std::size_t>(c)] /
-                                                       std::max(count[p], 1.0) / white);
+                                                       std::max(count[p], 1.0));
         }
+    return image;
+}
+
+void write_preview(const std::filesystem::path& pattern, const std::filesystem::path& preview, int max_side,
+                   double white) {
+    RFD_CHECK(max_side > 0);
+    const PatternFileInfo info = read_pattern_info(pattern);
+    if (!(white > 0.0)) {
+        const auto it = info.attributes.find("white");
+        white = it != info.attributes.end() ? std::atof(it->second.c_str()) : 1.0;
+        if (!(white > 0.0)) white = 1.0;
+    }
+    // Physical aspect: dots are 1/dpi_x by 1/dpi_y inches.
+    const double width_in = info.dpi_x > 0 ? info.width / info.dpi_x : info.width;
+    const double height_in = info.dpi_y > 0 ? info.height / info.dpi_y : info.height;
+    // No preview pixel smaller than a dot, so that every one averages at least one.
+    const double scale = std::min({max_side / std::max(width_in, height_in), info.width / width_in, info.height / height_in});
+    const int w = std::max(1, static_cast<int>(std::lround(width_in * scale)));
+    const int h = std::max(1, static_cast<int>(std::lround(height_in * scale)));
+    Image image = box_averaged(pattern, w, h);
+    for (float& v : image.samples()) v = static_cast<float>(v / white);
     write_image(preview, image);
 }
 

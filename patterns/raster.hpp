@@ -23,6 +23,7 @@
 
 #include <Eigen/Core>
 
+#include "core/image.hpp"
 #include "core/image_file.hpp"
 #include "core/units.hpp"
 #include "optics/design.hpp"
@@ -129,6 +130,10 @@ private:
     std::unique_ptr<ImageFileReader> file_;
     PatternFileInfo info_;
 };
+
+/// The pattern file's values box-averaged down to `width` x `height` pixels (each pixel the
+/// mean of the dots whose index maps into it), streamed strip by strip.
+Image box_averaged(const std::filesystem::path& pattern, int width, int height);
 
 /// A small preview of a pattern file for screens: box-averaged down to at most `max_side`
 /// pixels along its longer side (non-square dots averaged to square pixels), divided by

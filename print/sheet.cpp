@@ -240,6 +240,71 @@ void write_pdf(const std::filesystem::path& out, const SheetLayout& layout, cons
     pdf.finish();
 }
 
+// The page at kSheetPreviewPixels along its longer side, as write_pdf draws it.
+void write_preview(const std::filesystem::path& png, const SheetLayout& layout, const ToneMap& tone,
+                   const std::filesystem::path& pattern_file) {
+    const double px_per_mm = kSheetPreviewPixels / std::max(layout.paper.width, layout.paper.height);
+    const int width = std::max(1, static_cast<int>(std::lround(layout.paper.width * px_per_mm)));
+    const int height = std::max(1, static_cast<int>(std::lround(layout.paper.height * px_per_mm)));
+    const Eigen::Vector2d lo = layout.pattern_min(), hi = layout.pattern_max();
+    // No picture pixel smaller than a dot, so that every one averages at least one; Cairo
+    // scales the picture onto the page.
+    const int pw = std::clamp(static_cast<int>(std::lround((hi.x() - lo.x()) * px_per_mm)), 1, layout.pattern.width);
+    const int ph = std::clamp(static_cast<int>(std::lround((hi.y() - lo.y()) * px_per_mm)), 1, layout.pattern.height);
+    const Image pattern = patterns::box_averaged(pattern_file, pw, ph);
+
+    SurfacePtr picture(cairo_image_surface_create(CAIRO_FORMAT_RGB24, pw, ph), &cairo_surface_destroy);
+    cairo_surface_flush(picture.get());
+    std::vector<float> values(static_cast<std::size_t>(pw) * static_cast<std::size_t>(pattern.channels()));
+    std::vector<float> codes(3 * static_cast<std::size_t>(pw));
+    for (int y = 0; y < ph; ++y) {
+        for (int x = 0; x < pw; ++x)
+            for (int c = 0; c < pattern.channels(); ++c)
+                values[static_cast<std::size_t>(x * pattern.channels() + c)] = pattern.at(x, y, c);
+        tone_row(values.data(), pw, pattern.channels(), tone, codes.data());
+        auto* row = reinterpret_cast<std::uint32_t*>(cairo_image_surface_get_data(picture.get()) +
+                                                     static_cast<std::ptrdiff_t>(y) * cairo_image_surface_get_stride(picture.get()));
+        for (int x = 0; x < pw; ++x) {
+            std::uint32_t pixel = 0;
+            for (int c = 0; c < 3; ++c)
+                pixel = pixel << 8 | static_cast<std::uint32_t>(std::lround(255.0f * codes[3 * static_cast<std::size_t>(x) + c]));
+            row[x] = pixel;
+        }
+    }
+    cairo_surface_mark_dirty(picture.get());
+
+    SurfacePtr page(cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height), &cairo_surface_destroy);
+    {
+        ContextPtr cr(cairo_create(page.get()), &cairo_destroy);
+        cairo_set_source_rgb(cr.get(), 1, 1, 1);
+        cairo_paint(cr.get());
+        cairo_scale(cr.get(), px_per_mm, px_per_mm);  // user units: page-frame mm
+        if (layout.mirror) {
+            cairo_translate(cr.get(), layout.paper.width, 0.0);
+            cairo_scale(cr.get(), -1.0, 1.0);
+        }
+        cairo_save(cr.get());
+        cairo_translate(cr.get(), lo.x(), lo.y());
+        cairo_scale(cr.get(), (hi.x() - lo.x()) / pw, (hi.y() - lo.y()) / ph);
+        cairo_set_source_surface(cr.get(), picture.get(), 0.0, 0.0);
+        cairo_pattern_set_filter(cairo_get_source(cr.get()), CAIRO_FILTER_NEAREST);
+        cairo_paint(cr.get());
+        cairo_restore(cr.get());
+        cairo_set_source_rgb(cr.get(), 1, 1, 1);
+        trace_clear_regions(cr.get(), layout);
+        cairo_fill(cr.get());
+        cairo_set_source_rgb(cr.get(), 0, 0, 0);
+        draw_marks(cr.get(), layout);
+    }
+    cairo_surface_flush(page.get());
+    const std::filesystem::path temporary = temporary_sibling(png);
+    if (cairo_surface_write_to_png(page.get(), temporary.c_str()) != CAIRO_STATUS_SUCCESS) {
+        remove_temporary(temporary);
+        throw IoError(SourceLocation{png.string()}, "cannot write the sheet's preview");
+    }
+    move_into_place(temporary, png);
+}
+
 }  // namespace
 
 SheetReport write_sheet(const std::filesystem::path& out, const optics::Design& design,
@@ -274,10 +339,13 @@ SheetReport write_sheet(const std::filesystem::path& out, const optics::Design& 
     info.sheets = report.tone.sheets;
     info.mirror = options.mirror;
     report.layout = layout_sheet(design, printer, geometry, info);
+    if (!options.preview.empty() && lower_extension(options.preview) != ".png")
+        throw InputError(SourceLocation{options.preview.string(), 0, 0, "--preview"}, "expected a .png file");
     if (pdf)
         write_pdf(out, report.layout, report.tone, reader);
     else
         write_tiff(out, report.layout, report.tone, reader, options);
+    if (!options.preview.empty()) write_preview(options.preview, report.layout, report.tone, pattern_file);
     return report;
 }
 

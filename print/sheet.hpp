@@ -47,7 +47,11 @@ struct SheetOptions {
     bool mirror = false;      ///< the mirrored back sheet
     int bits = 8;             ///< TIFF bits per channel, 8 or 16
     int rows_per_strip = 64;  ///< TIFF rows composed at once
+    std::filesystem::path preview;  ///< also a small PNG of the page here, when not empty
 };
+
+/// The longer side of a sheet's preview, pixels.
+inline constexpr int kSheetPreviewPixels = 800;
 
 /// What write_sheet did, for the command's report.
 struct SheetReport {
@@ -56,7 +60,9 @@ struct SheetReport {
     int pattern_channels = 0;
 };
 
-/// Writes the sheet; the format follows `out`'s extension (.tif/.tiff or .pdf). Throws
+/// Writes the sheet; the format follows `out`'s extension (.tif/.tiff or .pdf). With
+/// options.preview, also the page as a screen sees it, kSheetPreviewPixels along its longer
+/// side: the pattern box-averaged and tone-mapped as printed, the marks drawn (PNG). Throws
 /// InputError for bad options, a pattern that does not match the design at the printer's
 /// dpi or does not fit the paper, IoError when a file cannot be read or written.
 SheetReport write_sheet(const std::filesystem::path& out, const optics::Design& design,

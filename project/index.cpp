@@ -81,13 +81,14 @@ std::vector<Section> instructions(const Project& project, const fs::path& out) {
 
     Section film{"3. Print the pattern", {}};
     std::vector<std::string> fronts, backs;
-    for (const char* format : {"pdf", "tif"}) {
+    for (const char* format : {"png", "pdf", "tif"}) {
         if (made(out, std::string("print/front.") + format)) fronts.push_back(std::string("print/front.") + format);
         if (made(out, std::string("print/back.") + format)) backs.push_back(std::string("print/back.") + format);
     }
     film.items.push_back({"Print the front sheet on transparency film with " + film_printer +
                               ", at 100 %, no colour adjustment (the PDF and the TIFF are the same page; use "
-                              "the one your printer driver takes at its true resolution).",
+                              "the one your printer driver takes at its true resolution; the PNG is a picture of "
+                              "the page to check it).",
                           fronts});
     if (!backs.empty())
         film.items.push_back({"Print the mirrored back sheet the same way. Lay it behind the front sheet, ink "

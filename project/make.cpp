@@ -133,6 +133,11 @@ std::vector<Step> plan(const Project& p, const fs::path& out) {
                        {p.design, out / "pattern.exr"},
                        {"print/" + name}};
             if (side == 1) sheet.arguments.push_back("--mirror");
+            if (format == p.outputs.sheet_formats.front()) {  // one picture per side, whatever the formats
+                const std::string preview = std::string("print/") + (side == 0 ? "front" : "back") + ".png";
+                sheet.arguments.insert(sheet.arguments.end(), {"--preview", o + preview});
+                sheet.outputs.push_back(preview);
+            }
             steps.push_back(std::move(sheet));
         }
     if (p.outputs.moire)

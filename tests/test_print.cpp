@@ -386,6 +386,51 @@ TEST(SheetTiff, MirrorIsTheExactLeftRightMirrorAndRerunsAreIdentical) {
     EXPECT_GT(inked, 1000);  // the comparison saw the marks and the pattern
 }
 
+// The page preview: the paper's shape at 800 pixels along its longer side, the pattern's dots
+// printed with the sheet's tone (at 300 dpi a dot is taller than a preview pixel: none may
+// be left without a dot), and over the pattern's rectangle as poppler draws the PDF of
+// the same sheet at that scale (mean code within 2 of 255; the label's text is hinted
+// differently, so the page as a whole differs by more).
+TEST(SheetPreview, ThePageAsPrintedAtScreenSize) {
+    TempDir dir;
+    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const PrinterProfile printer = parse_printer(small_printer_toml(600, 300), "test.toml");
+    const auto pattern = write_test_pattern(dir, design, printer, 0.3f);
+    SheetOptions options;
+    options.preview = dir / "front.png";
+    const SheetReport report = write_sheet(dir / "front.pdf", design, printer, pattern, options);
+    const Page preview = read_page(dir / "front.png");
+    EXPECT_EQ(preview.height, kSheetPreviewPixels);  // 60 mm paper, the longer side
+    EXPECT_EQ(preview.width, 667);                   // 50 mm: 800 * 50 / 60
+    const double px_per_mm = kSheetPreviewPixels / 60.0;
+    const Eigen::Vector2d centre = 0.5 * (report.layout.pattern_min() + report.layout.pattern_max()) * px_per_mm;
+    const int expected = static_cast<int>(std::lround(255.0 * (1.0 - report.tone.printer_value(0.3))));
+    EXPECT_NEAR(preview.code(static_cast<int>(centre.x()), static_cast<int>(centre.y())), expected, 1);
+
+    options.preview = dir / "wrong.jpg";
+    EXPECT_THAT(error_of([&] { write_sheet(dir / "x.pdf", design, printer, pattern, options); }),
+                HasSubstr("--preview: expected a .png file"));
+
+    const std::string pdftoppm = RFD_PDFTOPPM;
+    if (pdftoppm.empty()) GTEST_SKIP() << "poppler-utils (pdftoppm) not installed";
+    const std::string command = pdftoppm + " -scale-to 800 -png -singlefile " + (dir / "front.pdf").string() + " " +
+                                (dir / "poppler").string();
+    ASSERT_EQ(std::system(command.c_str()), 0) << command;
+    const Page poppler = read_page(dir / "poppler.png");
+    ASSERT_EQ(poppler.width, preview.width);
+    ASSERT_EQ(poppler.height, preview.height);
+    const Eigen::Vector2d lo = report.layout.pattern_min() * px_per_mm, hi = report.layout.pattern_max() * px_per_mm;
+    double ours = 0.0, theirs = 0.0, pixels = 0.0;
+    for (int y = static_cast<int>(lo.y()) + 2; y < static_cast<int>(hi.y()) - 2; ++y)
+        for (int x = static_cast<int>(lo.x()) + 2; x < static_cast<int>(hi.x()) - 2; ++x) {
+            ours += preview.code(x, y);
+            theirs += poppler.code(x, y);
+            pixels += 1.0;
+        }
+    ASSERT_GT(pixels, 1000.0);
+    EXPECT_NEAR(ours / pixels, theirs / pixels, 2.0);
+}
+
 TEST(SheetTiff, SixteenBitsKeepTheResolution) {
     TempDir dir;
     const optics::Design design = optics::load_design(kDesigns / "design2.toml");

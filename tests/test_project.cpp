@@ -58,7 +58,8 @@ sheets = ["pdf"]
 
 // Stands in for rfd: writes every path after an output option, its content the command
 // line and the content of every existing file or folder the command names, so outputs
-// change exactly when what a step reads changes. Folders (no extension) get one file.
+// change exactly when what a step reads changes. Folders (no extension) get one file, the
+// preview's folder the three files rfd make checks for.
 struct FakeRfd {
     std::vector<std::string> calls;  // the first two words of each command
     std::string fail_on;             // a command ("print sheet") that exits 2
@@ -75,6 +76,10 @@ struct FakeRfd {
         for (std::size_t k = 0; k + 1 < arguments.size(); ++k) {
             if (arguments[k] != "--out" && arguments[k] != "--preview" && arguments[k] != "--stl") continue;
             fs::path target = arguments[k + 1];
+            if (command == "simulate preview") {
+                for (const char* file : {"data.js", "predicted.png", "relit.png"}) write(target / file, content);
+                continue;
+            }
             if (target.extension().empty()) target /= "made.txt";
             if (arguments[k] == "--stl") target.replace_filename("holder_base.stl");
             write(target, content);
@@ -158,7 +163,7 @@ TEST(ProjectPlan, EveryStepReadsOnlyWhatEarlierStepsOrTheUserMade) {
         for (const fs::path& output : step.outputs) made.insert(output);
     }
     // inkjet_720 prints one sheet: no back sheet.
-    EXPECT_THAT(names, ::testing::ElementsAre("pattern", "sheet_front_pdf", "moire", "wedge", "holder", "compare", "tolerance", "verdict"));
+    EXPECT_THAT(names, ::testing::ElementsAre("pattern", "sheet_front_pdf", "moire", "wedge", "holder", "compare", "tolerance", "preview", "verdict"));
 }
 
 TEST(Make, ASecondRunSkipsEveryStepAndAChangedFieldRemakesOnlyWhatDependsOnIt) {
@@ -167,7 +172,7 @@ TEST(Make, ASecondRunSkipsEveryStepAndAChangedFieldRemakesOnlyWhatDependsOnIt) {
     write(dir / "p.toml", kProject);
     const Project project = load_project(dir / "p.toml");
     FakeRfd rfd;
-    EXPECT_EQ(run_make(project, dir / "out", rfd).ran.size(), 8u);
+    EXPECT_EQ(run_make(project, dir / "out", rfd).ran.size(), 9u);
     EXPECT_TRUE(fs::exists(dir / "out/README.txt"));
     EXPECT_TRUE(fs::exists(dir / "out/index.html"));
     EXPECT_TRUE(run_make(project, dir / "out", rfd).ran.empty());
@@ -175,14 +180,14 @@ TEST(Make, ASecondRunSkipsEveryStepAndAChangedFieldRemakesOnlyWhatDependsOnIt) {
     fs::remove_all(dir / "field");
     write_small_field(dir / "field", 0.75f);
     EXPECT_THAT(run_make(project, dir / "out", rfd).ran,
-                UnorderedElementsAre("pattern", "sheet_front_pdf", "compare", "tolerance", "verdict"));
+                UnorderedElementsAre("pattern", "sheet_front_pdf", "compare", "tolerance", "preview", "verdict"));
 
     // An output removed by hand is made again; what reads it is not, as it comes out the same.
     fs::remove(dir / "out/print/moire.pdf");
     EXPECT_THAT(run_make(project, dir / "out", rfd).ran, UnorderedElementsAre("moire"));
     fs::remove(dir / "out/pattern.png");
     EXPECT_THAT(run_make(project, dir / "out", rfd).ran, UnorderedElementsAre("pattern"));
-    EXPECT_EQ(run_make(project, dir / "out", rfd, true).ran.size(), 8u);
+    EXPECT_EQ(run_make(project, dir / "out", rfd, true).ran.size(), 9u);
 }
 
 TEST(Make, AFailingStepSaysWhichAndKeepsTheStepsBeforeIt) {
@@ -201,7 +206,7 @@ TEST(Make, AFailingStepSaysWhichAndKeepsTheStepsBeforeIt) {
     rfd.fail_on.clear();
     rfd.calls.clear();
     EXPECT_THAT(run_make(project, dir / "out", rfd).ran,
-                UnorderedElementsAre("sheet_front_pdf", "moire", "wedge", "holder", "compare", "tolerance", "verdict"));
+                UnorderedElementsAre("sheet_front_pdf", "moire", "wedge", "holder", "compare", "tolerance", "preview", "verdict"));
 }
 
 TEST(Make, ADamagedManifestRemakesEverythingAfterANote) {
@@ -212,7 +217,7 @@ TEST(Make, ADamagedManifestRemakesEverythingAfterANote) {
     FakeRfd rfd;
     run_make(project, dir / "out", rfd);
     write(dir / "out/manifest.json", "{\"steps\": 3");
-    EXPECT_EQ(run_make(project, dir / "out", rfd).ran.size(), 8u);
+    EXPECT_EQ(run_make(project, dir / "out", rfd).ran.size(), 9u);
     EXPECT_TRUE(run_make(project, dir / "out", rfd).ran.empty());
 }
 

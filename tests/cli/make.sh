@@ -58,11 +58,11 @@ holder = false
 compare_sweep = 3
 TOML
 "$rfd" make "$work/letters.toml" --out "$work/out" > "$work/run1.txt"
-for file in pattern.exr pattern.png print/front.pdf print/front.tif print/moire.pdf predict/compare/psnr.png print/wedge.pdf verdict.json \
+for file in pattern.exr pattern.png print/front.pdf print/front.tif print/moire.pdf predict/compare/psnr.png print/wedge.pdf print/front.png preview/data.js verdict.json \
             predict/tolerance/summary.txt README.txt index.html manifest.json logs/pattern.txt; do
   [ -s "$work/out/$file" ] || fail "run 1 did not write $file"
 done
-grep -q "8 step(s) made, 0 up to date" "$work/run1.txt" || fail "run 1: $(cat "$work/run1.txt")"
+grep -q "9 step(s) made, 0 up to date" "$work/run1.txt" || fail "run 1: $(cat "$work/run1.txt")"
 grep -q "coarse A5 test printer" "$work/out/logs/pattern.txt" || fail "the pattern does not record the project's printer"
 grep -Eq "^verdict: (go|check|no-go): " "$work/run1.txt" || fail "no verdict: $(cat "$work/run1.txt")"
 grep -Eq "^Verdict: (go|check|no-go): " "$work/out/README.txt" || fail "README.txt lacks the verdict"
@@ -70,7 +70,7 @@ grep -q 'class="verdict' "$work/out/index.html" || fail "index.html lacks the ve
 grep -q "rfd print sheet .*pattern.exr --out .*front.tif" "$work/out/README.txt" || fail "README.txt lacks the commands"
 
 "$rfd" make "$work/letters.toml" --out "$work/out" > "$work/run2.txt"
-grep -q "0 step(s) made, 8 up to date" "$work/run2.txt" || fail "run 2 made something: $(cat "$work/run2.txt")"
+grep -q "0 step(s) made, 9 up to date" "$work/run2.txt" || fail "run 2 made something: $(cat "$work/run2.txt")"
 
 "$rfd" --quiet pattern field letters --text GRAPH --resolution 24x20 --out "$work/field" > /dev/null
 "$rfd" make "$work/letters.toml" --out "$work/out" > "$work/run3.txt"
