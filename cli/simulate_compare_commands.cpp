@@ -183,6 +183,7 @@ void add_simulate_compare_command(CLI::App& simulate) {
         std::string csv = "index,field_theta_deg,field_phi_deg,display_angle_deg,inside_fov,crosstalk_free,efficiency,"
                           "peak,mse,psnr_db,fitted_gain,psnr_fitted_db,psnr_cell_db\n";
         Stats fov, fov_fitted, fov_cell, clean, clean_cell;
+        std::vector<Image> panels;  // prediction | reference | error, per direction
         for (std::size_t k = 0; k < results.size(); ++k) {
             const predict::DirectionComparison& r = results[k];
             char stem[32];
@@ -190,7 +191,8 @@ void add_simulate_compare_command(CLI::App& simulate) {
             write_image(out / (std::string(stem) + "_prediction.exr"), r.prediction);
             write_image(out / (std::string(stem) + "_reference.exr"), r.reference);
             write_image(out / (std::string(stem) + "_error.exr"), r.comparison.error);
-            write_image(out / (std::string(stem) + ".png"), predict::side_by_side(r, view_pixels, opt->error_gain));
+            panels.push_back(predict::side_by_side(r, view_pixels, opt->error_gain));
+            write_image(out / (std::string(stem) + ".png"), panels.back());
             const SphericalAngles a = angles_of(r.field_direction);
             const double theta = radians_to_degrees(a.theta), phi = radians_to_degrees(a.phi);
             if (r.inside_field_of_view) {
@@ -226,6 +228,8 @@ void add_simulate_compare_command(CLI::App& simulate) {
                    format_fixed(r.cell_comparison.psnr_db, 4) + "\n";  // no times: byte-identical reruns
         }
         write_text_file(out / "directions.csv", csv);
+        // Every direction's panels on one page, in the order of directions.csv.
+        write_image(out / "contact_sheet.png", tiled(panels, 3, 4, 1.0f));
 
         // PSNR against the light's angle from the display's axis, inside and outside the FOV.
         std::vector<std::size_t> order(results.size());

@@ -21,6 +21,22 @@ Image Image::exposed(double stops) const {
     return out;
 }
 
+Image tiled(const std::vector<Image>& images, int columns, int gap, float fill) {
+    RFD_CHECK(!images.empty() && columns > 0 && gap >= 0);
+    const int w = images.front().width(), h = images.front().height(), c = images.front().channels();
+    const int count = static_cast<int>(images.size());
+    const int across = std::min(columns, count), rows = (count + columns - 1) / columns;
+    Image out(gap + across * (w + gap), gap + rows * (h + gap), c, fill);
+    for (int k = 0; k < count; ++k) {
+        RFD_CHECK(images[static_cast<std::size_t>(k)].same_shape(images.front()));
+        const int x0 = gap + k % columns * (w + gap), y0 = gap + k / columns * (h + gap);
+        for (int ch = 0; ch < c; ++ch)
+            for (int y = 0; y < h; ++y)
+                for (int x = 0; x < w; ++x) out.at(x0 + x, y0 + y, ch) = images[static_cast<std::size_t>(k)].at(x, y, ch);
+    }
+    return out;
+}
+
 Image luminance(const Image& image) {
     Image out(image.width(), image.height(), 1);
     auto dst = out.plane(0);

@@ -62,6 +62,10 @@ private:
     std::vector<float> samples_;
 };
 
+/// `images` (one shape, at least one) laid out in rows of `columns`, `gap` pixels of `fill`
+/// between and around them: a contact sheet, or an atlas with gap 0.
+Image tiled(const std::vector<Image>& images, int columns, int gap = 0, float fill = 0.0f);
+
 /// Per-pixel luminance (channel mean) of an image, one channel.
 Image luminance(const Image& image);
 

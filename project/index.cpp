@@ -115,6 +115,10 @@ std::vector<Section> instructions(const Project& project, const fs::path& out) {
         predicted.items.push_back({"The predicted display against the field relit in software, PSNR against the "
                                    "light's angle (pictures per light in the folder; summary in logs/compare.txt).",
                                    {"predict/compare/psnr.png"}});
+    if (made(out, "predict/compare/contact_sheet.png"))
+        predicted.items.push_back({"Each compared light: predicted | relit | difference x 4 (in the order of "
+                                   "predict/compare/directions.csv).",
+                                   {"predict/compare/contact_sheet.png"}});
     if (made(out, "predict/tolerance"))
         predicted.items.push_back({"How precisely to assemble it (summary.txt and a chart per error).",
                                    {"predict/tolerance/summary.txt"}});

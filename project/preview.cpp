@@ -23,20 +23,6 @@ std::string read_bytes(const fs::path& file) {
     return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-// The tiles of `images` (all one shape) in rows of `columns`, tile k at column k % columns.
-Image atlas(const std::vector<Image>& images, int columns) {
-    const int w = images.front().width(), h = images.front().height(), c = images.front().channels();
-    const int rows = (static_cast<int>(images.size()) + columns - 1) / columns;
-    Image out(w * columns, h * rows, c);
-    for (std::size_t k = 0; k < images.size(); ++k) {
-        const int x0 = static_cast<int>(k) % columns * w, y0 = static_cast<int>(k) / columns * h;
-        for (int ch = 0; ch < c; ++ch)
-            for (int y = 0; y < h; ++y)
-                for (int x = 0; x < w; ++x) out.at(x0 + x, y0 + y, ch) = images[k].at(x, y, ch);
-    }
-    return out;
-}
-
 nlohmann::json vector_json(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
 nlohmann::json optional_json(const std::optional<double>& value) {
@@ -73,8 +59,8 @@ std::string base64(const std::string& bytes) {
 void write_preview_data(const predict::PreviewSet& set, const std::string& design_name, const fs::path& folder) {
     ensure_directory(folder);
     const int columns = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(set.directions.size()))));
-    write_image(folder / "predicted.png", atlas(set.predicted, columns));
-    write_image(folder / "relit.png", atlas(set.relit, columns));
+    write_image(folder / "predicted.png", tiled(set.predicted, columns));
+    write_image(folder / "relit.png", tiled(set.relit, columns));
 
     nlohmann::json directions = nlohmann::json::array(), triangles = nlohmann::json::array(),
                    planes = nlohmann::json::array(), rims = nlohmann::json::array();

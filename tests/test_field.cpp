@@ -142,6 +142,25 @@ TEST(Field, AnRtiBuilderCaptureReadsAsItIs) {
     EXPECT_NEAR(five[0].kernel_radius, degrees_to_radians(4.0), 1e-15);
 }
 
+// Tiles: image k at column k % columns, row k / columns, `gap` pixels of fill between and
+// around; a last row may be short.
+TEST(Image, TiledPlacesEachImageInItsCellWithGaps) {
+    std::vector<Image> images;
+    for (int k = 0; k < 5; ++k) images.emplace_back(2, 3, 1, static_cast<float>(k + 1));
+    const Image sheet = tiled(images, 3, 1, -1.0f);
+    ASSERT_EQ(sheet.width(), 1 + 3 * (2 + 1));
+    ASSERT_EQ(sheet.height(), 1 + 2 * (3 + 1));
+    for (int k = 0; k < 5; ++k) {
+        const int x0 = 1 + k % 3 * 3, y0 = 1 + k / 3 * 4;
+        EXPECT_EQ(sheet.at(x0, y0, 0), k + 1);
+        EXPECT_EQ(sheet.at(x0 + 1, y0 + 2, 0), k + 1);
+        EXPECT_EQ(sheet.at(x0 + 2, y0, 0), -1.0f);  // the gap after it
+    }
+    EXPECT_EQ(sheet.at(0, 0, 0), -1.0f);
+    EXPECT_EQ(sheet.at(7, 5, 0), -1.0f);  // the sixth cell, empty
+    EXPECT_EQ(tiled({images[0]}, 4).width(), 2);  // one image, no gap: itself
+}
+
 TEST(ImageWindow, CropsThenAveragesAndRefusesWhatLiesOutside) {
     Image image(6, 4, 2);
     for (int c = 0; c < 2; ++c)
