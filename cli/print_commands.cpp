@@ -43,6 +43,9 @@ void add_sheet_command(CLI::App& print_cmd) {
     cmd->add_option("--sheets", opt->sheet.sheets,
                     "Sheets stacked back to back (1 or 2; 2 prints each at the square root); default: the profile's");
     cmd->add_option("--bits", opt->sheet.bits, "TIFF bits per channel, 8 or 16");
+    cmd->add_option("--copies", opt->sheet.copies,
+                    "Copies of the pattern on the page, each with its marks (default 1; 0: as many as fit)")
+        ->check(CLI::Range(0, 10000));
     cmd->add_option("--preview", opt->sheet.preview, "Also a small PNG of the page (800 pixels along its longer side)");
     cmd->add_flag("--json", opt->json, "Machine-readable summary");
     cmd->callback([opt] {
@@ -68,6 +71,7 @@ void add_sheet_command(CLI::App& print_cmd) {
             {"white", r.tone.white},
             {"sheets", r.tone.sheets},
             {"mirror", l.mirror},
+            {"copies", l.copies.size()},
             {"markers", markers}};
         if (opt->json) {
             std::printf("%s\n", summary.dump(2).c_str());
@@ -76,8 +80,10 @@ void add_sheet_command(CLI::App& print_cmd) {
         std::printf("%s: %s sheet, %d x %d dots at %g x %g dpi (%s, %.0f x %.0f mm)\n", opt->out.c_str(),
                     l.mirror ? "back (mirrored)" : "front", l.page_width, l.page_height, l.dpi_x, l.dpi_y,
                     l.paper.name.c_str(), l.paper.width, l.paper.height);
-        std::printf("  pattern   %d x %d dots (%.2f x %.2f mm) at dot (%d, %d)\n", l.pattern.width, l.pattern.height,
+        std::printf("  pattern   %d x %d dots (%.2f x %.2f mm) at dot (%d, %d)", l.pattern.width, l.pattern.height,
                     l.pattern.size_mm().x(), l.pattern.size_mm().y(), l.offset_x, l.offset_y);
+        if (l.copies.size() > 1) std::printf(", %zu copies", l.copies.size());
+        std::printf("\n");
         std::printf("  tone      brightness %g, white %g, %d sheet(s), black %.4f of the stack\n", r.tone.brightness,
                     r.tone.white, r.tone.sheets, r.tone.stack_transmittance(0.0));
         for (const auto& m : l.markers)

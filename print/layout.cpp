@@ -102,8 +102,23 @@ SheetLayout layout_sheet(const optics::Design& design, const PrinterProfile& pri
                       printable_h);
         throw InputError(SourceLocation{printer.file, 0, 0, "paper"}, text);
     }
-    l.offset_x = (l.page_width - pattern.width) / 2;
-    l.offset_y = (l.page_height - pattern.height) / 2;
+    // Copies in a grid of blocks (a pattern with its room for marks), whole dots apart.
+    const int step_x = static_cast<int>(std::ceil((size.x() + 2 * kSideRoom) / l.dot_x - 1e-9));
+    const int step_y = static_cast<int>(std::ceil((size.y() + kTopRoom + kBottomRoom) / l.dot_y - 1e-9));
+    const int fit_x = 1 + static_cast<int>(std::floor((printable_w - size.x() - 2 * kSideRoom) / (step_x * l.dot_x)));
+    const int fit_y = 1 + static_cast<int>(std::floor((printable_h - size.y() - kTopRoom - kBottomRoom) / (step_y * l.dot_y)));
+    if (info.copies < 0) throw InputError(SourceLocation{"", 0, 0, "--copies"}, "expected 0 (as many as fit) or more");
+    const int copies = info.copies == 0 ? fit_x * fit_y : info.copies;
+    if (copies > fit_x * fit_y)
+        throw InputError(SourceLocation{"", 0, 0, "--copies"},
+                         std::to_string(copies) + " copies of the pattern do not fit on " + l.paper.name +
+                             " paper: at most " + std::to_string(fit_x * fit_y) + " (" + std::to_string(fit_x) +
+                             " x " + std::to_string(fit_y) + ")");
+    const int columns = std::min(copies, fit_x), rows = (copies + columns - 1) / columns;
+    l.copies.clear();
+    for (int k = 0; k < copies; ++k) l.copies.emplace_back(k % columns * step_x, k / columns * step_y);
+    l.offset_x = (l.page_width - (columns - 1) * step_x - pattern.width) / 2;
+    l.offset_y = (l.page_height - (rows - 1) * step_y - pattern.height) / 2;
 
     if (const auto lattice = marker_lattice(design)) {
         const double inradius = lattice->kind() == optics::LatticeKind::Hexagonal
@@ -129,16 +144,21 @@ SheetLayout layout_sheet(const optics::Design& design, const PrinterProfile& pri
 }
 
 void trace_clear_regions(cairo_t* cr, const SheetLayout& layout) {
-    for (const Marker& m : layout.markers) {
-        cairo_move_to(cr, m.cell.front().x(), m.cell.front().y());
-        for (std::size_t k = 1; k < m.cell.size(); ++k) cairo_line_to(cr, m.cell[k].x(), m.cell[k].y());
-        cairo_close_path(cr);
+    for (std::size_t copy = 0; copy < layout.copies.size(); ++copy) {
+        const Eigen::Vector2d shift = layout.copy_mm(copy);
+        for (const Marker& m : layout.markers) {
+            cairo_move_to(cr, m.cell.front().x() + shift.x(), m.cell.front().y() + shift.y());
+            for (std::size_t k = 1; k < m.cell.size(); ++k)
+                cairo_line_to(cr, m.cell[k].x() + shift.x(), m.cell[k].y() + shift.y());
+            cairo_close_path(cr);
+        }
     }
 }
 
-void draw_marks(cairo_t* cr, const SheetLayout& layout) {
-    cairo_save(cr);
-    cairo_set_line_cap(cr, CAIRO_LINE_CAP_BUTT);
+namespace {
+
+// One copy's markers, crop marks and ruler (user units: page-frame mm, at the first copy).
+void draw_copy_marks(cairo_t* cr, const SheetLayout& layout) {
     // Markers: a ring and a crosshair, all within 0.9 of the cell's inradius.
     for (const Marker& m : layout.markers) {
         const double arm = m.radius / 0.55 * 0.9;
@@ -181,6 +201,22 @@ void draw_marks(cairo_t* cr, const SheetLayout& layout) {
     for (int k = 0; k <= length; k += 10)
         show_text_at(cr, std::to_string(k) + (k == 0 ? " mm" : ""), lo.x() + k + 0.3,
                      base + 3.0 + kRulerFont, kRulerFont);
+}
+
+}  // namespace
+
+void draw_marks(cairo_t* cr, const SheetLayout& layout) {
+    cairo_save(cr);
+    cairo_set_line_cap(cr, CAIRO_LINE_CAP_BUTT);
+    for (std::size_t copy = 0; copy < layout.copies.size(); ++copy) {
+        const Eigen::Vector2d shift = layout.copy_mm(copy);
+        cairo_save(cr);
+        cairo_translate(cr, shift.x(), shift.y());
+        draw_copy_marks(cr, layout);
+        cairo_restore(cr);
+    }
+    const Eigen::Vector2d lo = layout.pattern_min();
+    cairo_select_font_face(cr, "DejaVu Sans", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
     // Label above the pattern and its crop marks, centred on the paper, shrunk to the
     // printable width.
     double font = kLabelFont;

@@ -48,6 +48,7 @@ struct SheetInfo {
     double brightness = 1.0;
     int sheets = 1;             ///< 1, or 2 (front + mirrored back)
     bool mirror = false;        ///< this is the mirrored back sheet
+    int copies = 1;             ///< copies of the pattern on the page; 0: as many as fit
 };
 
 struct SheetLayout {
@@ -60,6 +61,12 @@ struct SheetLayout {
     std::vector<Marker> markers;
     std::vector<std::string> label;       ///< label lines, top to bottom
     bool mirror = false;
+    /// Every copy of the pattern (with its markers, crop marks and ruler): page-dot shifts
+    /// from the first, which `offset_x`, `offset_y` and `markers` describe; {0, 0} first,
+    /// row by row. Copies of one row share their rows of page dots; rows do not overlap.
+    std::vector<Eigen::Vector2i> copies{Eigen::Vector2i::Zero()};
+    /// The shift of copy k in page-frame mm.
+    Eigen::Vector2d copy_mm(std::size_t k) const { return {copies[k].x() * dot_x, copies[k].y() * dot_y}; }
 
     /// Continuous page dot coordinates of a point of the pattern's lattice frame.
     Eigen::Vector2d page_dot(const Eigen::Vector2d& lattice_mm) const;
@@ -79,16 +86,18 @@ inline constexpr double kTopRoom = 15.0;
 inline constexpr double kBottomRoom = 11.0;
 
 /// Lays out a sheet for a pattern whose raster is `pattern` (the design's raster at the
-/// printer's dpi). Throws InputError when the pattern and its marks do not fit inside the
-/// paper's printable area (saying both sizes).
+/// printer's dpi): info.copies of it (0: as many as fit) in rows, the whole grid centred,
+/// the label once above the first row. Throws InputError when the pattern and its marks do
+/// not fit inside the paper's printable area (saying both sizes), or the copies asked for
+/// do not (saying how many do).
 SheetLayout layout_sheet(const optics::Design& design, const PrinterProfile& printer,
                          const patterns::PatternGeometry& pattern, const SheetInfo& info);
 
 /// Adds to the current path of `cr` (user units: page-frame mm) the regions printed clear:
-/// the cells of the registration markers.
+/// the cells of the registration markers, of every copy.
 void trace_clear_regions(cairo_t* cr, const SheetLayout& layout);
-/// Draws, with the current source of `cr`, all ink of the marks: markers, crop marks,
-/// ruler and label (vector paths and text; user units: page-frame mm).
+/// Draws, with the current source of `cr`, all ink of the marks: every copy's markers, crop
+/// marks and ruler, and the label (vector paths and text; user units: page-frame mm).
 void draw_marks(cairo_t* cr, const SheetLayout& layout);
 
 }  // namespace rfd::print

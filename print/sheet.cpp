@@ -113,25 +113,45 @@ void write_tiff(const std::filesystem::path& out, const SheetLayout& layout, con
                                     static_cast<std::size_t>(strip));
     std::vector<float> codes(row_codes * static_cast<std::size_t>(strip));
     MaskRenderer masks(layout, strip);
+    // Copies of one row share page rows; a strip never spans two rows of copies, so that it
+    // needs one range of pattern rows.
+    std::vector<int> row_tops;  // page row of each row of copies' first pattern row
+    for (const Eigen::Vector2i& copy : layout.copies)
+        if (row_tops.empty() || layout.offset_y + copy.y() != row_tops.back()) row_tops.push_back(layout.offset_y + copy.y());
+    std::vector<int> breaks;
+    for (const int top : row_tops) breaks.insert(breaks.end(), {top, top + g.height});
     Progress progress("sheet rows", static_cast<std::size_t>(H));
-    for (int y0 = 0; y0 < H; y0 += strip) {
-        const int y1 = std::min(H, y0 + strip);
-        // Pattern rows inside this strip.
-        const int p0 = std::clamp(y0 - layout.offset_y, 0, g.height);
-        const int p1 = std::clamp(y1 - layout.offset_y, 0, g.height);
-        if (p0 < p1) reader.read_rows(p0, p1, pattern_rows);
+    for (int y0 = 0, y1 = 0; y0 < H; y0 = y1) {
+        y1 = std::min(H, y0 + strip);
+        for (const int b : breaks)
+            if (b > y0 && b < y1) y1 = b;
+        // The row of copies this strip crosses, if any, and its pattern rows.
+        int top = 0;
+        bool inside = false;
+        for (const int t : row_tops)
+            if (y0 >= t && y0 < t + g.height) {
+                top = t;
+                inside = true;
+            }
+        const int p0 = inside ? y0 - top : 0, p1 = inside ? y1 - top : 0;
+        if (inside) reader.read_rows(p0, p1, pattern_rows);
         masks.render(y0);
         parallel_for_chunks(static_cast<std::size_t>(y1 - y0), 1, [&](std::size_t begin, std::size_t end) {
             std::vector<float> front(row_codes);
             for (std::size_t r = begin; r < end; ++r) {
                 const int y = y0 + static_cast<int>(r);
                 std::fill(front.begin(), front.end(), 1.0f);  // bare film
-                const int py = y - layout.offset_y;
-                if (py >= 0 && py < g.height)
-                    tone_row(pattern_rows.data() + static_cast<std::size_t>(py - p0) *
+                if (inside) {
+                    float* first = front.data() + 3 * static_cast<std::size_t>(layout.offset_x);
+                    tone_row(pattern_rows.data() + static_cast<std::size_t>(y - top - p0) *
                                                        static_cast<std::size_t>(g.width) *
                                                        static_cast<std::size_t>(channels),
-                             g.width, channels, tone, front.data() + 3 * static_cast<std::size_t>(layout.offset_x));
+                             g.width, channels, tone, first);
+                    for (const Eigen::Vector2i& copy : layout.copies)
+                        if (copy.x() != 0 && layout.offset_y + copy.y() == top)
+                            std::copy(first, first + 3 * static_cast<std::size_t>(g.width),
+                                      first + 3 * static_cast<std::ptrdiff_t>(copy.x()));
+                }
                 for (int x = 0; x < W; ++x) {
                     const float clear = masks.clear(x, static_cast<int>(r)) / 255.0f;
                     const float ink = masks.ink(x, static_cast<int>(r)) / 255.0f;
@@ -220,13 +240,16 @@ void write_pdf(const std::filesystem::path& out, const SheetLayout& layout, cons
             }
             for (std::size_t t = 0; t < tiles.size(); ++t) {
                 cairo_surface_mark_dirty(tiles[t].get());
-                cairo_save(cr.get());
-                cairo_translate(cr.get(), (layout.offset_x + tile_x[t]) * layout.dot_x, (layout.offset_y + ty) * layout.dot_y);
-                cairo_scale(cr.get(), layout.dot_x, layout.dot_y);
-                cairo_set_source_surface(cr.get(), tiles[t].get(), 0.0, 0.0);
-                cairo_pattern_set_filter(cairo_get_source(cr.get()), CAIRO_FILTER_NEAREST);
-                cairo_paint(cr.get());
-                cairo_restore(cr.get());
+                for (const Eigen::Vector2i& copy : layout.copies) {
+                    cairo_save(cr.get());
+                    cairo_translate(cr.get(), (layout.offset_x + copy.x() + tile_x[t]) * layout.dot_x,
+                                    (layout.offset_y + copy.y() + ty) * layout.dot_y);
+                    cairo_scale(cr.get(), layout.dot_x, layout.dot_y);
+                    cairo_set_source_surface(cr.get(), tiles[t].get(), 0.0, 0.0);
+                    cairo_pattern_set_filter(cairo_get_source(cr.get()), CAIRO_FILTER_NEAREST);
+                    cairo_paint(cr.get());
+                    cairo_restore(cr.get());
+                }
             }
         }
         progress.finish();
@@ -283,13 +306,16 @@ void write_preview(const std::filesystem::path& png, const SheetLayout& layout, 
             cairo_translate(cr.get(), layout.paper.width, 0.0);
             cairo_scale(cr.get(), -1.0, 1.0);
         }
-        cairo_save(cr.get());
-        cairo_translate(cr.get(), lo.x(), lo.y());
-        cairo_scale(cr.get(), (hi.x() - lo.x()) / pw, (hi.y() - lo.y()) / ph);
-        cairo_set_source_surface(cr.get(), picture.get(), 0.0, 0.0);
-        cairo_pattern_set_filter(cairo_get_source(cr.get()), CAIRO_FILTER_NEAREST);
-        cairo_paint(cr.get());
-        cairo_restore(cr.get());
+        for (std::size_t copy = 0; copy < layout.copies.size(); ++copy) {
+            const Eigen::Vector2d shift = layout.copy_mm(copy);
+            cairo_save(cr.get());
+            cairo_translate(cr.get(), lo.x() + shift.x(), lo.y() + shift.y());
+            cairo_scale(cr.get(), (hi.x() - lo.x()) / pw, (hi.y() - lo.y()) / ph);
+            cairo_set_source_surface(cr.get(), picture.get(), 0.0, 0.0);
+            cairo_pattern_set_filter(cairo_get_source(cr.get()), CAIRO_FILTER_NEAREST);
+            cairo_paint(cr.get());
+            cairo_restore(cr.get());
+        }
         cairo_set_source_rgb(cr.get(), 1, 1, 1);
         trace_clear_regions(cr.get(), layout);
         cairo_fill(cr.get());
@@ -338,6 +364,7 @@ SheetReport write_sheet(const std::filesystem::path& out, const optics::Design& 
     info.brightness = options.brightness;
     info.sheets = report.tone.sheets;
     info.mirror = options.mirror;
+    info.copies = options.copies;
     report.layout = layout_sheet(design, printer, geometry, info);
     if (!options.preview.empty() && lower_extension(options.preview) != ".png")
         throw InputError(SourceLocation{options.preview.string(), 0, 0, "--preview"}, "expected a .png file");

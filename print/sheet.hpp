@@ -47,6 +47,7 @@ struct SheetOptions {
     bool mirror = false;      ///< the mirrored back sheet
     int bits = 8;             ///< TIFF bits per channel, 8 or 16
     int rows_per_strip = 64;  ///< TIFF rows composed at once
+    int copies = 1;           ///< copies of the pattern on the page; 0: as many as fit
     std::filesystem::path preview;  ///< also a small PNG of the page here, when not empty
 };
 

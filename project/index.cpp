@@ -88,7 +88,8 @@ std::vector<Section> instructions(const Project& project, const fs::path& out) {
     film.items.push_back({"Print the front sheet on transparency film with " + film_printer +
                               ", at 100 %, no colour adjustment (the PDF and the TIFF are the same page; use "
                               "the one your printer driver takes at its true resolution; the PNG is a picture of "
-                              "the page to check it).",
+                              "the page to check it). A small pattern is printed as many times as the page holds: "
+                              "spares, cut along the crop marks.",
                           fronts});
     if (!backs.empty())
         film.items.push_back({"Print the mirrored back sheet the same way. Lay it behind the front sheet, ink "

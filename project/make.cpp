@@ -129,7 +129,8 @@ std::vector<Step> plan(const Project& p, const fs::path& out) {
             Step sheet{"sheet_" + std::string(side == 0 ? "front_" : "back_") + format,
                        side == 0 ? "the front sheet to print (" + name + ")"
                                  : "the mirrored back sheet to print (" + name + "), laid behind the front one",
-                       {"print", "sheet", design, pattern, "--out", o + "print/" + name},
+                       {"print", "sheet", design, pattern, "--copies", std::to_string(p.outputs.copies), "--out",
+                        o + "print/" + name},
                        {p.design, out / "pattern.exr"},
                        {"print/" + name}};
             if (side == 1) sheet.arguments.push_back("--mirror");

@@ -103,6 +103,7 @@ Outputs read_outputs(ConfigTable& table) {
             if (format != "pdf" && format != "tif")
                 table.fail("sheets", "expected formats \"pdf\" and/or \"tif\", got \"" + format + "\"");
     }
+    o.copies = static_cast<int>(table.optional_integer("copies", 0, 1000).value_or(o.copies));
     o.moire = table.optional_boolean("moire").value_or(o.moire);
     o.wedge = table.optional_boolean("wedge").value_or(o.wedge);
     o.holder = table.optional_boolean("holder").value_or(o.holder);

@@ -6,7 +6,7 @@
 //   [source]   field (a folder or .lp), scene + lights + resolution, or procedural + text +
 //              resolution; region, scale
 //   [encode]   tilt_deg, turn_deg, angle_scale, model, interpolation, fit, margin_mm
-//   [make]     sheets, moire, wedge, holder, compare_sweep, tolerance, preview_lights
+//   [make]     sheets, copies, moire, wedge, holder, compare_sweep, tolerance, preview_lights
 //
 // Paths are relative to the project file. Every key is checked like every other input
 // file: an unknown key or a value out of range is an error naming file, line and key.
@@ -41,6 +41,7 @@ struct Encoding {
 /// What to make besides the pattern.
 struct Outputs {
     std::vector<std::string> sheet_formats{"pdf", "tif"};  ///< of the front (and back) sheets
+    int copies = 0;           ///< of the pattern per sheet; 0: as many as fit (spares to cut)
     bool moire = true;        ///< the pitch calibration sheet
     bool wedge = true;        ///< the step wedge that measures the printer's tone curve
     bool holder = true;       ///< the holder's .scad and STLs with their checks

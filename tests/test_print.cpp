@@ -7,6 +7,7 @@
 #include <random>
 #include <fstream>
 #include <iterator>
+#include <set>
 #include <sstream>
 
 #include <gmock/gmock.h>
@@ -429,6 +430,55 @@ TEST(SheetPreview, ThePageAsPrintedAtScreenSize) {
         }
     ASSERT_GT(pixels, 1000.0);
     EXPECT_NEAR(ours / pixels, theirs / pixels, 2.0);
+}
+
+// Copies: as many as fit, each block (pattern and its room for marks) inside the printable
+// area, none overlapping another, one more column or row would not fit; in the TIFF every
+// copy's dots are the first copy's, dot for dot; too many asked for says how many fit.
+TEST(SheetCopies, AsManyAsFitEachTheSamePrint) {
+    TempDir dir;
+    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const PrinterProfile printer = parse_printer(small_printer_toml(300, 150, 120, 150), "test.toml");
+    const auto g = patterns::pattern_geometry(design, printer.dpi_x, printer.dpi_y);
+    patterns::write_pattern(dir / "steps.exr", Steps(g), {{"white", "0.8"}});
+    SheetOptions options;
+    options.copies = 0;
+    const SheetLayout l = write_sheet(dir / "copies.tif", design, printer, dir / "steps.exr", options).layout;
+    ASSERT_GT(l.copies.size(), 1u);
+    const Eigen::Vector2d size = g.size_mm();
+    const double margin = printer.paper.margin;
+    std::set<int> columns, rows;
+    for (std::size_t k = 0; k < l.copies.size(); ++k) {
+        const Eigen::Vector2d lo = l.pattern_min() + l.copy_mm(k), hi = l.pattern_max() + l.copy_mm(k);
+        EXPECT_GE(lo.x() - kSideRoom, margin - 1e-9) << k;
+        EXPECT_LE(hi.x() + kSideRoom, printer.paper.width - margin + 1e-9) << k;
+        EXPECT_GE(lo.y() - kTopRoom, margin - 1e-9) << k;
+        EXPECT_LE(hi.y() + kBottomRoom, printer.paper.height - margin + 1e-9) << k;
+        for (std::size_t j = 0; j < k; ++j) {
+            const Eigen::Vector2d d = (l.copy_mm(k) - l.copy_mm(j)).cwiseAbs();
+            EXPECT_TRUE(d.x() >= size.x() + 2 * kSideRoom - 1e-9 || d.y() >= size.y() + kTopRoom + kBottomRoom - 1e-9)
+                << k << " overlaps " << j;
+        }
+        columns.insert(l.copies[k].x());
+        rows.insert(l.copies[k].y());
+    }
+    EXPECT_EQ(l.copies.size(), columns.size() * rows.size());
+    EXPECT_GT(static_cast<double>(columns.size() + 1) * (size.x() + 2 * kSideRoom), printer.paper.width - 2 * margin);
+    EXPECT_GT(static_cast<double>(rows.size() + 1) * (size.y() + kTopRoom + kBottomRoom), printer.paper.height - 2 * margin);
+
+    const Page page = read_page(dir / "copies.tif");
+    long long differing = 0;
+    for (std::size_t k = 1; k < l.copies.size(); ++k)
+        for (int y = 0; y < g.height; ++y)
+            for (int x = 0; x < g.width; ++x)
+                for (int c = 0; c < 3; ++c)
+                    differing += page.code(l.offset_x + x, l.offset_y + y, c) !=
+                                 page.code(l.offset_x + l.copies[k].x() + x, l.offset_y + l.copies[k].y() + y, c);
+    EXPECT_EQ(differing, 0);
+
+    options.copies = static_cast<int>(l.copies.size()) + 1;
+    EXPECT_THAT(error_of([&] { write_sheet(dir / "more.pdf", design, printer, dir / "steps.exr", options); }),
+                HasSubstr("copies of the pattern do not fit on test paper: at most " + std::to_string(l.copies.size())));
 }
 
 TEST(SheetTiff, SixteenBitsKeepTheResolution) {

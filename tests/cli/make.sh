@@ -67,7 +67,7 @@ grep -q "coarse A5 test printer" "$work/out/logs/pattern.txt" || fail "the patte
 grep -Eq "^verdict: (go|check|no-go): " "$work/run1.txt" || fail "no verdict: $(cat "$work/run1.txt")"
 grep -Eq "^Verdict: (go|check|no-go): " "$work/out/README.txt" || fail "README.txt lacks the verdict"
 grep -q 'class="verdict' "$work/out/index.html" || fail "index.html lacks the verdict"
-grep -q "rfd print sheet .*pattern.exr --out .*front.tif" "$work/out/README.txt" || fail "README.txt lacks the commands"
+grep -q "rfd print sheet .*pattern.exr --copies 0 --out .*front.tif" "$work/out/README.txt" || fail "README.txt lacks the commands"
 
 "$rfd" make "$work/letters.toml" --out "$work/out" > "$work/run2.txt"
 grep -q "0 step(s) made, 9 up to date" "$work/run2.txt" || fail "run 2 made something: $(cat "$work/run2.txt")"
