@@ -79,6 +79,7 @@ void add_simulate_compare_command(CLI::App& simulate) {
         std::string design, pattern, field, out, models = "paraxial,exact,auto", accuracy_rays = "2,4,8,16";
         optics::ModelChoice model = optics::ModelChoice::Auto;
         std::vector<std::string> lights;
+        predict::LightFrame frame = predict::LightFrame::Display;
         double pixels_per_lenslet = 16.0;
         int sweep = 9, rays = 0, reference_rays = 32, view_pixels = 0;
         double tolerance_dots = 0.25, error_gain = 4.0;
@@ -90,7 +91,9 @@ void add_simulate_compare_command(CLI::App& simulate) {
     cmd->add_option("FIELD", opt->field, "The reflectance field the pattern was encoded from (folder or .lp)")->required();
     cmd->add_option("--out", opt->out, "Output folder")->required();
     cmd->add_option("--light", opt->lights,
-                    "Also compare under a white light from THETA,PHI (degrees, the field's frame); repeat for several");
+                    "Also compare under a white light from THETA,PHI (degrees, in the frame --frame names, default "
+                    "the display's: 0,0 is straight behind it); repeat for several");
+    add_frame_option(*cmd, opt->frame);
     cmd->add_option("--sweep", opt->sweep,
                     "Light directions spread over the display's range, the first on its axis (default 9; 0: only --light)")
         ->check(CLI::Range(0, 1000));
@@ -152,11 +155,13 @@ void add_simulate_compare_command(CLI::App& simulate) {
 
         std::vector<Eigen::Vector3d> directions = comparison.sweep(opt->sweep);
         for (const std::string& text : opt->lights) {
-            const relight::Light light = parse_light(text);
-            const auto* point = std::get_if<relight::DirectionalLight>(&light);
+            const relight::Light named = parse_light(text);
+            const auto* point = std::get_if<relight::DirectionalLight>(&named);
             if (!point || point->irradiance != Eigen::Vector3d::Ones())
                 throw InputError("--light " + text + ": compare takes point lights of white light (THETA,PHI)");
-            directions.push_back(point->direction.normalized());
+            // Compared in the field's frame: a display-frame light is the field light it shows.
+            const relight::Light light = predict::light_in_field_frame(named, opt->frame, encoder.options().mapping);
+            directions.push_back(std::get<relight::DirectionalLight>(light).direction.normalized());
         }
 
         optics::SimulationOptions options;

@@ -65,7 +65,7 @@ done
 "$rfd" simulate designs/design1.toml "$pattern1" --envmap "$out/predicted/window_room.exr" \
   --out "$out/predicted/design1_window_room.png" > "$out/predicted/design1_window_room.txt"
 "$rfd" simulate compare designs/design1.toml "$pattern1" "$field" --sweep 5 \
-  --light 45,70 --chart-accuracy --models paraxial,exact --accuracy-rays 2,4,8 --reference-rays 16 \
+  --light 45,70 --frame field --chart-accuracy --models paraxial,exact --accuracy-rays 2,4,8 --reference-rays 16 \
   --out "$out/predicted/compare_design1" > "$out/predicted/compare_design1.txt"
 index_entry predicted/design1_red_green.png "Design I under a red and a green lamp at once"
 index_entry predicted/design1_disc.png "Design I under an 8-degree disc lamp"

@@ -56,3 +56,15 @@ endif()
 if(EXISTS ${OUT}/never)
   message(FATAL_ERROR "a refused comparison wrote its output")
 endif()
+
+# Lights in the display's frame (the default) and the field's: on a pattern encoded with a
+# 10-degree tilt, display 0,0 is the display's axis, and field 0,0 is 10 degrees off it.
+run(0 pattern encode ${DESIGN} ${OUT}/diamonds --tilt 10 --allow-partial --out ${OUT}/tilted.exr)
+foreach(frame display field)
+  run(0 simulate compare ${DESIGN} ${OUT}/tilted.exr ${OUT}/diamonds --sweep 0 --light 0,0 --frame ${frame}
+      --out ${OUT}/tilted_${frame} --json)
+  string(JSON angle_${frame} GET "${last_output}" directions 0 display_angle_deg)
+endforeach()
+if(angle_display GREATER 1e-6 OR angle_field LESS 9.999 OR angle_field GREATER 10.001)
+  message(FATAL_ERROR "--light 0,0: display frame ${angle_display} deg, field frame ${angle_field} deg from the axis (expected 0 and 10)")
+endif()
