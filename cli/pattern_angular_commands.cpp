@@ -22,13 +22,13 @@ namespace rfd::cli {
 namespace {
 
 // A single field folder (or .lp) is a view set of one head-on view.
-relight::ViewSet read_source(const std::filesystem::path& source) {
+relight::ViewSet read_source(const std::filesystem::path& source, const relight::ImageWindow& window) {
     const bool field_folder = std::filesystem::is_directory(source) && !std::filesystem::exists(source / "views.txt");
-    if (!field_folder && source.extension() != ".lp") return relight::read_view_set(source);
+    if (!field_folder && source.extension() != ".lp") return relight::read_view_set(source, window);
     relight::ViewSet set;
     set.file = relight::light_file_of(source);
     set.views.push_back({source.string(), Eigen::Vector3d::UnitZ(), Eigen::Matrix3d::Identity(), 0});
-    set.fields.push_back(relight::read_field(source));
+    set.fields.push_back(relight::read_field(source, window));
     return set;
 }
 
@@ -40,7 +40,8 @@ void add_pattern_angular_command(CLI::App& group) {
     struct Options {
         std::string design, source, out, procedural, text = "0123456789ABCDEFGHIJKLMNOPQRST";
         optics::ModelChoice model = optics::ModelChoice::Auto;
-        double dpi = 0.0, region = 1.0;
+        double dpi = 0.0, coverage = 1.0;
+        WindowOptions window;
         int bin_samples = 3, table = 129;
         bool json = false, single = false;
     };
@@ -55,8 +56,10 @@ void add_pattern_angular_command(CLI::App& group) {
     cmd->add_option("--dpi", opt->dpi, "Print resolution on both axes (default: the design's printer)")->check(positive_number());
     cmd->add_option("--bin-samples", opt->bin_samples, "Incident directions per side of each bin")->check(CLI::Range(1, 16));
     cmd->add_option("--table", opt->table, "Optics table nodes per side of a meso cell")->check(CLI::Range(3, 4097));
-    cmd->add_option("--region", opt->region, "Fraction of each view image (about its centre) the macro grid covers")
+    cmd->add_option("--coverage", opt->coverage,
+                    "Fraction of each view image (about its centre, after --region and --scale) the macro grid covers")
         ->check(CLI::Range(1e-3, 1.0));
+    add_window_options(*cmd, opt->window);
     cmd->add_flag("--single-float", opt->single, "EXR: 32-bit floats instead of half floats");
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
     cmd->callback([opt] {
@@ -76,7 +79,11 @@ void add_pattern_angular_command(CLI::App& group) {
         } else if (opt->procedural == "diamonds") {
             field = std::make_unique<patterns::DiamondField>(patterns::diamond_field_for(meso, options.model));
         } else {
-            field = std::make_unique<patterns::ViewSetField>(read_source(opt->source), opt->region);
+            // --region was the coverage fraction once: say where it went.
+            if (!opt->window.region.empty() && opt->window.region.find(',') == std::string::npos)
+                throw InputError("--region takes X,Y,W,H in pixels, as every command that reads images does; the "
+                                 "fraction of each view the macro grid covers is --coverage");
+            field = std::make_unique<patterns::ViewSetField>(read_source(opt->source, opt->window.window()), opt->coverage);
         }
         const patterns::AngularPattern pattern(optics, *field, options);
         const double white = patterns::estimate_white(pattern, 99.5);

@@ -113,7 +113,7 @@ std::filesystem::path view_file_of(const std::filesystem::path& set) {
     return set;
 }
 
-ViewSet read_view_set(const std::filesystem::path& set_path) {
+ViewSet read_view_set(const std::filesystem::path& set_path, const ImageWindow& window) {
     ViewSet set;
     set.file = view_file_of(set_path);
     set.views = read_view_file(set.file);
@@ -122,7 +122,7 @@ ViewSet read_view_set(const std::filesystem::path& set_path) {
         const std::filesystem::path folder = base / view.folder;
         if (!std::filesystem::is_directory(folder))
             throw IoError(at(set.file, view.line), "view folder '" + folder.string() + "' does not exist");
-        ReflectanceField field = read_field(folder);
+        ReflectanceField field = read_field(folder, window);
         if (field.size() == 0)
             throw InputError(at(set.file, view.line), "view '" + view.folder + "' has no images");
         for (auto& d : field.directions) d = (view.to_display * d).normalized();

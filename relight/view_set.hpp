@@ -59,9 +59,9 @@ void write_view_file(const std::filesystem::path& path, const std::vector<ViewEn
 /// The view file of a view set given as a folder (holding views.txt) or as the file.
 std::filesystem::path view_file_of(const std::filesystem::path& set);
 
-/// Reads the view file and every view's field. Throws InputError (naming the view file and
-/// line) for a missing view folder, views whose images differ in size or channel count,
-/// and anything read_field rejects.
-ViewSet read_view_set(const std::filesystem::path& set);
+/// Reads the view file and every view's field, each image through `window`. Throws
+/// InputError (naming the view file and line) for a missing view folder, views whose images
+/// differ in size or channel count, and anything read_field rejects.
+ViewSet read_view_set(const std::filesystem::path& set, const ImageWindow& window = {});
 
 }  // namespace rfd::relight
