@@ -35,6 +35,7 @@ struct AdaptiveCommandOptions {
     std::string initial_lights;
     std::string out;
     std::string resolution;
+    WindowOptions window;
     int samples = 0;
     std::size_t initial = 256;
     std::size_t per_iteration = 16;
@@ -60,6 +61,9 @@ std::vector<Eigen::Vector3d> initial_directions(const AdaptiveCommandOptions& op
 
 std::unique_ptr<relight::CaptureDevice> make_device(const AdaptiveCommandOptions& opt) {
     if (!opt.scene.empty()) {
+        if (!opt.window.region.empty() || opt.window.scale != 1.0)
+            throw InputError("--region and --scale apply to a rig's photographs (--device); a scene renders what "
+                             "its camera sees (set its camera and --resolution)");
         relight::Scene scene = relight::load_scene(opt.scene);
         apply_scene_overrides(scene, opt.resolution, opt.samples);
         return std::make_unique<relight::StageCaptureDevice>(std::move(scene));
@@ -68,7 +72,8 @@ std::unique_ptr<relight::CaptureDevice> make_device(const AdaptiveCommandOptions
         opt.scratch.empty() ? std::filesystem::path(opt.out) / "capture" : std::filesystem::path(opt.scratch);
     return std::make_unique<relight::CommandCaptureDevice>(opt.device, scratch,
                                                            degrees_to_radians(opt.narrow_radius_deg),
-                                                           degrees_to_radians(opt.wide_radius_deg));
+                                                           degrees_to_radians(opt.wide_radius_deg),
+                                                           opt.window.window());
 }
 
 std::string iterations_csv(const relight::AdaptiveRun& run) {
@@ -94,6 +99,7 @@ void add_adaptive_command(CLI::App& capture) {
         ->check(CLI::Range(1, 4096));
     cmd->add_option("--device", opt->device,
                     "Rig command instead of a scene; placeholders {x} {y} {z} {theta} {phi} {kernel} {out}");
+    add_window_options(*cmd, opt->window);
     cmd->add_option("--scratch", opt->scratch, "Folder for the rig command's images (default OUT/capture)");
     cmd->add_option("--narrow-radius", opt->narrow_radius_deg, "Rig: angular radius of its narrow light, degrees")
         ->check(CLI::Range(0.0, 90.0));

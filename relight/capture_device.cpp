@@ -24,11 +24,12 @@ void replace_all(std::string& text, const std::string& key, const std::string& v
 
 CommandCaptureDevice::CommandCaptureDevice(std::string command_template,
                                            std::filesystem::path scratch, double narrow_radius,
-                                           double wide_radius)
+                                           double wide_radius, ImageWindow window)
     : template_(std::move(command_template)),
       scratch_(std::move(scratch)),
       narrow_radius_(narrow_radius),
-      wide_radius_(wide_radius) {
+      wide_radius_(wide_radius),
+      window_(window) {
     if (template_.find("{out}") == std::string::npos)
         throw InputError(SourceLocation{"", 0, 0, "--device"},
                          "the capture command must contain {out}, the image file it writes");
@@ -69,7 +70,7 @@ std::vector<Image> CommandCaptureDevice::capture(const std::vector<Eigen::Vector
         if (!std::filesystem::exists(out))
             throw ToolError("capture command succeeded but wrote no image at " + out.string() +
                             ": " + command);
-        images.push_back(read_image(out));
+        images.push_back(apply_window(read_image(out), window_, out.string()));
         if (!images.front().same_shape(images.back()))
             throw ToolError("capture command returned images of different sizes: " + command);
         std::filesystem::remove(out, ec);

@@ -18,6 +18,7 @@
 #include <Eigen/Core>
 
 #include "core/image.hpp"
+#include "relight/field.hpp"
 
 namespace rfd::relight {
 
@@ -36,9 +37,10 @@ public:
 
 class CommandCaptureDevice : public CaptureDevice {
 public:
-    /// `scratch` is a directory for the command's output files (created if needed).
+    /// `scratch` is a directory for the command's output files (created if needed). Each
+    /// photograph is read through `window` (the object's part of the frame, then scaled).
     CommandCaptureDevice(std::string command_template, std::filesystem::path scratch,
-                         double narrow_radius = 0.0, double wide_radius = 0.0);
+                         double narrow_radius = 0.0, double wide_radius = 0.0, ImageWindow window = {});
     std::vector<Image> capture(const std::vector<Eigen::Vector3d>& directions,
                                KernelChoice kernel) override;
     double kernel_radius(KernelChoice kernel) const override {
@@ -53,6 +55,7 @@ private:
     std::filesystem::path scratch_;
     double narrow_radius_;
     double wide_radius_;
+    ImageWindow window_;
     std::size_t counter_ = 0;
 };
 

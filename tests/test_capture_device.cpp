@@ -41,6 +41,29 @@ TEST(CommandCaptureDevice, ReturnsTheImageTheCommandWrote) {
     EXPECT_EQ(images[1], image);
 }
 
+// A rig's photographs hold more than the object: the device reads each through its window.
+TEST(CommandCaptureDevice, ReadsEachPhotographThroughItsWindow) {
+    TempDir dir;
+    Image image(4, 3, 1);
+    for (std::size_t k = 0; k < image.samples().size(); ++k) image.samples()[k] = static_cast<float>(k);
+    write_image(dir / "prepared.exr", image);
+    ImageWindow window;
+    window.x = 1;
+    window.y = 1;
+    window.width = 2;
+    window.height = 2;
+    CommandCaptureDevice device("cp " + (dir / "prepared.exr").string() + " {out}", dir / "scratch", 0.0, 0.0, window);
+    const auto images = device.capture({Eigen::Vector3d::UnitZ()}, KernelChoice::Narrow);
+    ASSERT_EQ(images.size(), 1u);
+    ASSERT_EQ(images[0].width(), 2);
+    ASSERT_EQ(images[0].height(), 2);
+    EXPECT_EQ(images[0].at(0, 0, 0), image.at(1, 1, 0));
+    EXPECT_EQ(images[0].at(1, 1, 0), image.at(2, 2, 0));
+    window.width = 9;
+    CommandCaptureDevice outside("cp " + (dir / "prepared.exr").string() + " {out}", dir / "scratch2", 0.0, 0.0, window);
+    EXPECT_THAT(error_of([&] { outside.capture({Eigen::Vector3d::UnitZ()}, KernelChoice::Narrow); }), HasSubstr("region"));
+}
+
 TEST(CommandCaptureDevice, FailuresAreNamed) {
     TempDir dir;
     EXPECT_THAT(error_of([&] { CommandCaptureDevice("shoot", dir / "s"); }), HasSubstr("must contain {out}"));
