@@ -97,7 +97,7 @@ void add_moire_command(CLI::App& print_cmd) {
     auto* cmd = print_cmd.add_subcommand(
         "moire", "Pitch-calibration sheet (thesis 8.4.1): line bands for a range of pitch hypotheses (PDF)");
     struct Options {
-        std::string design, printer, out, pitch, pitch_y;
+        std::string design, printer, out, pitch, pitch_y, preview;
         bool json = false;
     };
     auto opt = std::make_shared<Options>();
@@ -109,16 +109,20 @@ void add_moire_command(CLI::App& print_cmd) {
                     "design's pitch_y / pitch_x)");
     cmd->add_option("--printer", opt->printer, "Printer profile (paper size); default epson_stylus_pro_4800");
     cmd->add_option("--out", opt->out, "Output PDF")->required();
+    cmd->add_option("--preview", opt->preview, "Also a PNG of the first page (800 pixels along its longer side)");
     cmd->add_flag("--json", opt->json, "Machine-readable list of bands");
     cmd->callback([opt] {
         const std::filesystem::path out(opt->out);
         if (out.extension() != ".pdf")
             throw InputError(SourceLocation{opt->out, 0, 0, "--out"}, "expected a .pdf file");
+        if (!opt->preview.empty() && std::filesystem::path(opt->preview).extension() != ".png")
+            throw InputError(SourceLocation{opt->preview, 0, 0, "--preview"}, "expected a .png file");
         const optics::Design design = optics::load_design(opt->design);
         print::MoireOptions options;
         options.x = opt->pitch.empty() ? print::default_pitch_range(design)
                                        : print::parse_pitch_range(opt->pitch, "--pitch");
         if (!opt->pitch_y.empty()) options.y = print::parse_pitch_range(opt->pitch_y, "--pitch-y");
+        options.preview = opt->preview;
         const print::PrinterProfile printer = printer_for(design, opt->printer);
         const auto bands = print::write_moire_pdf(out, design, printer, options);
         if (opt->json) {
@@ -143,7 +147,7 @@ void add_wedge_command(CLI::App& print_cmd) {
         "wedge", "Step-wedge sheet (PDF): patches from bare film to full ink, to measure the printer's tone curve "
                  "for its profile");
     struct Options {
-        std::string printer = "epson_stylus_pro_4800", out;
+        std::string printer = "epson_stylus_pro_4800", out, preview;
         int steps = 21;
         bool json = false;
     };
@@ -152,12 +156,15 @@ void add_wedge_command(CLI::App& print_cmd) {
     cmd->add_option("--steps", opt->steps, "Patches from code 255 (no ink) to 0 (full ink), default 21")
         ->check(CLI::Range(2, 256));
     cmd->add_option("--out", opt->out, "Output PDF")->required();
+    cmd->add_option("--preview", opt->preview, "Also a PNG of the first page (800 pixels along its longer side)");
     cmd->add_flag("--json", opt->json, "Machine-readable list of patches");
     cmd->callback([opt] {
         if (std::filesystem::path(opt->out).extension() != ".pdf")
             throw InputError(SourceLocation{opt->out, 0, 0, "--out"}, "expected a .pdf file");
         const print::PrinterProfile printer = print::load_printer(opt->printer);
-        const auto patches = print::write_wedge_pdf(opt->out, printer, opt->steps);
+        if (!opt->preview.empty() && std::filesystem::path(opt->preview).extension() != ".png")
+            throw InputError(SourceLocation{opt->preview, 0, 0, "--preview"}, "expected a .png file");
+        const auto patches = print::write_wedge_pdf(opt->out, printer, opt->steps, opt->preview);
         if (opt->json) {
             nlohmann::json list = nlohmann::json::array();
             for (const auto& p : patches)

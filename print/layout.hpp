@@ -79,6 +79,9 @@ struct SheetLayout {
     }
 };
 
+/// The longer side of a page's screen picture (write_page_png, --preview), pixels.
+inline constexpr int kPagePreviewPixels = 800;
+
 /// Room the marks need around the pattern, mm: crop marks at the sides, the label above,
 /// the ruler below.
 inline constexpr double kSideRoom = 6.0;

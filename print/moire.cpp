@@ -99,16 +99,11 @@ std::vector<MoireBand> write_moire_pdf(const std::filesystem::path& out, const o
         bands[k].top = paper.margin + kHeader + (static_cast<int>(k) % per_page) * (band_height + kBandGap);
     }
 
-    constexpr double kPointsPerMm = 72.0 / kMillimetresPerInch;
-    PdfFile pdf(out, paper.width * kPointsPerMm, paper.height * kPointsPerMm, "calibration sheet");
-    {
-        std::unique_ptr<cairo_t, decltype(&cairo_destroy)> owner(cairo_create(pdf.surface()), &cairo_destroy);
-        cairo_t* cr = owner.get();
-        cairo_scale(cr, kPointsPerMm, kPointsPerMm);
-        cairo_select_font_face(cr, "DejaVu Sans", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
-        cairo_set_source_rgb(cr, 0, 0, 0);
-        const int pages = bands.back().page + 1;
-        for (int page = 0; page < pages; ++page) {
+    const int pages = bands.back().page + 1;
+    // One page, user units page-frame mm.
+    const auto draw_page = [&](cairo_t* cr, int page) {
+            cairo_select_font_face(cr, "DejaVu Sans", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+            cairo_set_source_rgb(cr, 0, 0, 0);
             cairo_set_font_size(cr, 2.6);
             const std::string header[] = {
                 "Pitch calibration (moire) - " + design.name + " - page " + std::to_string(page + 1) + " of " +
@@ -154,10 +149,19 @@ std::vector<MoireBand> write_moire_pdf(const std::filesystem::path& out, const o
                 cairo_fill(cr);
                 cairo_restore(cr);
             }
-            cairo_show_page(cr);
+    };
+    constexpr double kPointsPerMm = 72.0 / kMillimetresPerInch;
+    PdfFile pdf(out, paper.width * kPointsPerMm, paper.height * kPointsPerMm, "calibration sheet");
+    {
+        std::unique_ptr<cairo_t, decltype(&cairo_destroy)> owner(cairo_create(pdf.surface()), &cairo_destroy);
+        cairo_scale(owner.get(), kPointsPerMm, kPointsPerMm);
+        for (int page = 0; page < pages; ++page) {
+            draw_page(owner.get(), page);
+            cairo_show_page(owner.get());
         }
     }
     pdf.finish();
+    if (!options.preview.empty()) write_page_png(options.preview, paper.width, paper.height, kPagePreviewPixels, [&](cairo_t* cr) { draw_page(cr, 0); });
     return bands;
 }
 

@@ -50,6 +50,7 @@ struct MoireOptions {
     PitchRange x;                  ///< pitch along a row, mm
     std::optional<PitchRange> y;   ///< rectangular arrays: row spacing; default x scaled
     double band_height = 10.0;     ///< mm
+    std::filesystem::path preview; ///< also a PNG of the first page here, when not empty
 };
 
 /// One band of the sheet, for the report and the tests.

@@ -1,5 +1,8 @@
 #include "print/pdf_file.hpp"
 
+#include <algorithm>
+#include <cmath>
+#include <memory>
 #include <utility>
 
 #include <cairo-pdf.h>
@@ -44,6 +47,29 @@ void PdfFile::finish() {
     if (std::fclose(file) != 0) fail("closing the file failed");
     move_into_place(temporary_.path(), target_);
     temporary_.release();
+}
+
+void write_page_png(const std::filesystem::path& png, double paper_width_mm, double paper_height_mm, int pixels,
+                    const std::function<void(cairo_t*)>& draw) {
+    const double px_per_mm = pixels / std::max(paper_width_mm, paper_height_mm);
+    const int width = std::max(1, static_cast<int>(std::lround(paper_width_mm * px_per_mm)));
+    const int height = std::max(1, static_cast<int>(std::lround(paper_height_mm * px_per_mm)));
+    std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> page(
+        cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height), &cairo_surface_destroy);
+    {
+        std::unique_ptr<cairo_t, decltype(&cairo_destroy)> cr(cairo_create(page.get()), &cairo_destroy);
+        cairo_set_source_rgb(cr.get(), 1, 1, 1);
+        cairo_paint(cr.get());
+        cairo_scale(cr.get(), px_per_mm, px_per_mm);
+        draw(cr.get());
+    }
+    cairo_surface_flush(page.get());
+    const std::filesystem::path temporary = temporary_sibling(png);
+    if (cairo_surface_write_to_png(page.get(), temporary.c_str()) != CAIRO_STATUS_SUCCESS) {
+        remove_temporary(temporary);
+        throw IoError(SourceLocation{png.string()}, "cannot write the page's picture");
+    }
+    move_into_place(temporary, png);
 }
 
 }  // namespace rfd::print

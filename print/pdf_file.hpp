@@ -12,12 +12,14 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <string>
 
 #include <cairo.h>
 
 #include "core/files.hpp"
+#include "print/layout.hpp"
 
 namespace rfd::print {
 
@@ -40,5 +42,11 @@ private:
     std::FILE* file_ = nullptr;
     cairo_surface_t* surface_ = nullptr;
 };
+
+/// A page as a screen picture: `draw` paints it (user units: page-frame mm) over white, at
+/// `pixels` along the paper's longer side; written as PNG through a temporary file. IoError
+/// naming `png` when it cannot be written.
+void write_page_png(const std::filesystem::path& png, double paper_width_mm, double paper_height_mm, int pixels,
+                    const std::function<void(cairo_t*)>& draw);
 
 }  // namespace rfd::print

@@ -263,12 +263,10 @@ void write_pdf(const std::filesystem::path& out, const SheetLayout& layout, cons
     pdf.finish();
 }
 
-// The page at kSheetPreviewPixels along its longer side, as write_pdf draws it.
+// The page at kPagePreviewPixels along its longer side, as write_pdf draws it.
 void write_preview(const std::filesystem::path& png, const SheetLayout& layout, const ToneMap& tone,
                    const std::filesystem::path& pattern_file) {
-    const double px_per_mm = kSheetPreviewPixels / std::max(layout.paper.width, layout.paper.height);
-    const int width = std::max(1, static_cast<int>(std::lround(layout.paper.width * px_per_mm)));
-    const int height = std::max(1, static_cast<int>(std::lround(layout.paper.height * px_per_mm)));
+    const double px_per_mm = kPagePreviewPixels / std::max(layout.paper.width, layout.paper.height);
     const Eigen::Vector2d lo = layout.pattern_min(), hi = layout.pattern_max();
     // No picture pixel smaller than a dot, so that every one averages at least one; Cairo
     // scales the picture onto the page.
@@ -296,39 +294,27 @@ void write_preview(const std::filesystem::path& png, const SheetLayout& layout, 
     }
     cairo_surface_mark_dirty(picture.get());
 
-    SurfacePtr page(cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height), &cairo_surface_destroy);
-    {
-        ContextPtr cr(cairo_create(page.get()), &cairo_destroy);
-        cairo_set_source_rgb(cr.get(), 1, 1, 1);
-        cairo_paint(cr.get());
-        cairo_scale(cr.get(), px_per_mm, px_per_mm);  // user units: page-frame mm
+    write_page_png(png, layout.paper.width, layout.paper.height, kPagePreviewPixels, [&](cairo_t* cr) {
         if (layout.mirror) {
-            cairo_translate(cr.get(), layout.paper.width, 0.0);
-            cairo_scale(cr.get(), -1.0, 1.0);
+            cairo_translate(cr, layout.paper.width, 0.0);
+            cairo_scale(cr, -1.0, 1.0);
         }
         for (std::size_t copy = 0; copy < layout.copies.size(); ++copy) {
             const Eigen::Vector2d shift = layout.copy_mm(copy);
-            cairo_save(cr.get());
-            cairo_translate(cr.get(), lo.x() + shift.x(), lo.y() + shift.y());
-            cairo_scale(cr.get(), (hi.x() - lo.x()) / pw, (hi.y() - lo.y()) / ph);
-            cairo_set_source_surface(cr.get(), picture.get(), 0.0, 0.0);
-            cairo_pattern_set_filter(cairo_get_source(cr.get()), CAIRO_FILTER_NEAREST);
-            cairo_paint(cr.get());
-            cairo_restore(cr.get());
+            cairo_save(cr);
+            cairo_translate(cr, lo.x() + shift.x(), lo.y() + shift.y());
+            cairo_scale(cr, (hi.x() - lo.x()) / pw, (hi.y() - lo.y()) / ph);
+            cairo_set_source_surface(cr, picture.get(), 0.0, 0.0);
+            cairo_pattern_set_filter(cairo_get_source(cr), CAIRO_FILTER_NEAREST);
+            cairo_paint(cr);
+            cairo_restore(cr);
         }
-        cairo_set_source_rgb(cr.get(), 1, 1, 1);
-        trace_clear_regions(cr.get(), layout);
-        cairo_fill(cr.get());
-        cairo_set_source_rgb(cr.get(), 0, 0, 0);
-        draw_marks(cr.get(), layout);
-    }
-    cairo_surface_flush(page.get());
-    const std::filesystem::path temporary = temporary_sibling(png);
-    if (cairo_surface_write_to_png(page.get(), temporary.c_str()) != CAIRO_STATUS_SUCCESS) {
-        remove_temporary(temporary);
-        throw IoError(SourceLocation{png.string()}, "cannot write the sheet's preview");
-    }
-    move_into_place(temporary, png);
+        cairo_set_source_rgb(cr, 1, 1, 1);
+        trace_clear_regions(cr, layout);
+        cairo_fill(cr);
+        cairo_set_source_rgb(cr, 0, 0, 0);
+        draw_marks(cr, layout);
+    });
 }
 
 }  // namespace

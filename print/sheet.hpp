@@ -51,8 +51,6 @@ struct SheetOptions {
     std::filesystem::path preview;  ///< also a small PNG of the page here, when not empty
 };
 
-/// The longer side of a sheet's preview, pixels.
-inline constexpr int kSheetPreviewPixels = 800;
 
 /// What write_sheet did, for the command's report.
 struct SheetReport {
@@ -62,7 +60,7 @@ struct SheetReport {
 };
 
 /// Writes the sheet; the format follows `out`'s extension (.tif/.tiff or .pdf). With
-/// options.preview, also the page as a screen sees it, kSheetPreviewPixels along its longer
+/// options.preview, also the page as a screen sees it, kPagePreviewPixels (layout.hpp) along its longer
 /// side: the pattern box-averaged and tone-mapped as printed, the marks drawn (PNG). Throws
 /// InputError for bad options, a pattern that does not match the design at the printer's
 /// dpi or does not fit the paper, IoError when a file cannot be read or written.

@@ -58,7 +58,8 @@ std::vector<WedgePatch> wedge_patches(const PrinterProfile& printer, int steps) 
     return patches;
 }
 
-std::vector<WedgePatch> write_wedge_pdf(const std::filesystem::path& out, const PrinterProfile& printer, int steps) {
+std::vector<WedgePatch> write_wedge_pdf(const std::filesystem::path& out, const PrinterProfile& printer, int steps,
+                                        const std::filesystem::path& preview) {
     std::vector<WedgePatch> patches = wedge_patches(printer, steps);
     const Paper& paper = printer.paper;
     const int columns = static_cast<int>(std::floor((paper.width - 2 * paper.margin + kGap) / (kPatch + kGap)));
@@ -74,45 +75,49 @@ std::vector<WedgePatch> write_wedge_pdf(const std::filesystem::path& out, const 
         patches[k].top = paper.margin + kHeader + ((slot / columns) % rows) * (kPatch + kLabel);
     }
 
+    const int pages = patches.back().page + 1;
+    // One page, user units page-frame mm.
+    const auto draw_page = [&](cairo_t* cr, int page) {
+        cairo_select_font_face(cr, "DejaVu Sans", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+        cairo_set_source_rgb(cr, 0, 0, 0);
+        cairo_set_font_size(cr, 2.6);
+        const std::string header[] = {
+            "Step wedge - " + printer.name + " - " + format_number(printer.dpi_x.value) + " x " +
+                format_number(printer.dpi_y.value) + " dpi - page " + std::to_string(page + 1) + " of " +
+                std::to_string(pages),
+            "Print on your film at 100 %, colour management off, as you print patterns. Measure each patch's",
+            "transmittance against bare film (code 255). max_density = -log10(T of code 0); fit gamma to",
+            "T(v) = T_ink + (1 - T_ink)(1 - v)^gamma. Under each patch: code, ink v, and T the profile predicts."};
+        for (std::size_t k = 0; k < std::size(header); ++k) {
+            cairo_move_to(cr, paper.margin, paper.margin + 3.0 + 3.2 * static_cast<double>(k));
+            cairo_show_text(cr, header[k].c_str());
+        }
+        for (const WedgePatch& patch : patches) {
+            if (patch.page != page) continue;
+            cairo_set_source_rgb(cr, 0, 0, 0);
+            draw_patch(cr, patch.code, patch.left, patch.top);
+            cairo_set_source_rgb(cr, 0, 0, 0);
+            cairo_set_font_size(cr, 2.2);
+            cairo_move_to(cr, patch.left, patch.top + kPatch + 2.8);
+            cairo_show_text(cr, ("code " + std::to_string(patch.code)).c_str());
+            cairo_move_to(cr, patch.left, patch.top + kPatch + 5.2);
+            cairo_show_text(cr, ("v " + format_fixed(patch.ink, 3)).c_str());
+            cairo_move_to(cr, patch.left, patch.top + kPatch + 7.6);
+            cairo_show_text(cr, ("T " + format_fixed(patch.transmittance, 4)).c_str());
+        }
+    };
     constexpr double kPointsPerMm = 72.0 / kMillimetresPerInch;
     PdfFile pdf(out, paper.width * kPointsPerMm, paper.height * kPointsPerMm, "step wedge");
     {
         std::unique_ptr<cairo_t, decltype(&cairo_destroy)> owner(cairo_create(pdf.surface()), &cairo_destroy);
-        cairo_t* cr = owner.get();
-        cairo_scale(cr, kPointsPerMm, kPointsPerMm);
-        cairo_select_font_face(cr, "DejaVu Sans", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
-        const int pages = patches.back().page + 1;
+        cairo_scale(owner.get(), kPointsPerMm, kPointsPerMm);
         for (int page = 0; page < pages; ++page) {
-            cairo_set_source_rgb(cr, 0, 0, 0);
-            cairo_set_font_size(cr, 2.6);
-            const std::string header[] = {
-                "Step wedge - " + printer.name + " - " + format_number(printer.dpi_x.value) + " x " +
-                    format_number(printer.dpi_y.value) + " dpi - page " + std::to_string(page + 1) + " of " +
-                    std::to_string(pages),
-                "Print on your film at 100 %, colour management off, as you print patterns. Measure each patch's",
-                "transmittance against bare film (code 255). max_density = -log10(T of code 0); fit gamma to",
-                "T(v) = T_ink + (1 - T_ink)(1 - v)^gamma. Under each patch: code, ink v, and T the profile predicts."};
-            for (std::size_t k = 0; k < std::size(header); ++k) {
-                cairo_move_to(cr, paper.margin, paper.margin + 3.0 + 3.2 * static_cast<double>(k));
-                cairo_show_text(cr, header[k].c_str());
-            }
-            for (const WedgePatch& patch : patches) {
-                if (patch.page != page) continue;
-                cairo_set_source_rgb(cr, 0, 0, 0);
-                draw_patch(cr, patch.code, patch.left, patch.top);
-                cairo_set_source_rgb(cr, 0, 0, 0);
-                cairo_set_font_size(cr, 2.2);
-                cairo_move_to(cr, patch.left, patch.top + kPatch + 2.8);
-                cairo_show_text(cr, ("code " + std::to_string(patch.code)).c_str());
-                cairo_move_to(cr, patch.left, patch.top + kPatch + 5.2);
-                cairo_show_text(cr, ("v " + format_fixed(patch.ink, 3)).c_str());
-                cairo_move_to(cr, patch.left, patch.top + kPatch + 7.6);
-                cairo_show_text(cr, ("T " + format_fixed(patch.transmittance, 4)).c_str());
-            }
-            cairo_show_page(cr);
+            draw_page(owner.get(), page);
+            cairo_show_page(owner.get());
         }
     }
     pdf.finish();
+    if (!preview.empty()) write_page_png(preview, paper.width, paper.height, kPagePreviewPixels, [&](cairo_t* cr) { draw_page(cr, 0); });
     return patches;
 }
 

@@ -27,8 +27,10 @@ struct WedgePatch {
 /// profile predicts for each.
 std::vector<WedgePatch> wedge_patches(const PrinterProfile& printer, int steps);
 
-/// Writes the wedge as a PDF on the profile's paper (temporary file + rename) and returns
-/// its patches. InputError when the paper cannot hold one patch; IoError when it cannot write.
-std::vector<WedgePatch> write_wedge_pdf(const std::filesystem::path& out, const PrinterProfile& printer, int steps);
+/// Writes the wedge as a PDF on the profile's paper (temporary file + rename), and its first
+/// page as a PNG at `preview` when given, and returns its patches. InputError when the
+/// paper cannot hold one patch; IoError when it cannot write.
+std::vector<WedgePatch> write_wedge_pdf(const std::filesystem::path& out, const PrinterProfile& printer, int steps,
+                                        const std::filesystem::path& preview = {});
 
 }  // namespace rfd::print

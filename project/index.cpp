@@ -57,12 +57,12 @@ std::vector<Section> instructions(const Project& project, const fs::path& out) {
                  ", at 100 % (no scaling, no colour adjustment). Lay the lens array on it: the band whose fringes "
                  "vanish or are widest has the array's true pitch. If it is not the design's, put it into the "
                  "design's lattice and run rfd make again.",
-             {"print/moire.pdf"}});
+             {"print/moire.pdf", "print/moire.png"}});
     if (made(out, "print/wedge.pdf"))
         print_first.items.push_back(
             {"Print wedge.pdf the same way and measure its steps (docs/formats.md, printer profiles): the "
              "printer profile's gamma, max_density and black_level come from it.",
-             {"print/wedge.pdf"}});
+             {"print/wedge.pdf", "print/wedge.png"}});
     print_first.items.push_back(
         {"If you do not know your 3D printer's clearance, print the fit-test coupon first: "
          "rfd holder coupon --out coupon.scad --stl coupon.stl",

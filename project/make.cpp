@@ -143,14 +143,16 @@ std::vector<Step> plan(const Project& p, const fs::path& out) {
         }
     if (p.outputs.moire)
         steps.push_back({"moire", "the pitch calibration sheet (moire.pdf)",
-                         {"print", "moire", design, "--printer", p.printer, "--out", o + "print/moire.pdf"},
+                         {"print", "moire", design, "--printer", p.printer, "--out", o + "print/moire.pdf",
+                          "--preview", o + "print/moire.png"},
                          {p.design, printer},
-                         {"print/moire.pdf"}});
+                         {"print/moire.pdf", "print/moire.png"}});
     if (p.outputs.wedge)
         steps.push_back({"wedge", "the step wedge that measures the printer's tone curve (wedge.pdf)",
-                         {"print", "wedge", "--printer", p.printer, "--out", o + "print/wedge.pdf"},
+                         {"print", "wedge", "--printer", p.printer, "--out", o + "print/wedge.pdf", "--preview",
+                          o + "print/wedge.png"},
                          {printer},
-                         {"print/wedge.pdf"}});
+                         {"print/wedge.pdf", "print/wedge.png"}});
     if (p.outputs.holder)
         steps.push_back({"holder", "the lens holder: OpenSCAD source, STLs to 3D-print, and their checks",
                          {"holder", design, "--3d-printer", p.printer_3d.string(), "--printer", p.printer, "--out",

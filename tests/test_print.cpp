@@ -17,6 +17,7 @@
 #include "optics/design.hpp"
 #include "patterns/raster.hpp"
 #include "print/moire.hpp"
+#include "print/layout.hpp"
 #include "print/printed.hpp"
 #include "print/printer.hpp"
 #include "print/sheet.hpp"
@@ -401,9 +402,9 @@ TEST(SheetPreview, ThePageAsPrintedAtScreenSize) {
     options.preview = dir / "front.png";
     const SheetReport report = write_sheet(dir / "front.pdf", design, printer, pattern, options);
     const Page preview = read_page(dir / "front.png");
-    EXPECT_EQ(preview.height, kSheetPreviewPixels);  // 60 mm paper, the longer side
+    EXPECT_EQ(preview.height, kPagePreviewPixels);  // 60 mm paper, the longer side
     EXPECT_EQ(preview.width, 667);                   // 50 mm: 800 * 50 / 60
-    const double px_per_mm = kSheetPreviewPixels / 60.0;
+    const double px_per_mm = kPagePreviewPixels / 60.0;
     const Eigen::Vector2d centre = 0.5 * (report.layout.pattern_min() + report.layout.pattern_max()) * px_per_mm;
     const int expected = static_cast<int>(std::lround(255.0 * (1.0 - report.tone.printer_value(0.3))));
     EXPECT_NEAR(preview.code(static_cast<int>(centre.x()), static_cast<int>(centre.y())), expected, 1);
@@ -737,10 +738,21 @@ TEST(Wedge, PatchesCarryTheirCodesAndTheProfilesPrediction) {
     EXPECT_NEAR(patches[2].transmittance, t_ink + (1 - t_ink) * std::pow(153.0 / 255.0, printer.gamma), 1e-15);
     EXPECT_THAT(error_of([&] { wedge_patches(printer, 1); }), HasSubstr("expected 2 to 256"));
 
+    TempDir dir;
+    const auto placed = write_wedge_pdf(dir / "wedge.pdf", printer, 21, dir / "wedge.png");
+    // The page's picture: every patch's centre holds its code there too.
+    const Page picture = read_page(dir / "wedge.png");
+    ASSERT_EQ(picture.height, kPagePreviewPixels);  // A4: 297 mm the longer side
+    const double px_per_mm = kPagePreviewPixels / 297.0;
+    for (const WedgePatch& patch : placed)
+        EXPECT_NEAR(picture.code(static_cast<int>((patch.left + 8.0) * px_per_mm), static_cast<int>((patch.top + 8.0) * px_per_mm)),
+                    patch.code, 1.0)
+            << "picture, patch of code " << patch.code;
+    EXPECT_THAT(error_of([&] { write_wedge_pdf(dir / "w.pdf", parse_printer(small_printer_toml(720, 720, 10, 10), "tiny.toml"), 5); }),
+                HasSubstr("does not fit"));
+
     const std::string pdftoppm = RFD_PDFTOPPM;
     if (pdftoppm.empty()) GTEST_SKIP() << "poppler-utils (pdftoppm) not installed";
-    TempDir dir;
-    const auto placed = write_wedge_pdf(dir / "wedge.pdf", printer, 21);
     const std::string command = pdftoppm + " -r 50 -png -singlefile " + (dir / "wedge.pdf").string() + " " +
                                 (dir / "view").string();
     ASSERT_EQ(std::system(command.c_str()), 0) << command;
@@ -749,8 +761,6 @@ TEST(Wedge, PatchesCarryTheirCodesAndTheProfilesPrediction) {
         const int x = static_cast<int>((patch.left + 8.0) * 50 / 25.4), y = static_cast<int>((patch.top + 8.0) * 50 / 25.4);
         EXPECT_NEAR(view.code(x, y), patch.code, 1.0) << "patch of code " << patch.code;
     }
-    EXPECT_THAT(error_of([&] { write_wedge_pdf(dir / "w.pdf", parse_printer(small_printer_toml(720, 720, 10, 10), "tiny.toml"), 5); }),
-                HasSubstr("does not fit"));
 }
 
 // ----------------------------------------------------------------------------- moire
@@ -784,7 +794,17 @@ TEST(Moire, BandsForEveryHypothesisOnPaperSizedPages) {
     const PrinterProfile printer = load_printer("epson_stylus_pro_4800");
     MoireOptions options;
     options.x = parse_pitch_range("2.33:2.39:13", "--pitch");
+    options.preview = dir / "calib.png";
     const auto bands = write_moire_pdf(dir / "calib.pdf", design, printer, options);
+    // The first page's picture: the paper's shape, and ink on it (the bands' lines).
+    const Page picture = read_page(dir / "calib.png");
+    EXPECT_EQ(picture.height, kPagePreviewPixels);
+    EXPECT_EQ(picture.width, static_cast<int>(std::lround(kPagePreviewPixels * printer.paper.width / printer.paper.height)));
+    long long inked = 0;
+    for (int y = 0; y < picture.height; ++y)
+        for (int x = 0; x < picture.width; ++x) inked += picture.code(x, y) < 128;
+    EXPECT_GT(inked, 1000);
+    options.preview.clear();
     ASSERT_EQ(bands.size(), 26u);
     for (int k = 0; k < 13; ++k) {
         EXPECT_TRUE(bands[static_cast<std::size_t>(k)].along_x);
