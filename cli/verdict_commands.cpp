@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <fstream>
 #include <memory>
+#include <set>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -57,6 +58,7 @@ void add_simulate_verdict_command(CLI::App& simulate) {
         const optics::Design design = optics::load_design(opt->design);
         const optics::DesignSummary analysis = optics::summarise(optics::DesignOptics(design));
         predict::VerdictInputs inputs;
+        std::set<std::string> at_least;  // tolerances the sweep only bounded from below
         inputs.design = design.name;
         inputs.field_of_view_deg = analysis.field_of_view_deg;
         for (const auto& [direction, onset] : analysis.crosstalk_exact_deg)
@@ -74,7 +76,13 @@ void add_simulate_verdict_command(CLI::App& simulate) {
                 const nlohmann::json tolerance = read_summary(opt->tolerance, "--tolerance");
                 for (const auto& curve : tolerance.at("curves")) {
                     const std::string kind = curve.at("kind").get<std::string>();
-                    const std::optional<double> value = optional_number(curve.at("tolerance"));
+                    // A sweep that never fell below the threshold bounds the tolerance from
+                    // below by its largest error.
+                    std::optional<double> value = optional_number(curve.at("tolerance"));
+                    if (!value) {
+                        value = optional_number(curve.at("max"));
+                        if (value) at_least.insert(kind);
+                    }
                     if (kind == "shift") t.shift_mm = value;
                     if (kind == "rotation") t.rotation_deg = value;
                     if (kind == "pitch_error") t.pitch_ppm = value;
@@ -92,7 +100,8 @@ void add_simulate_verdict_command(CLI::App& simulate) {
             tolerances = {{"shift_mm", tolerance_json(inputs.tolerances->shift_mm)},
                           {"rotation_deg", tolerance_json(inputs.tolerances->rotation_deg)},
                           {"pitch_error_ppm", tolerance_json(inputs.tolerances->pitch_ppm)},
-                          {"spacer_mm", tolerance_json(inputs.tolerances->spacer_mm)}};
+                          {"spacer_mm", tolerance_json(inputs.tolerances->spacer_mm)},
+                          {"at_least", at_least}};
         const nlohmann::json json = {{"design", design.name},
                                      {"call", std::string(predict::to_string(v.call))},
                                      {"reason", v.reason},
@@ -114,6 +123,9 @@ void add_simulate_verdict_command(CLI::App& simulate) {
         const auto number = [](const std::optional<double>& value, const char* unit) {
             return value ? format_fixed(*value, 2) + unit : std::string("-");
         };
+        const auto bound = [&](const std::optional<double>& value, const char* unit, const std::string& kind) {
+            return number(value, unit) + (at_least.count(kind) ? " or more" : "");
+        };
         std::printf("%s\n", v.line().c_str());
         std::printf("  design                  %s\n", design.name.c_str());
         std::printf("  PSNR over the FOV       mean %s, min %s (%d direction(s); against the field's brightest)\n",
@@ -125,10 +137,10 @@ void add_simulate_verdict_command(CLI::App& simulate) {
         std::printf("  field of view           %s full cone\n", number(inputs.field_of_view_deg, " deg").c_str());
         if (inputs.tolerances)
             std::printf("  tolerances              shift %s, rotation %s, pitch %s, spacer %s\n",
-                        number(inputs.tolerances->shift_mm, " mm").c_str(),
-                        number(inputs.tolerances->rotation_deg, " deg").c_str(),
-                        number(inputs.tolerances->pitch_ppm, " ppm").c_str(),
-                        number(inputs.tolerances->spacer_mm, " mm").c_str());
+                        bound(inputs.tolerances->shift_mm, " mm", "shift").c_str(),
+                        bound(inputs.tolerances->rotation_deg, " deg", "rotation").c_str(),
+                        bound(inputs.tolerances->pitch_ppm, " ppm", "pitch_error").c_str(),
+                        bound(inputs.tolerances->spacer_mm, " mm", "spacer").c_str());
         for (const std::string& warning : inputs.warnings) std::printf("  warning                 %s\n", warning.c_str());
     });
 }

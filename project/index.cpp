@@ -166,9 +166,15 @@ VerdictText read_verdict(const fs::path& out) {
                            number(v["field_of_view_deg"], " deg"));
     if (v["tolerances"].is_object()) {
         const nlohmann::json& t = v["tolerances"];
-        text.figures.push_back("assemble within: shift " + number(t["shift_mm"], " mm") + ", rotation " +
-                               number(t["rotation_deg"], " deg") + ", pitch " + number(t["pitch_error_ppm"], " ppm") +
-                               ", spacer " + number(t["spacer_mm"], " mm"));
+        const nlohmann::json at_least = t.value("at_least", nlohmann::json::array());
+        const auto bound = [&](const char* key, const char* kind, const std::string& unit) {
+            const bool more = std::find(at_least.begin(), at_least.end(), kind) != at_least.end();
+            return number(t[key], unit) + (more ? " or more" : "");
+        };
+        text.figures.push_back("assemble within: shift " + bound("shift_mm", "shift", " mm") + ", rotation " +
+                               bound("rotation_deg", "rotation", " deg") + ", pitch " +
+                               bound("pitch_error_ppm", "pitch_error", " ppm") + ", spacer " +
+                               bound("spacer_mm", "spacer", " mm"));
     }
     for (const auto& warning : v.value("warnings", nlohmann::json::array()))
         if (warning.is_string()) text.figures.push_back("design warning: " + warning.get<std::string>());
