@@ -1,5 +1,6 @@
 #include "project/project.hpp"
 
+#include <algorithm>
 #include <system_error>
 
 #include "core/config.hpp"
@@ -99,9 +100,14 @@ Outputs read_outputs(ConfigTable& table) {
     Outputs o;
     if (table.has("sheets")) {
         o.sheet_formats = table.strings("sheets");
-        for (const std::string& format : o.sheet_formats)
+        for (std::size_t k = 0; k < o.sheet_formats.size(); ++k) {
+            const std::string& format = o.sheet_formats[k];
             if (format != "pdf" && format != "tif")
                 table.fail("sheets", "expected formats \"pdf\" and/or \"tif\", got \"" + format + "\"");
+            if (std::find(o.sheet_formats.begin(), o.sheet_formats.begin() + static_cast<std::ptrdiff_t>(k), format) !=
+                o.sheet_formats.begin() + static_cast<std::ptrdiff_t>(k))
+                table.fail("sheets", "\"" + format + "\" is named twice");
+        }
     }
     o.copies = static_cast<int>(table.optional_integer("copies", 0, 1000).value_or(o.copies));
     o.moire = table.optional_boolean("moire").value_or(o.moire);

@@ -141,6 +141,8 @@ field = "field"
     EXPECT_THAT(error_for(kProject + "[encode]\nmodel = \"fast\"\n"), HasSubstr("encode.model"));
     EXPECT_THAT(error_for("[project]\ndesign = \"design2\"\n[source]\nfield = \"field\"\n[make]\nsheets = [\"png\"]\n"),
                 HasSubstr("expected formats \"pdf\" and/or \"tif\""));
+    EXPECT_THAT(error_for("[project]\ndesign = \"design2\"\n[source]\nfield = \"field\"\n[make]\nsheets = [\"pdf\", \"pdf\"]\n"),
+                HasSubstr("\"pdf\" is named twice"));
     EXPECT_THAT(error_for("[project]\ndesign = \"design2\"\n[source]\nfield = \"field\"\nregion = [0, 0, 0, 3]\n"),
                 HasSubstr("source.region"));
     EXPECT_THAT(error_for("[project]\ndesign = \"design2\"\n"), HasSubstr("source"));
