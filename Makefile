@@ -8,7 +8,7 @@
 JOBS ?= $(shell nproc)
 RFD := build/bin/rfd
 
-.PHONY: all deps configure build build-tests build-asan test test-release test-asan test-all \
+.PHONY: all deps configure build build-tests build-asan build-asan-all test test-release test-asan test-all \
         bench demo studies clean
 
 all: build
@@ -28,7 +28,11 @@ build-tests: configure
 
 build-asan: deps
 	cmake --preset asan
-	cmake --build build-asan -j $(JOBS) --target rfd rfd_tests rfd_fuzz
+	cmake --build build-asan -j $(JOBS) --target rfd rfd_tests
+
+# The fuzz driver too: its bounded runs (label fuzz) are part of test-all.
+build-asan-all: build-asan
+	cmake --build build-asan -j $(JOBS) --target rfd_fuzz
 
 test: test-release test-asan
 
@@ -38,7 +42,7 @@ test-release: build-tests
 test-asan: build-asan
 	ctest --preset asan -j $(JOBS)
 
-test-all: build-tests build-asan
+test-all: build-tests build-asan-all
 	ctest --preset release -j $(JOBS)
 	ctest --preset asan-all -j $(JOBS)
 
