@@ -150,18 +150,7 @@ std::vector<MoireBand> write_moire_pdf(const std::filesystem::path& out, const o
                 cairo_restore(cr);
             }
     };
-    constexpr double kPointsPerMm = 72.0 / kMillimetresPerInch;
-    PdfFile pdf(out, paper.width * kPointsPerMm, paper.height * kPointsPerMm, "calibration sheet");
-    {
-        std::unique_ptr<cairo_t, decltype(&cairo_destroy)> owner(cairo_create(pdf.surface()), &cairo_destroy);
-        cairo_scale(owner.get(), kPointsPerMm, kPointsPerMm);
-        for (int page = 0; page < pages; ++page) {
-            draw_page(owner.get(), page);
-            cairo_show_page(owner.get());
-        }
-    }
-    pdf.finish();
-    if (!options.preview.empty()) write_page_png(options.preview, paper.width, paper.height, kPagePreviewPixels, [&](cairo_t* cr) { draw_page(cr, 0); });
+    write_pages(out, paper, pages, "calibration sheet", draw_page, options.preview);
     return bands;
 }
 

@@ -8,6 +8,7 @@
 #include <cairo-pdf.h>
 
 #include "core/error.hpp"
+#include "core/units.hpp"
 
 namespace rfd::print {
 namespace {
@@ -70,6 +71,22 @@ void write_page_png(const std::filesystem::path& png, double paper_width_mm, dou
         throw IoError(SourceLocation{png.string()}, "cannot write the page's picture");
     }
     move_into_place(temporary, png);
+}
+
+void write_pages(const std::filesystem::path& out, const Paper& paper, int pages, const std::string& what,
+                 const std::function<void(cairo_t*, int)>& draw, const std::filesystem::path& preview) {
+    constexpr double kPointsPerMm = 72.0 / kMillimetresPerInch;
+    PdfFile pdf(out, paper.width * kPointsPerMm, paper.height * kPointsPerMm, what);
+    {
+        std::unique_ptr<cairo_t, decltype(&cairo_destroy)> cr(cairo_create(pdf.surface()), &cairo_destroy);
+        cairo_scale(cr.get(), kPointsPerMm, kPointsPerMm);
+        for (int page = 0; page < pages; ++page) {
+            draw(cr.get(), page);
+            cairo_show_page(cr.get());
+        }
+    }
+    pdf.finish();
+    if (!preview.empty()) write_page_png(preview, paper.width, paper.height, kPagePreviewPixels, [&](cairo_t* cr) { draw(cr, 0); });
 }
 
 }  // namespace rfd::print

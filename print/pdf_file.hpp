@@ -20,6 +20,7 @@
 
 #include "core/files.hpp"
 #include "print/layout.hpp"
+#include "print/printer.hpp"
 
 namespace rfd::print {
 
@@ -48,5 +49,10 @@ private:
 /// naming `png` when it cannot be written.
 void write_page_png(const std::filesystem::path& png, double paper_width_mm, double paper_height_mm, int pixels,
                     const std::function<void(cairo_t*)>& draw);
+
+/// A PDF of `pages` pages of `paper`, each drawn by `draw(cr, page)` in page-frame mm
+/// (`what` names it in messages), and, when `preview` is given, its first page as write_page_png.
+void write_pages(const std::filesystem::path& out, const Paper& paper, int pages, const std::string& what,
+                 const std::function<void(cairo_t*, int)>& draw, const std::filesystem::path& preview = {});
 
 }  // namespace rfd::print

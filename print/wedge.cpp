@@ -106,18 +106,7 @@ std::vector<WedgePatch> write_wedge_pdf(const std::filesystem::path& out, const 
             cairo_show_text(cr, ("T " + format_fixed(patch.transmittance, 4)).c_str());
         }
     };
-    constexpr double kPointsPerMm = 72.0 / kMillimetresPerInch;
-    PdfFile pdf(out, paper.width * kPointsPerMm, paper.height * kPointsPerMm, "step wedge");
-    {
-        std::unique_ptr<cairo_t, decltype(&cairo_destroy)> owner(cairo_create(pdf.surface()), &cairo_destroy);
-        cairo_scale(owner.get(), kPointsPerMm, kPointsPerMm);
-        for (int page = 0; page < pages; ++page) {
-            draw_page(owner.get(), page);
-            cairo_show_page(owner.get());
-        }
-    }
-    pdf.finish();
-    if (!preview.empty()) write_page_png(preview, paper.width, paper.height, kPagePreviewPixels, [&](cairo_t* cr) { draw_page(cr, 0); });
+    write_pages(out, paper, pages, "step wedge", draw_page, preview);
     return patches;
 }
 
