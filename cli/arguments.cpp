@@ -1,5 +1,7 @@
 #include "cli/arguments.hpp"
 
+#include "optics/analysis.hpp"
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -185,6 +187,13 @@ void add_window_options(CLI::App& command, WindowOptions& options) {
                        "calibration spheres and frame)");
     command.add_option("--scale", options.scale, "Scale every image of the field by this, after --region (0.5 halves)")
         ->check(CLI::Range(0.01, 16.0));
+}
+
+double field_of_view_half_angle_deg(const optics::DesignOptics& optics, const std::string& design_file) {
+    const optics::DesignSummary summary = optics::summarise(optics);
+    if (!summary.field_of_view_deg)
+        throw InputError(SourceLocation{design_file}, "the design has no field of view edge: give --max-angle");
+    return 0.5 * *summary.field_of_view_deg;
 }
 
 void add_frame_option(CLI::App& command, predict::LightFrame& frame) {

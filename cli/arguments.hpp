@@ -111,6 +111,11 @@ struct WindowOptions {
 };
 void add_window_options(CLI::App& command, WindowOptions& options);
 
+/// Half the design's field of view (exact, the smallest wrap-over angle), degrees: the
+/// default --max-angle of simulate rti and preview. InputError naming `design_file` when the
+/// design has no field-of-view edge.
+double field_of_view_half_angle_deg(const optics::DesignOptics& optics, const std::string& design_file);
+
 /// --frame display|field for --light (default display), with its help.
 void add_frame_option(CLI::App& command, predict::LightFrame& frame);
 

@@ -55,12 +55,7 @@ void add_simulate_preview_command(CLI::App& simulate) {
         const predict::EncodedField reference(design, opt->pattern, pattern.geometry(), pattern.tone().white, opt->field);
         const predict::DisplayComparison comparison(simulator, pattern, reference.encoder(), pattern.tone());
         double max_angle_deg = opt->max_angle_deg.value_or(0.0);
-        if (!opt->max_angle_deg) {
-            const optics::DesignSummary summary = optics::summarise(simulator.optics());
-            if (!summary.field_of_view_deg)
-                throw InputError(SourceLocation{opt->design}, "the design has no field of view edge: give --max-angle");
-            max_angle_deg = 0.5 * *summary.field_of_view_deg;
-        }
+        if (!opt->max_angle_deg) max_angle_deg = field_of_view_half_angle_deg(simulator.optics(), opt->design);
         optics::SimulationOptions options;
         options.rays_per_side = opt->rays;
         options.pixels_per_pitch = opt->pixels_per_lenslet;

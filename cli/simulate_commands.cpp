@@ -257,12 +257,7 @@ void add_rti_command(CLI::App& simulate) {
         const optics::DisplaySimulator simulator(design);
         const print::PrintedTransparency pattern = printed_pattern(design, opt->pattern, opt->print);
         double max_angle_deg = opt->max_angle_deg.value_or(0.0);
-        if (!opt->max_angle_deg) {
-            const optics::DesignSummary summary = optics::summarise(simulator.optics());
-            if (!summary.field_of_view_deg)
-                throw InputError(SourceLocation{opt->design}, "the design has no field of view edge: give --max-angle");
-            max_angle_deg = 0.5 * *summary.field_of_view_deg;
-        }
+        if (!opt->max_angle_deg) max_angle_deg = field_of_view_half_angle_deg(simulator.optics(), opt->design);
         optics::SimulationOptions options;
         options.rays_per_side = opt->rays;
         options.model = optics::resolve(opt->model, simulator.optics(),
