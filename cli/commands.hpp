@@ -31,6 +31,8 @@ void add_pattern_commands(CLI::App& app);
 void add_print_commands(CLI::App& app);
 /// `pattern encode-angular` (Designs III/IV), added to the `pattern` group.
 void add_pattern_angular_command(CLI::App& pattern);
+/// `pattern optimize` (Designs I/II): a pattern chosen through the simulator.
+void add_pattern_optimize_command(CLI::App& pattern);
 
 /// `simulate`: the predicted output of a Design I/II display under lights.
 void add_simulate_commands(CLI::App& app);

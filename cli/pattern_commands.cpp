@@ -220,6 +220,7 @@ void add_pattern_commands(CLI::App& app) {
     add_encode_command(*pattern);
     add_field_command(*pattern);
     add_pattern_angular_command(*pattern);
+    add_pattern_optimize_command(*pattern);
 }
 
 }  // namespace rfd::cli

@@ -76,16 +76,6 @@ bool trace_paraxial_ray(const SequentialSystem& system, ParaxialRay& ray, std::v
     return false;
 }
 
-// One traced ray as every lenslet of the display repeats it: what it carries and, for a
-// ray that crossed into neighbouring lenslets, where those lie relative to its own.
-struct LensletRay {
-    Eigen::Vector2d on_pattern, on_diffuser;
-    double entering = 0.0;            // power entering the lenslet: ray area x cos(incidence)
-    double reaching = 0.0;            // of which reaches the diffuser (Fresnel losses)
-    std::array<double, 3> colour{};   // the light's irradiance share per channel
-    std::size_t first_neighbour = 0, neighbours = 0;  // into `neighbour_offsets`
-    bool crossed = false;  // passed from one lenslet into another (wrap-over)
-};
 
 
 // A light the display cannot show: InputError naming it (1-based, as the user gave them).
@@ -224,18 +214,6 @@ std::vector<TracedRay> trace_jobs(const DesignOptics& reference, std::size_t dif
     return traced;
 }
 
-// What every lenslet repeats: the rays that reach the diffuser, sorted by where they land
-// along y (so the rays of a lenslet that land in a strip of output rows are a contiguous
-// run), and the light entering it in all.
-struct RepeatedRays {
-    std::vector<LensletRay> rays;
-    std::vector<Eigen::Vector2d> neighbour_offsets;  // mm, from a lenslet's centre to its neighbours'
-    double entering = 0.0;                           // per lenslet
-    std::array<double, 3> entering_colour{};         // per lenslet and channel
-    std::size_t lost = 0;                            // per lenslet: rays that do not reach the diffuser
-    // The box the rays land in on the diffuser, mm from their lenslet's centre.
-    Eigen::Vector2d reach_min = Eigen::Vector2d::Constant(HUGE_VAL), reach_max = -reach_min;
-};
 
 RepeatedRays repeated_rays(const DesignOptics& reference, const EntryGrid& grid, const std::vector<RayJob>& jobs,
                            const std::vector<TracedRay>& traced) {
@@ -528,6 +506,14 @@ DisplaySimulator::DisplaySimulator(const Design& design)
     diffuser_surface_ = optics_.system().find(diffuser->name + " diffuser");
     RFD_CHECK(diffuser_surface_ > optics_.encoding_surface());
     RFD_CHECK(reference_->system().find(diffuser->name + " diffuser") == diffuser_surface_);
+}
+
+RepeatedRays DisplaySimulator::trace_lenslet(const std::vector<DisplayLight>& lights,
+                                            const SimulationOptions& options) const {
+    RFD_CHECK(options.rays_per_side > 0 && options.max_rays_per_lenslet > 0);
+    check_lights(lights, optics_.design().file);
+    return trace_reference_lenslet(*reference_, diffuser_surface_, options.model,
+                                   plan_entry_grid(optics_, lights, options), lights);
 }
 
 DiffuserImage DisplaySimulator::simulate(const Transparency& pattern, const std::vector<DisplayLight>& lights,

@@ -33,6 +33,7 @@
 //          DiffuserImage out = sim.simulate(t, {{incident_direction(0.2, 0.0), {1, 1, 1}}}, {});
 
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <memory>
 #include <span>
@@ -151,6 +152,32 @@ Image per_lenslet(const Lattice& lattice, const DiffuserImage& image, double cor
 /// per_side x per_side over the disc of an area source (those inside it, equal weights).
 std::vector<Eigen::Vector3d> disc_directions(const DisplayLight& light, int per_side);
 
+/// One ray of a lenslet as every lenslet of the display repeats it, shifted to its centre:
+/// where it meets the pattern and the diffuser, what it carries and, for a ray that crossed
+/// into neighbouring lenslets, where those lie relative to its own.
+struct LensletRay {
+    Eigen::Vector2d on_pattern = Eigen::Vector2d::Zero();   ///< mm from its lenslet's centre
+    Eigen::Vector2d on_diffuser = Eigen::Vector2d::Zero();  ///< likewise
+    double entering = 0.0;            ///< power entering the lenslet: ray area (mm^2) x cos(incidence)
+    double reaching = 0.0;            ///< of which reaches the diffuser (Fresnel losses)
+    std::array<double, 3> colour{};   ///< the light's irradiance share per channel
+    std::size_t first_neighbour = 0, neighbours = 0;  ///< into RepeatedRays::neighbour_offsets
+    bool crossed = false;             ///< passed from one lenslet into another (wrap-over)
+};
+
+/// What every lenslet repeats under a set of lights: the rays that reach the diffuser,
+/// sorted by where they land along y (descending), and the light entering a lenslet in all.
+/// A ray exists at a lenslet only when every neighbour it passes through is in the array.
+struct RepeatedRays {
+    std::vector<LensletRay> rays;
+    std::vector<Eigen::Vector2d> neighbour_offsets;  ///< mm, from a lenslet's centre to its neighbours'
+    double entering = 0.0;                           ///< per lenslet
+    std::array<double, 3> entering_colour{};         ///< per lenslet and channel
+    std::size_t lost = 0;                            ///< per lenslet: rays that do not reach the diffuser
+    /// The box the rays land in on the diffuser, mm from their lenslet's centre.
+    Eigen::Vector2d reach_min = Eigen::Vector2d::Constant(HUGE_VAL), reach_max = -reach_min;
+};
+
 class DisplaySimulator {
 public:
     /// Designs I and II only; InputError otherwise.
@@ -163,6 +190,10 @@ public:
     /// The diffuser image under `lights` (each with d.z() > 0; InputError otherwise).
     DiffuserImage simulate(const Transparency& pattern, const std::vector<DisplayLight>& lights,
                            const SimulationOptions& options) const;
+
+    /// The rays one lenslet repeats under `lights` (simulate()'s, before any pattern): for
+    /// callers that apply the same optics to many patterns (predict/optimize.hpp).
+    RepeatedRays trace_lenslet(const std::vector<DisplayLight>& lights, const SimulationOptions& options) const;
 
     /// The mean of `image` over each lenslet's cell: the picture at the display's own
     /// resolution (one value per lenslet), see optics::per_lenslet.

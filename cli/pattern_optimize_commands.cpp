@@ -1,0 +1,275 @@
+// rfd pattern optimize: a Design I/II pattern chosen through the display's own forward
+// model (predict/optimize.hpp), starting from the direct encoding.
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "cli/arguments.hpp"
+#include "cli/commands.hpp"
+#include "core/error.hpp"
+#include "core/files.hpp"
+#include "core/plot.hpp"
+#include "core/progress.hpp"
+#include "core/text.hpp"
+#include "optics/display.hpp"
+#include "patterns/encode.hpp"
+#include "predict/compare.hpp"
+#include "predict/optimize.hpp"
+#include "print/printed.hpp"
+
+namespace rfd::cli {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// --crop I,J,W,H: lenslets, from the bottom-left lenslet of the array.
+predict::LensletWindow parse_crop(const std::string& text, const optics::Lattice& lattice) {
+    std::stringstream in(text);
+    std::vector<int> values;
+    std::string item;
+    while (std::getline(in, item, ',')) {
+        std::size_t used = 0;
+        int value = -1;
+        try {
+            value = std::stoi(item, &used);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (used != item.size() || item.empty()) values.clear(), values.push_back(-1);
+        values.push_back(value);
+    }
+    if (values.size() != 4 || values[0] < 0 || values[1] < 0 || values[2] < 1 || values[3] < 1 ||
+        values[0] + values[2] > lattice.count_x() || values[1] + values[3] > lattice.count_y())
+        throw InputError("--crop: expected I,J,W,H, whole lenslets inside the " + std::to_string(lattice.count_x()) +
+                         " x " + std::to_string(lattice.count_y()) + " array, got '" + text + "'");
+    return {values[0], values[1], values[0] + values[2], values[1] + values[3]};
+}
+
+double mean_of(const std::vector<double>& values) {
+    double sum = 0.0;
+    for (double v : values) sum += v;
+    return values.empty() ? std::nan("") : sum / static_cast<double>(values.size());
+}
+
+nlohmann::json db(double value) { return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr); }
+
+}  // namespace
+
+void add_pattern_optimize_command(CLI::App& pattern) {
+    auto* cmd = pattern.add_subcommand(
+        "optimize", "Choose a Design I/II pattern through the display's own forward model: the printable pattern whose "
+                    "predicted output comes closest to the field relit in software, over the field of view");
+    struct Options {
+        std::string design, field, from, out, report, crop;
+        PrintOptions print;
+        optics::ModelChoice model = optics::ModelChoice::Auto;
+        double spacing = 0.1, tolerance = 1e-5;
+        int iterations = 40, rays = 8, chart_every = 5;
+        bool unbounded = false, json = false;
+    };
+    auto opt = std::make_shared<Options>();
+    cmd->add_option("DESIGN", opt->design, "Design TOML file (Design I or II)")->required();
+    cmd->add_option("FIELD", opt->field, "The reflectance field (folder or .lp) the --from pattern was encoded from")
+        ->required();
+    cmd->add_option("--from", opt->from,
+                    "The direct encoding (`rfd pattern encode`): its encoder's options, white and printer are kept, "
+                    "its values are the start")
+        ->required();
+    cmd->add_option("--out", opt->out, "Optimised pattern file (.exr)")->required();
+    cmd->add_option("--spacing", opt->spacing,
+                    "Node spacing on the pattern plane, mm: the pattern's unknowns, per lenslet (default 0.1)")
+        ->check(positive_number());
+    cmd->add_option("--iterations", opt->iterations, "At most this many solver iterations (default 40)")
+        ->check(CLI::Range(0, 100000));
+    cmd->add_option("--tolerance", opt->tolerance,
+                    "Stop when an iteration lowers the objective by less than this fraction (default 1e-5)")
+        ->check(CLI::Range(0.0, 1.0));
+    cmd->add_option("--rays", opt->rays, "Rays per side of each lenslet's grid, per direction (default 8)")
+        ->check(CLI::Range(1, 64));
+    add_model_option(*cmd, opt->model);
+    add_print_options(*cmd, opt->print);
+    cmd->add_option("--crop", opt->crop,
+                    "Only fit the cells of lenslets I,J,W,H (from the bottom-left lenslet): a quick trial");
+    cmd->add_flag("--unbounded", opt->unbounded,
+                  "Drop the printer's bounds (CGLS): the unconstrained optimum, the ceiling; not printable as is");
+    cmd->add_option("--report", opt->report,
+                    "Also write a folder with the objective and the held-out PSNR against iterations and time");
+    cmd->add_option("--chart-every", opt->chart_every, "Held-out PSNR every this many iterations (default 5)")
+        ->check(CLI::Range(1, 100000));
+    cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
+    cmd->callback([opt] {
+        const auto start = Clock::now();
+        auto seconds = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
+        const optics::Design design = optics::load_design(opt->design);
+        const optics::DisplaySimulator simulator(design);
+        const print::PrintedTransparency direct = printed_pattern(design, opt->from, opt->print);
+        const predict::EncodedField reference(design, opt->from, direct.geometry(), direct.tone().white, opt->field);
+        const patterns::Encoder& encoder = reference.encoder();
+        const print::ToneMap& tone = direct.tone();
+        const optics::Lattice& lattice = encoder.lattice();
+        const predict::NodeGrid nodes(lattice, direct.geometry(), opt->spacing);
+        std::optional<predict::LensletWindow> fitted;
+        if (!opt->crop.empty()) fitted = parse_crop(opt->crop, lattice);
+
+        optics::SimulationOptions options;
+        options.rays_per_side = opt->rays;
+        options.model = optics::resolve(opt->model, simulator.optics(),
+                                        {direct.geometry().dot_x, direct.geometry().dot_y})
+                            .model;
+        const predict::SweepDirections fit_sweep = predict::sweep_directions(encoder, nodes, false);
+        const predict::SweepDirections held_sweep = predict::sweep_directions(encoder, nodes, true);
+        if (fit_sweep.display.empty()) throw InputError("--spacing: no node lies inside a lenslet's cell; use a smaller one");
+
+        // A crop follows the light of the lenslets around it that reaches its cells.
+        std::optional<predict::LensletWindow> sources;
+        predict::DisplayOperator probe(simulator, nodes, {fit_sweep.display.front()}, options);
+        if (fitted) sources = fitted->grown(probe.reach_rows() + 1);
+        const predict::DisplayOperator fit_op(simulator, nodes, fit_sweep.display, options, sources);
+        const predict::DisplayOperator held_op(simulator, nodes, held_sweep.display, options, sources);
+        const std::vector<double> fit_target =
+            predict::optimization_targets(fit_op, fit_op.flat_field(), encoder, tone);
+        const std::vector<double> held_target =
+            predict::optimization_targets(held_op, held_op.flat_field(), encoder, tone);
+        const predict::OptimizationProblem problem(fit_op, fit_target, fit_sweep.weights, fitted);
+        const std::vector<double> u0 = predict::nodes_from_pattern(nodes, direct, tone);
+        const double prepare_s = seconds();
+
+        struct ChartPoint {
+            int iteration;
+            double seconds, objective, fitted_psnr, held_psnr;
+        };
+        std::vector<ChartPoint> points;
+        auto held_mean = [&](std::span<const double> u) {
+            return mean_of(predict::direction_psnr(held_op, held_target, u, fitted));
+        };
+        auto fit_mean = [&](std::span<const double> u) {
+            return mean_of(predict::direction_psnr(fit_op, fit_target, u, fitted));
+        };
+        const double f0 = problem.objective([&] {
+            std::vector<double> y(fit_op.output_size());
+            fit_op.forward(u0, y);
+            return y;
+        }());
+        points.push_back({0, seconds(), f0, fit_mean(u0), held_mean(u0)});
+        double eval_seconds = 0.0;
+        predict::SolverOptions solver;
+        solver.iterations = opt->iterations;
+        solver.tolerance = opt->tolerance;
+        solver.bounded = !opt->unbounded;
+        Progress progress("optimizing", static_cast<std::size_t>(opt->iterations));
+        solver.on_iteration = [&](int it, double f, std::span<const double> u) {
+            progress.advance();
+            if (it % opt->chart_every != 0) return;
+            const auto t0 = Clock::now();
+            const double now = seconds() - eval_seconds;
+            const double fit = fit_mean(u), held = held_mean(u);
+            eval_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
+            points.push_back({it, now, f, fit, held});
+        };
+        const auto solve_start = Clock::now();
+        predict::OptimizationResult result = predict::solve(problem, u0, solver);
+        progress.finish();
+        const double solve_s = std::chrono::duration<double>(Clock::now() - solve_start).count() - eval_seconds;
+        if (points.back().iteration != result.iterations)
+            points.push_back({result.iterations, seconds() - eval_seconds, result.objective.back(), fit_mean(result.u),
+                              held_mean(result.u)});
+        for (double v : result.u)
+            if (!std::isfinite(v)) throw Error("the optimiser produced a value that is not a number");
+
+        // The pattern: the encoder's attributes and the optimiser's settings.
+        const patterns::PatternFileInfo info = patterns::read_pattern_info(opt->from);
+        patterns::PatternAttributes attributes = info.attributes;
+        attributes["optimized"] = opt->unbounded ? "unbounded" : "bounded";
+        attributes["optimized_from"] = opt->from;
+        attributes["optimized_spacing_mm"] = format_number(opt->spacing);
+        attributes["optimized_iterations"] = std::to_string(result.iterations);
+        attributes["optimized_rays"] = std::to_string(opt->rays);
+        attributes["optimized_model"] = std::string(optics::to_string(options.model));
+        attributes["optimized_directions"] = std::to_string(fit_sweep.display.size());
+        attributes["optimized_brightness"] = format_number(tone.brightness);
+        if (fitted) attributes["optimized_crop"] = opt->crop;
+        std::vector<double> printable = result.u;
+        if (opt->unbounded)
+            for (double& v : printable) v = std::clamp(v, 0.0, 1.0);
+        const predict::NodePattern out_pattern(nodes, std::move(printable), info.channels, tone.white, tone.brightness);
+        patterns::write_pattern(opt->out, out_pattern, attributes);
+
+        const ChartPoint& first = points.front();
+        const ChartPoint& last = points.back();
+        if (!opt->report.empty()) {
+            ensure_directory(opt->report);
+            const std::filesystem::path dir(opt->report);
+            LineChart chart;
+            chart.title = "Pattern optimisation: " + design.name;
+            chart.x_label = "solver time (s)";
+            chart.y_label = "mean PSNR per direction (dB)";
+            chart.y2_label = "objective / objective at the start";
+            chart.key_position = "bottom right";
+            PlotSeries held{"held-out directions", {}, {}}, fit{"optimised directions", {}, {}},
+                objective{"objective", {}, {}, true};
+            std::string csv = "iteration,seconds,objective,fitted_psnr_db,held_out_psnr_db\n";
+            for (const ChartPoint& p : points) {
+                held.x.push_back(p.seconds - first.seconds);
+                held.y.push_back(p.held_psnr);
+                fit.x.push_back(p.seconds - first.seconds);
+                fit.y.push_back(p.fitted_psnr);
+                objective.x.push_back(p.seconds - first.seconds);
+                objective.y.push_back(p.objective / first.objective);
+                csv += std::to_string(p.iteration) + "," + format_fixed(p.seconds - first.seconds, 3) + "," +
+                       format_number(p.objective) + "," + format_fixed(p.fitted_psnr, 4) + "," +
+                       format_fixed(p.held_psnr, 4) + "\n";
+            }
+            chart.series = {held, fit, objective};
+            write_text_file(dir / "iterations.csv", csv);
+            write_line_chart(chart, dir / "convergence");
+        }
+        if (opt->json) {
+            const nlohmann::json summary = {
+                {"pattern", opt->out},
+                {"from", opt->from},
+                {"bounded", !opt->unbounded},
+                {"spacing_mm", opt->spacing},
+                {"nodes_per_lenslet", {nodes.nodes_x(), nodes.nodes_y()}},
+                {"unknowns", nodes.size()},
+                {"directions", fit_sweep.display.size()},
+                {"held_out_directions", held_sweep.display.size()},
+                {"rays_per_side", opt->rays},
+                {"model", std::string(optics::to_string(options.model))},
+                {"iterations", result.iterations},
+                {"converged", result.converged},
+                {"objective_start", first.objective},
+                {"objective_end", last.objective},
+                {"fitted_psnr_start_db", db(first.fitted_psnr)},
+                {"fitted_psnr_end_db", db(last.fitted_psnr)},
+                {"held_out_psnr_start_db", db(first.held_psnr)},
+                {"held_out_psnr_end_db", db(last.held_psnr)},
+                {"prepare_seconds", prepare_s},
+                {"solve_seconds", solve_s},
+            };
+            std::printf("%s\n", summary.dump(2).c_str());
+            return;
+        }
+        std::printf("pattern %s: optimised from %s (%s)\n", opt->out.c_str(), opt->from.c_str(),
+                    opt->unbounded ? "unbounded: the ceiling, clamped to print" : "within the printer's range");
+        std::printf("  unknowns          %d x %d nodes per lenslet, %.3g mm apart: %zu values\n", nodes.nodes_x(),
+                    nodes.nodes_y(), opt->spacing, nodes.size());
+        std::printf("  directions        %zu optimised, %zu held out (in between), %d rays per side, %s model\n",
+                    fit_sweep.display.size(), held_sweep.display.size(), opt->rays,
+                    std::string(optics::to_string(options.model)).c_str());
+        std::printf("  objective         %.6g -> %.6g in %d iterations%s\n", first.objective, last.objective,
+                    result.iterations, result.converged ? " (converged)" : "");
+        std::printf("  mean PSNR         optimised directions %.2f -> %.2f dB, held out %.2f -> %.2f dB\n",
+                    first.fitted_psnr, last.fitted_psnr, first.held_psnr, last.held_psnr);
+        std::printf("  time              %.1f s to prepare, %.1f s to solve\n", prepare_s, solve_s);
+    });
+}
+
+}  // namespace rfd::cli
