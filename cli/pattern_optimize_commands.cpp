@@ -53,10 +53,14 @@ predict::LensletWindow parse_crop(const std::string& text, const optics::Lattice
     return {values[0], values[1], values[0] + values[2], values[1] + values[3]};
 }
 
+// Over the directions with a finite PSNR: a direction whose picture is black (a letter
+// field between its letters) or matched exactly says nothing of the others.
 double mean_of(const std::vector<double>& values) {
     double sum = 0.0;
-    for (double v : values) sum += v;
-    return values.empty() ? std::nan("") : sum / static_cast<double>(values.size());
+    int count = 0;
+    for (double v : values)
+        if (std::isfinite(v)) sum += v, ++count;
+    return count ? sum / count : std::nan("");
 }
 
 nlohmann::json db(double value) { return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr); }
@@ -71,7 +75,7 @@ void add_pattern_optimize_command(CLI::App& pattern) {
         std::string design, field, from, out, report, crop;
         PrintOptions print;
         optics::ModelChoice model = optics::ModelChoice::Auto;
-        double spacing = 0.1, tolerance = 1e-5;
+        double spacing = 0.1, tolerance = 1e-5, core_weight = 0.0;
         int iterations = 40, rays = 8, chart_every = 5;
         bool unbounded = false, json = false;
     };
@@ -94,6 +98,10 @@ void add_pattern_optimize_command(CLI::App& pattern) {
         ->check(CLI::Range(0.0, 1.0));
     cmd->add_option("--rays", opt->rays, "Rays per side of each lenslet's grid, per direction (default 8)")
         ->check(CLI::Range(1, 64));
+    cmd->add_option("--core-weight", opt->core_weight,
+                    "Design II: also fit the macro-pixels' cores, where no neighbour reaches, this much beside the "
+                    "whole cells (default 0: whole cells, the picture at the display's resolution)")
+        ->check(CLI::Range(0.0, 1e6));
     add_model_option(*cmd, opt->model);
     add_print_options(*cmd, opt->print);
     cmd->add_option("--crop", opt->crop,
@@ -132,13 +140,14 @@ void add_pattern_optimize_command(CLI::App& pattern) {
         std::optional<predict::LensletWindow> sources;
         predict::DisplayOperator probe(simulator, nodes, {fit_sweep.display.front()}, options);
         if (fitted) sources = fitted->grown(probe.reach_rows() + 1);
-        const predict::DisplayOperator fit_op(simulator, nodes, fit_sweep.display, options, sources);
+        const bool cores = opt->core_weight > 0.0;
+        const predict::DisplayOperator fit_op(simulator, nodes, fit_sweep.display, options, sources, cores);
         const predict::DisplayOperator held_op(simulator, nodes, held_sweep.display, options, sources);
         const std::vector<double> fit_target =
             predict::optimization_targets(fit_op, fit_op.flat_field(), encoder, tone);
         const std::vector<double> held_target =
             predict::optimization_targets(held_op, held_op.flat_field(), encoder, tone);
-        const predict::OptimizationProblem problem(fit_op, fit_target, fit_sweep.weights, fitted);
+        const predict::OptimizationProblem problem(fit_op, fit_target, fit_sweep.weights, fitted, opt->core_weight);
         const std::vector<double> u0 = predict::nodes_from_pattern(nodes, direct, tone);
         const double prepare_s = seconds();
 
@@ -195,6 +204,7 @@ void add_pattern_optimize_command(CLI::App& pattern) {
         attributes["optimized_model"] = std::string(optics::to_string(options.model));
         attributes["optimized_directions"] = std::to_string(fit_sweep.display.size());
         attributes["optimized_brightness"] = format_number(tone.brightness);
+        attributes["optimized_core_weight"] = format_number(opt->core_weight);
         if (fitted) attributes["optimized_crop"] = opt->crop;
         std::vector<double> printable = result.u;
         if (opt->unbounded)

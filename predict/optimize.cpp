@@ -9,6 +9,7 @@
 
 #include "core/error.hpp"
 #include "core/parallel.hpp"
+#include "predict/compare.hpp"
 
 namespace rfd::predict {
 namespace {
@@ -74,8 +75,11 @@ bool NodeGrid::dot_stencil(int px, int py, Stencil& out) const {
 
 DisplayOperator::DisplayOperator(const optics::DisplaySimulator& simulator, const NodeGrid& nodes,
                                  std::vector<Eigen::Vector3d> display_directions,
-                                 const optics::SimulationOptions& options, std::optional<LensletWindow> sources)
-    : nodes_(nodes), sources_(sources.value_or(LensletWindow::whole(nodes.lattice()))) {
+                                 const optics::SimulationOptions& options, std::optional<LensletWindow> sources,
+                                 bool cores)
+    : nodes_(nodes),
+      sources_(sources.value_or(LensletWindow::whole(nodes.lattice()))),
+      core_fraction_(cores ? macro_pixel_core(simulator.optics()).fraction : 1.0) {
     const optics::Lattice& lattice = nodes_.lattice();
     RFD_CHECK(lattice.count_x() == simulator.optics().lattice().count_x() &&
               lattice.count_y() == simulator.optics().lattice().count_y());
@@ -108,6 +112,10 @@ DisplayOperator::DisplayOperator(const optics::DisplaySimulator& simulator, cons
                 const Eigen::Vector2d read_centre = lattice.center(lattice.cell_at(origin + ray.on_pattern)) - origin;
                 nodes_.local_stencil(ray.on_pattern - read_centre, r.node, r.weight);
                 r.power = ray.reaching / lattice.cell_area();
+                const Eigen::Vector2d landing_centre = lattice.center(lattice.cell_at(origin + ray.on_diffuser)) - origin;
+                if (core_fraction_ < 1.0 &&
+                    lattice.cell_contains(origins[0], origin + (ray.on_diffuser - landing_centre) / core_fraction_))
+                    r.core_power = r.power / (core_fraction_ * core_fraction_);
                 r.first_crossed = static_cast<std::uint32_t>(out.crossed.size());
                 for (std::size_t k = 0; k < ray.neighbours; ++k)
                     out.crossed.push_back(step_to(traced.neighbour_offsets[ray.first_neighbour + k]));
@@ -149,6 +157,7 @@ void DisplayOperator::forward_direction(std::size_t d, std::span<const double> u
     RFD_CHECK(u.size() == input_size() && y.size() == block_size());
     std::fill(y.begin(), y.end(), 0.0);
     const optics::Lattice& lattice = nodes_.lattice();
+    const std::size_t cores = regions() > 1 ? nodes_.lenslets() * 3 : 0;  // where the cores' block starts
     const LensletWindow window{std::max(sources_.i0, 0), std::max(sources_.j0, 0),
                                std::min(sources_.i1, lattice.count_x()), std::min(sources_.j1, lattice.count_y())};
     for (int j = window.j0; j < window.j1; ++j)
@@ -156,14 +165,16 @@ void DisplayOperator::forward_direction(std::size_t d, std::span<const double> u
             for_each_ray(directions_[d], {i, j},
                          [&](const Ray& ray, bool printed, std::size_t base, std::size_t landing) {
                              double* out = y.data() + landing * 3;
-                             if (!printed) {
-                                 for (std::size_t c = 0; c < 3; ++c) out[c] += ray.power * outside;
-                                 return;
-                             }
+                             double* core = y.data() + cores + landing * 3;
                              const double* v = u.data() + base;
-                             for (std::size_t c = 0; c < 3; ++c)
-                                 out[c] += ray.power * (ray.weight[0] * v[ray.node[0] + c] + ray.weight[1] * v[ray.node[1] + c] +
-                                                        ray.weight[2] * v[ray.node[2] + c] + ray.weight[3] * v[ray.node[3] + c]);
+                             for (std::size_t c = 0; c < 3; ++c) {
+                                 const double value =
+                                     printed ? ray.weight[0] * v[ray.node[0] + c] + ray.weight[1] * v[ray.node[1] + c] +
+                                                   ray.weight[2] * v[ray.node[2] + c] + ray.weight[3] * v[ray.node[3] + c]
+                                             : outside;
+                                 out[c] += ray.power * value;
+                                 if (ray.core_power != 0.0) core[c] += ray.core_power * value;
+                             }
                          });
 }
 
@@ -183,6 +194,7 @@ void DisplayOperator::adjoint(std::span<const double> y, std::span<double> g) co
                                std::min(sources_.i1, lattice.count_x()), std::min(sources_.j1, lattice.count_y())};
     if (window.i0 >= window.i1 || window.j0 >= window.j1) return;
     const std::size_t block = block_size();
+    const std::size_t cores = regions() > 1 ? nodes_.lenslets() * 3 : 0;
     // A source lenslet writes nodes at most reach_rows() rows away: bands of 2 reach_rows()
     // rows, every other one at a time, never write the same node.
     const int band_rows = std::max(1, 2 * reach_rows_);
@@ -202,7 +214,8 @@ void DisplayOperator::adjoint(std::span<const double> y, std::span<double> g) co
                                              if (!printed) return;
                                              double* out = g.data() + base;
                                              for (std::size_t c = 0; c < 3; ++c) {
-                                                 const double v = ray.power * in[landing * 3 + c];
+                                                 double v = ray.power * in[landing * 3 + c];
+                                                 if (ray.core_power != 0.0) v += ray.core_power * in[cores + landing * 3 + c];
                                                  for (int n = 0; n < 4; ++n) out[ray.node[n] + c] += ray.weight[n] * v;
                                              }
                                          });
@@ -219,8 +232,10 @@ std::vector<double> DisplayOperator::flat_field() const {
 }
 
 OptimizationProblem::OptimizationProblem(const DisplayOperator& op, std::vector<double> target,
-                                         std::vector<double> weights, std::optional<LensletWindow> fitted)
-    : op_(op), target_(std::move(target)), weights_(std::move(weights)) {
+                                         std::vector<double> weights, std::optional<LensletWindow> fitted,
+                                         double core_weight)
+    : op_(op), target_(std::move(target)), weights_(std::move(weights)), core_weight_(core_weight) {
+    RFD_CHECK(core_weight >= 0.0);
     RFD_CHECK(target_.size() == op.output_size() && weights_.size() == op.directions());
     const optics::Lattice& lattice = op.nodes().lattice();
     fitted_.assign(op.nodes().lenslets(), 1);
@@ -233,7 +248,9 @@ OptimizationProblem::OptimizationProblem(const DisplayOperator& op, std::vector<
 
 double OptimizationProblem::weight_of(std::size_t k) const {
     const std::size_t block = op_.block_size();
-    return fitted_[(k % block) / 3] ? weights_[k / block] : 0.0;
+    const std::size_t within = (k % block) / 3;
+    if (!fitted_[within % fitted_.size()]) return 0.0;
+    return within < fitted_.size() ? weights_[k / block] : core_weight_ * weights_[k / block];
 }
 
 double OptimizationProblem::residual(std::span<const double> au, std::span<double> r) const {
@@ -432,7 +449,8 @@ std::vector<double> optimization_targets(const DisplayOperator& op, const std::v
     parallel_for_chunks(op.directions(), 1, [&](std::size_t begin, std::size_t end) {
         for (std::size_t d = begin; d < end; ++d) {
             const std::vector<double> desired = desired_transmittance(encoder, tone, op.direction(d));
-            for (std::size_t k = 0; k < block; ++k) target[d * block + k] = flat_field[d * block + k] * desired[k];
+            for (std::size_t k = 0; k < block; ++k)
+                target[d * block + k] = flat_field[d * block + k] * desired[k % desired.size()];
         }
     });
     return target;
@@ -498,8 +516,9 @@ std::vector<double> direction_psnr(const DisplayOperator& op, const std::vector<
                     }
                 }
             const double mse = count ? sum / static_cast<double>(count) : 0.0;
-            psnr[d] = mse > 0.0 ? (peak > 0.0 ? 10.0 * std::log10(peak * peak / mse) : 0.0)
-                                : std::numeric_limits<double>::infinity();
+            psnr[d] = !(peak > 0.0)  ? std::nan("")
+                      : mse > 0.0 ? 10.0 * std::log10(peak * peak / mse)
+                                  : std::numeric_limits<double>::infinity();
         }
     });
     return psnr;

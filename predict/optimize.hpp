@@ -125,20 +125,31 @@ private:
 };
 
 /// The linear map of the header from node values to the mean over each diffuser cell, one
-/// block of lenslets x 3 values (linear_index order, channel fastest) per direction.
+/// block of lenslets x 3 values (linear_index order, channel fastest) per direction; for a
+/// Design II whose macro-pixels overlap (predict/compare.hpp) and when asked, the block goes
+/// on with the mean over each cell's core. Whole cells are the picture at the display's
+/// resolution; fitting them sharpens each macro-pixel against the light its neighbours
+/// spill in, which changes the core, where no neighbour reaches: weighing the cores in too
+/// keeps a picture's shape there (SIG08's letters) at some cost to the cells.
 class DisplayOperator {
 public:
     /// Traces `display_directions` (travel, z > 0) through `simulator` (options.model,
     /// options.rays_per_side; a full grid per direction). Only the rays of lenslets in
     /// `sources` are followed (a crop: the window of cells to fit, grown by the reach of
     /// the light); the default is every lenslet.
+    /// With `cores`, a design whose macro-pixels overlap also has its cores' means.
     DisplayOperator(const optics::DisplaySimulator& simulator, const NodeGrid& nodes,
                     std::vector<Eigen::Vector3d> display_directions, const optics::SimulationOptions& options,
-                    std::optional<LensletWindow> sources = std::nullopt);
+                    std::optional<LensletWindow> sources = std::nullopt, bool cores = false);
 
     std::size_t directions() const { return directions_.size(); }
     const Eigen::Vector3d& direction(std::size_t d) const { return directions_[d].display; }
-    std::size_t block_size() const { return nodes_.lenslets() * 3; }
+    /// Outputs per direction: the cells' means, then (Design II) their cores' means.
+    std::size_t block_size() const { return nodes_.lenslets() * 3 * regions(); }
+    /// 2 when asked for cores and the design's macro-pixels overlap their neighbours
+    /// (predict/compare.hpp's macro_pixel_core: fraction < 1); else 1.
+    std::size_t regions() const { return core_fraction_ < 1.0 ? 2 : 1; }
+    double core_fraction() const { return core_fraction_; }
     std::size_t output_size() const { return directions_.size() * block_size(); }
     std::size_t input_size() const { return nodes_.size(); }
     const NodeGrid& nodes() const { return nodes_; }
@@ -166,6 +177,7 @@ public:
         std::array<std::uint32_t, 4> node{};  // index of channel 0 within the read lenslet's nodes
         std::array<double, 4> weight{};
         double power = 0.0;
+        double core_power = 0.0;  // over the core's area when it lands in the core, else 0
         std::uint32_t first_crossed = 0, crossed = 0;
     };
     struct Direction {
@@ -180,14 +192,16 @@ public:
     std::vector<Direction> directions_;
     LensletWindow sources_;
     int reach_rows_ = 0;
+    double core_fraction_ = 1.0;
 };
 
 /// f(u) of the header: the operator, the targets W_d u*_d (output_size()) and per-direction
 /// weights; cells outside `fitted` (default: all) do not count.
 class OptimizationProblem {
 public:
+    /// `core_weight`: the cores' share beside the whole cells' (when op has cores).
     OptimizationProblem(const DisplayOperator& op, std::vector<double> target, std::vector<double> weights,
-                        std::optional<LensletWindow> fitted = std::nullopt);
+                        std::optional<LensletWindow> fitted = std::nullopt, double core_weight = 1.0);
     const DisplayOperator& op() const { return op_; }
     const std::vector<double>& target() const { return target_; }
     /// r = w (A u - target) per output value (w: the direction's weight, 0 outside the
@@ -201,6 +215,7 @@ private:
     const DisplayOperator& op_;
     std::vector<double> target_, weights_;
     std::vector<std::uint8_t> fitted_;  // per lenslet
+    double core_weight_ = 0.0;
 };
 
 struct SolverOptions {
@@ -254,9 +269,10 @@ std::vector<double> direct_nodes(const NodeGrid& nodes, const patterns::Encoder&
 std::vector<double> nodes_from_pattern(const NodeGrid& nodes, const optics::Transparency& pattern,
                                        const print::ToneMap& tone);
 
-/// Per direction of `op`, the PSNR of A_d u against the targets over the fitted cells (peak:
+/// Per direction of `op`, the PSNR of A_d u against the targets over the fitted whole cells (peak:
 /// the direction's largest target), as predict/compare.hpp measures (without the black
-/// level's b W_d on both sides, so these read a little lower).
+/// level's b W_d on both sides, so these read a little lower). NaN for a direction whose
+/// targets are all 0 (nothing to show), +inf for an exact match.
 std::vector<double> direction_psnr(const DisplayOperator& op, const std::vector<double>& target,
                                    std::span<const double> u, std::optional<LensletWindow> fitted = std::nullopt);
 

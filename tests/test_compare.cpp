@@ -396,8 +396,6 @@ TEST(DisplayComparison, Sig08LettersAppearEachUnderItsOwnLightOnly) {
         for (std::size_t i = 0; i < r.prediction.samples().size(); ++i)
             shown(static_cast<Eigen::Index>(i)) = r.prediction.samples()[i];
         const Eigen::VectorXd mixture = basis.colPivHouseholderQr().solve(shown);
-for (std::size_t j = 0; j < n; ++j) { std::printf("  ref-ref %.3f", pearson(pictures[k], pictures[j])); }
-        std::printf("\n");
         for (std::size_t j = 0; j < n; ++j) {
             if (j == k) continue;
             EXPECT_LT(std::abs(mixture(static_cast<Eigen::Index>(j))), 0.03 * mixture(static_cast<Eigen::Index>(k)))
