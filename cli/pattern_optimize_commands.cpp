@@ -1,6 +1,7 @@
 // rfd pattern optimize: a Design I/II pattern chosen through the display's own forward
 // model (predict/optimize.hpp), starting from the direct encoding.
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -76,7 +77,7 @@ void add_pattern_optimize_command(CLI::App& pattern) {
         PrintOptions print;
         optics::ModelChoice model = optics::ModelChoice::Auto;
         double spacing = 0.1, tolerance = 1e-5, core_weight = 0.0;
-        int iterations = 40, rays = 8, chart_every = 5;
+        int iterations = 40, rays = 8, chart_every = 5, judge_sweep = 9;
         bool unbounded = false, json = false;
     };
     auto opt = std::make_shared<Options>();
@@ -110,6 +111,10 @@ void add_pattern_optimize_command(CLI::App& pattern) {
                   "Drop the printer's bounds (CGLS): the unconstrained optimum, the ceiling; not printable as is");
     cmd->add_option("--report", opt->report,
                     "Also write a folder with the objective and the held-out PSNR against iterations and time");
+    cmd->add_option("--judge-sweep", opt->judge_sweep,
+                    "With --report: the simulator's judgement of the direct and the optimised pattern over this many "
+                    "light directions (default 9; 0: none)")
+        ->check(CLI::Range(0, 1000));
     cmd->add_option("--chart-every", opt->chart_every, "Held-out PSNR every this many iterations (default 5)")
         ->check(CLI::Range(1, 100000));
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
@@ -140,8 +145,8 @@ void add_pattern_optimize_command(CLI::App& pattern) {
         std::optional<predict::LensletWindow> sources;
         predict::DisplayOperator probe(simulator, nodes, {fit_sweep.display.front()}, options);
         if (fitted) sources = fitted->grown(probe.reach_rows() + 1);
-        const bool cores = opt->core_weight > 0.0;
-        const predict::DisplayOperator fit_op(simulator, nodes, fit_sweep.display, options, sources, cores);
+        const bool fit_cores = opt->core_weight > 0.0;
+        const predict::DisplayOperator fit_op(simulator, nodes, fit_sweep.display, options, sources, fit_cores);
         const predict::DisplayOperator held_op(simulator, nodes, held_sweep.display, options, sources);
         const std::vector<double> fit_target =
             predict::optimization_targets(fit_op, fit_op.flat_field(), encoder, tone);
@@ -214,6 +219,44 @@ void add_pattern_optimize_command(CLI::App& pattern) {
 
         const ChartPoint& first = points.front();
         const ChartPoint& last = points.back();
+        // The simulator's judgement, as simulate compare measures: the print of each pattern.
+        struct Judged {
+            predict::DirectionComparison direct, optimised;
+        };
+        std::vector<Judged> judged;
+        if (!opt->report.empty() && opt->judge_sweep > 0) {
+            const print::PrintedTransparency optimised = printed_pattern(design, opt->out, opt->print);
+            const predict::DisplayComparison judge_direct(simulator, direct, encoder, tone);
+            const predict::DisplayComparison judge_optimised(simulator, optimised, encoder, optimised.tone());
+            optics::SimulationOptions judge;
+            judge.model = optics::Model::Exact;
+            judge.rays_per_side = judge_direct.core().fraction < 1.0 ? 32 : 16;
+            judge.pixels_per_pitch = 16.0;
+            const std::vector<Eigen::Vector3d> sweep = judge_direct.sweep(opt->judge_sweep);
+            Progress judging("judging", sweep.size());
+            for (const Eigen::Vector3d& v : sweep) {
+                judged.push_back({judge_direct.compare(v, judge), judge_optimised.compare(v, judge)});
+                judging.advance();
+            }
+        }
+        struct Means {
+            double direct = 0.0, optimised = 0.0;
+            int count = 0;
+        };
+        Means in_fov, clean_cells;
+        for (const Judged& j : judged) {
+            if (j.direct.inside_field_of_view) {
+                in_fov.direct += j.direct.comparison.psnr_db;
+                in_fov.optimised += j.optimised.comparison.psnr_db;
+                ++in_fov.count;
+            }
+            if (j.direct.crosstalk_free) {
+                clean_cells.direct += j.direct.cell_comparison.psnr_db;
+                clean_cells.optimised += j.optimised.cell_comparison.psnr_db;
+                ++clean_cells.count;
+            }
+        }
+        auto mean_db = [](double sum, int count) { return count ? sum / count : std::nan(""); };
         if (!opt->report.empty()) {
             ensure_directory(opt->report);
             const std::filesystem::path dir(opt->report);
@@ -240,6 +283,45 @@ void add_pattern_optimize_command(CLI::App& pattern) {
             chart.series = {held, fit, objective};
             write_text_file(dir / "iterations.csv", csv);
             write_line_chart(chart, dir / "convergence");
+            if (!judged.empty()) {
+                std::string table =
+                    "index,display_angle_deg,inside_fov,crosstalk_free,direct_psnr_db,optimized_psnr_db,"
+                    "direct_cell_psnr_db,optimized_cell_psnr_db\n";
+                std::vector<std::size_t> order(judged.size());
+                for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+                std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+                    return judged[a].direct.display_angle_deg < judged[b].direct.display_angle_deg;
+                });
+                LineChart angles;
+                angles.title = "Direct and optimised pattern, judged by the simulator: " + design.name;
+                angles.x_label = "light's angle to the display's axis (degrees)";
+                angles.y_label = "PSNR per lenslet (dB)";
+                angles.key_position = "bottom left";
+                const bool cores = judged.front().direct.core.fraction < 1.0;
+                PlotSeries d{cores ? "direct, cores" : "direct", {}, {}}, o{cores ? "optimised, cores" : "optimised", {}, {}},
+                    dc{"direct, whole cells", {}, {}}, oc{"optimised, whole cells", {}, {}};
+                for (std::size_t k = 0; k < judged.size(); ++k) {
+                    const Judged& j = judged[k];
+                    table += std::to_string(k) + "," + format_fixed(j.direct.display_angle_deg, 4) + "," +
+                             (j.direct.inside_field_of_view ? "1" : "0") + "," + (j.direct.crosstalk_free ? "1" : "0") +
+                             "," + format_fixed(j.direct.comparison.psnr_db, 4) + "," +
+                             format_fixed(j.optimised.comparison.psnr_db, 4) + "," +
+                             format_fixed(j.direct.cell_comparison.psnr_db, 4) + "," +
+                             format_fixed(j.optimised.cell_comparison.psnr_db, 4) + "\n";
+                }
+                for (std::size_t k : order) {
+                    const Judged& j = judged[k];
+                    const double angle = j.direct.display_angle_deg;
+                    d.x.push_back(angle), d.y.push_back(j.direct.comparison.psnr_db);
+                    o.x.push_back(angle), o.y.push_back(j.optimised.comparison.psnr_db);
+                    dc.x.push_back(angle), dc.y.push_back(j.direct.cell_comparison.psnr_db);
+                    oc.x.push_back(angle), oc.y.push_back(j.optimised.cell_comparison.psnr_db);
+                }
+                angles.series = {d, o};
+                if (cores) angles.series.insert(angles.series.end(), {dc, oc});
+                write_text_file(dir / "directions.csv", table);
+                write_line_chart(angles, dir / "compare");
+            }
         }
         if (opt->json) {
             const nlohmann::json summary = {
@@ -263,6 +345,11 @@ void add_pattern_optimize_command(CLI::App& pattern) {
                 {"held_out_psnr_end_db", db(last.held_psnr)},
                 {"prepare_seconds", prepare_s},
                 {"solve_seconds", solve_s},
+                {"judged_directions", judged.size()},
+                {"judged_in_fov_psnr_direct_db", db(mean_db(in_fov.direct, in_fov.count))},
+                {"judged_in_fov_psnr_optimized_db", db(mean_db(in_fov.optimised, in_fov.count))},
+                {"judged_crosstalk_free_cell_psnr_direct_db", db(mean_db(clean_cells.direct, clean_cells.count))},
+                {"judged_crosstalk_free_cell_psnr_optimized_db", db(mean_db(clean_cells.optimised, clean_cells.count))},
             };
             std::printf("%s\n", summary.dump(2).c_str());
             return;
@@ -279,6 +366,12 @@ void add_pattern_optimize_command(CLI::App& pattern) {
         std::printf("  mean PSNR         optimised directions %.2f -> %.2f dB, held out %.2f -> %.2f dB\n",
                     first.fitted_psnr, last.fitted_psnr, first.held_psnr, last.held_psnr);
         std::printf("  time              %.1f s to prepare, %.1f s to solve\n", prepare_s, solve_s);
+        if (!judged.empty())
+            std::printf("  judged            mean PSNR inside the field of view %.2f dB direct, %.2f dB optimised "
+                        "(%d of %zu directions); whole cells in the crosstalk-free cone %.2f -> %.2f dB\n",
+                        mean_db(in_fov.direct, in_fov.count), mean_db(in_fov.optimised, in_fov.count), in_fov.count,
+                        judged.size(), mean_db(clean_cells.direct, clean_cells.count),
+                        mean_db(clean_cells.optimised, clean_cells.count));
     });
 }
 

@@ -25,7 +25,7 @@ void add_simulate_preview_command(CLI::App& simulate) {
         "preview", "The pictures of the preview page: the predicted display and the field relit in software over "
                    "a cone of light directions, with what the page needs to blend them as rfd does (Designs I and II)");
     struct Options {
-        std::string design, pattern, field, out;
+        std::string design, pattern, field, out, direct;
         PrintOptions print;
         optics::ModelChoice model = optics::ModelChoice::Auto;
         std::size_t count = 96;
@@ -46,6 +46,9 @@ void add_simulate_preview_command(CLI::App& simulate) {
         ->check(CLI::Range(1, 256));
     cmd->add_option("--pixels-per-lenslet", opt->pixels_per_lenslet, "Diffuser pixels per lenslet pitch (default 8)")
         ->check(CLI::Range(1.0, 64.0));
+    cmd->add_option("--direct", opt->direct,
+                    "The direct encoding PATTERN was optimised from (`rfd pattern optimize --from`): its pictures too, "
+                    "for the page's switch between the two");
     add_model_option(*cmd, opt->model);
     add_print_options(*cmd, opt->print);
     cmd->callback([opt] {
@@ -62,9 +65,19 @@ void add_simulate_preview_command(CLI::App& simulate) {
         options.model = optics::resolve(opt->model, simulator.optics(),
                                         {pattern.geometry().dot_x, pattern.geometry().dot_y}, 0.25)
                             .model;
-        const predict::PreviewSet set =
+        predict::PreviewSet set =
             predict::preview_set(simulator, comparison, reference.encoder().options().mapping, opt->count,
                                  degrees_to_radians(max_angle_deg), options);
+        if (!opt->direct.empty()) {
+            const print::PrintedTransparency direct = printed_pattern(design, opt->direct, opt->print);
+            if (std::abs(direct.tone().white - pattern.tone().white) > 1e-6 * pattern.tone().white)
+                throw InputError(SourceLocation{opt->direct}, "--direct: not the pattern '" + opt->pattern +
+                                                                  "' was optimised from (another rfd:white)");
+            const predict::DisplayComparison direct_comparison(simulator, direct, reference.encoder(), direct.tone());
+            set.predicted_direct = predict::preview_set(simulator, direct_comparison, reference.encoder().options().mapping,
+                                                        opt->count, degrees_to_radians(max_angle_deg), options)
+                                       .predicted;  // the same scale: the relit pictures set it
+        }
         project::write_preview_data(set, design.name, opt->out);
         std::printf("wrote %s/data.js: %zu light directions up to %.1f deg from the display's axis (display frame), "
                     "pictures of %d x %d lenslets, %s model, %d rays per side; scale %.6g (exposure %.4f stops)\n",

@@ -524,6 +524,30 @@ std::vector<double> direction_psnr(const DisplayOperator& op, const std::vector<
     return psnr;
 }
 
+NodeTransparency::NodeTransparency(const NodeGrid& nodes, std::vector<double> u, double black)
+    : nodes_(nodes), u_(std::move(u)), black_(black) {
+    RFD_CHECK(u_.size() == nodes.size() && black >= 0.0 && black < 1.0);
+}
+
+void NodeTransparency::sample(std::span<const Eigen::Vector2d> points, std::span<float> out) const {
+    RFD_CHECK(out.size() == points.size() * 3);
+    const patterns::PatternGeometry& g = nodes_.geometry();
+    parallel_for_chunks(points.size(), 1 << 12, [&](std::size_t begin, std::size_t end) {
+        NodeGrid::Stencil s;
+        for (std::size_t k = begin; k < end; ++k) {
+            const double fx = points[k].x() / g.dot_x + 0.5 * g.width, fy = 0.5 * g.height - points[k].y() / g.dot_y;
+            const bool on_sheet = fx >= 0.0 && fy >= 0.0 && fx < g.width && fy < g.height;
+            const bool printed = on_sheet && nodes_.dot_stencil(static_cast<int>(fx), static_cast<int>(fy), s);
+            for (std::size_t c = 0; c < 3; ++c) {
+                double u = 0.0;
+                if (printed)
+                    for (int n = 0; n < 4; ++n) u += s.weight[n] * u_[s.index[n] + c];
+                out[k * 3 + c] = on_sheet ? static_cast<float>(black_ + (1.0 - black_) * u) : 0.0f;
+            }
+        }
+    });
+}
+
 NodePattern::NodePattern(const NodeGrid& nodes, std::vector<double> u, int channels, double white, double brightness)
     : nodes_(nodes), u_(std::move(u)), channels_(channels), scale_(white / brightness) {
     RFD_CHECK(u_.size() == nodes.size() && (channels == 1 || channels == 3) && white > 0.0 && brightness > 0.0);

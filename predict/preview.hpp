@@ -34,6 +34,9 @@ struct PreviewRim {
 struct PreviewSet {
     std::vector<Eigen::Vector3d> directions;  ///< display frame, toward the light, unit
     std::vector<Image> predicted, relit;      ///< per lenslet (whole cells), 3 channels, times `scale`
+    /// The predicted pictures of a second pattern of the same field (the direct encoding
+    /// beside an optimised one), same directions and scale; empty when there is none.
+    std::vector<Image> predicted_direct;
     double scale = 1.0;                       ///< the compared values times this: the brightest relit value is 1
     double max_angle_deg = 0.0;               ///< the cone the directions cover
     std::vector<std::array<std::size_t, 3>> triangles;         ///< of the directions' triangulation

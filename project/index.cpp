@@ -120,10 +120,18 @@ std::vector<Section> instructions(const Project& project, const fs::path& out) {
         predicted.items.push_back({"Each compared light: predicted | relit | difference x 4 (in the order of "
                                    "predict/compare/directions.csv).",
                                    {"predict/compare/contact_sheet.png"}});
+    if (made(out, "predict/optimize/compare.png"))
+        predicted.items.push_back({"The optimised pattern against the direct encoding it started from, as the "
+                                   "simulator judges them per light (directions.csv), and the optimiser's progress "
+                                   "(iterations.csv).",
+                                   {"predict/optimize/compare.png", "predict/optimize/convergence.png"}});
     if (made(out, "predict/tolerance"))
         predicted.items.push_back({"How precisely to assemble it (summary.txt and a chart per error).",
                                    {"predict/tolerance/summary.txt"}});
-    predicted.items.push_back({"The pattern, scaled down for the screen.", {"pattern.png"}});
+    predicted.items.push_back({made(out, "pattern_optimized.exr")
+                                   ? "The direct encoding the optimised pattern started from, scaled down for the screen."
+                                   : "The pattern, scaled down for the screen.",
+                               {"pattern.png"}});
     sections.push_back(predicted);
     return sections;
 }

@@ -121,7 +121,24 @@ std::vector<Step> plan(const Project& p, const fs::path& out) {
     if (p.source.scale) encode.arguments.insert(encode.arguments.end(), {"--scale", format_number(*p.source.scale, 17)});
     steps.push_back(std::move(encode));
 
-    const std::string pattern = o + "pattern.exr";
+    // What is printed and predicted: the direct encoding, or the pattern optimised from it.
+    std::string pattern = o + "pattern.exr";
+    fs::path pattern_file = out / "pattern.exr";
+    if (const auto& opt = p.optimization) {
+        Step optimize{"optimize",
+                      "the pattern chosen through the simulator (pattern_optimized.exr), from the direct encoding; "
+                      "its report in predict/optimize",
+                      {"pattern", "optimize", design, field.string(), "--from", o + "pattern.exr", "--out",
+                       o + "pattern_optimized.exr", "--iterations", std::to_string(opt->iterations), "--spacing",
+                       format_number(opt->spacing_mm), "--core-weight", format_number(opt->core_weight),
+                       "--report", o + "predict/optimize", "--judge-sweep", std::to_string(p.outputs.compare_sweep)},
+                      {p.design, out / "pattern.exr"},
+                      {"pattern_optimized.exr", "predict/optimize"}};
+        optimize.inputs.insert(optimize.inputs.end(), field_inputs.begin(), field_inputs.end());
+        steps.push_back(std::move(optimize));
+        pattern = o + "pattern_optimized.exr";
+        pattern_file = out / "pattern_optimized.exr";
+    }
     const int sheets = print::load_printer(p.printer).sheets;
     for (const std::string& format : p.outputs.sheet_formats)
         for (int side = 0; side < sheets; ++side) {
@@ -131,7 +148,7 @@ std::vector<Step> plan(const Project& p, const fs::path& out) {
                                  : "the mirrored back sheet to print (" + name + "), laid behind the front one",
                        {"print", "sheet", design, pattern, "--copies", std::to_string(p.outputs.copies), "--out",
                         o + "print/" + name},
-                       {p.design, out / "pattern.exr"},
+                       {p.design, pattern_file},
                        {"print/" + name}};
             if (side == 1) sheet.arguments.push_back("--mirror");
             if (format == p.outputs.sheet_formats.front()) {  // one picture per side, whatever the formats
@@ -164,22 +181,27 @@ std::vector<Step> plan(const Project& p, const fs::path& out) {
                          "the predicted display beside the field relit in software, over a sweep of light directions",
                          {"simulate", "compare", design, pattern, field.string(), "--sweep",
                           std::to_string(p.outputs.compare_sweep), "--out", o + "predict/compare"},
-                         {p.design, out / "pattern.exr"},
+                         {p.design, pattern_file},
                          {"predict/compare"}});
     if (p.outputs.compare_sweep > 0)
         steps.back().inputs.insert(steps.back().inputs.end(), field_inputs.begin(), field_inputs.end());
     if (p.outputs.tolerance)
         steps.push_back({"tolerance", "how precisely to assemble: the shift, rotation, pitch and spacer errors it tolerates",
                          {"simulate", "tolerance", design, pattern, "--out", o + "predict/tolerance"},
-                         {p.design, out / "pattern.exr"},
+                         {p.design, pattern_file},
                          {"predict/tolerance"}});
     if (p.outputs.preview_lights > 0) {
         steps.push_back({"preview", "the preview page's pictures: predicted and relit over the field of view",
                          {"simulate", "preview", design, pattern, field.string(), "--count",
                           std::to_string(p.outputs.preview_lights), "--out", o + "preview"},
-                         {p.design, out / "pattern.exr"},
+                         {p.design, pattern_file},
                          {"preview/data.js", "preview/predicted.png", "preview/relit.png"}});
         steps.back().inputs.insert(steps.back().inputs.end(), field_inputs.begin(), field_inputs.end());
+        if (p.optimization) {  // the page switches between the optimised pattern and the direct one
+            steps.back().arguments.insert(steps.back().arguments.end(), {"--direct", o + "pattern.exr"});
+            steps.back().inputs.push_back(out / "pattern.exr");
+            steps.back().outputs.push_back("preview/direct.png");
+        }
     }
     if (p.outputs.compare_sweep > 0) {
         Step verdict{"verdict", "the verdict: go, check or no-go, and the figures it rests on (verdict.json)",

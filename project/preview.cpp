@@ -61,6 +61,7 @@ void write_preview_data(const predict::PreviewSet& set, const std::string& desig
     const int columns = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(set.directions.size()))));
     write_image(folder / "predicted.png", tiled(set.predicted, columns));
     write_image(folder / "relit.png", tiled(set.relit, columns));
+    if (!set.predicted_direct.empty()) write_image(folder / "direct.png", tiled(set.predicted_direct, columns));
 
     nlohmann::json directions = nlohmann::json::array(), triangles = nlohmann::json::array(),
                    planes = nlohmann::json::array(), rims = nlohmann::json::array();
@@ -74,7 +75,7 @@ void write_preview_data(const predict::PreviewSet& set, const std::string& desig
         rims.push_back({{"phi_deg", rim.phi_deg},
                         {"wrap_over_deg", optional_json(rim.wrap_over_deg)},
                         {"crosstalk_deg", optional_json(rim.crosstalk_deg)}});
-    const nlohmann::json data = {
+    nlohmann::json data = {
         {"design", design_name},
         {"frame", "display: z the display's axis, toward the light"},
         {"max_angle_deg", set.max_angle_deg},
@@ -87,6 +88,8 @@ void write_preview_data(const predict::PreviewSet& set, const std::string& desig
         {"rims", rims},
         {"predicted", "data:image/png;base64," + base64(read_bytes(folder / "predicted.png"))},
         {"relit", "data:image/png;base64," + base64(read_bytes(folder / "relit.png"))}};
+    if (!set.predicted_direct.empty())
+        data["predicted_direct"] = "data:image/png;base64," + base64(read_bytes(folder / "direct.png"));
     write_text_file(folder / "data.js",
                     "// Written by rfd simulate preview: what index.html's light control blends.\n"
                     "window.RFD_PREVIEW = " + data.dump() + ";\n");

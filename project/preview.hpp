@@ -8,6 +8,8 @@
 //                          rims, scale, and the two atlases as data: URIs
 //   FOLDER/predicted.png   the predicted pictures, one tile per direction (sRGB)
 //   FOLDER/relit.png       the field relit in software, the same tiles
+//   FOLDER/direct.png      the direct encoding's predicted pictures, when the pattern was
+//                          optimised from it (the page then switches between the two)
 //   FOLDER/preview.js      the page's script (project/assets/preview.js)
 //   FOLDER/holder.js       the holder's STLs (base64), when given
 //   FOLDER/vendor/         three.js and its STL loader and orbit controls (Debian's

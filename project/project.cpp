@@ -159,6 +159,14 @@ Project load_project(const fs::path& file) {
         project.encoding = read_encoding(*encode);
         encode->finish();
     }
+    if (auto optimize = root.optional_table("optimize")) {
+        Optimization o;
+        o.iterations = static_cast<int>(optimize->optional_integer("iterations", 0, 100000).value_or(o.iterations));
+        o.spacing_mm = optimize->optional_number("spacing_mm", 0.005, 2.0).value_or(o.spacing_mm);
+        o.core_weight = optimize->optional_number("core_weight", 0.0, 1e6).value_or(o.core_weight);
+        optimize->finish();
+        project.optimization = o;
+    }
     if (auto make = root.optional_table("make")) {
         project.outputs = read_outputs(*make);
         make->finish();

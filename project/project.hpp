@@ -7,6 +7,8 @@
 //              resolution; region, scale
 //   [encode]   tilt_deg, turn_deg, angle_scale, model, interpolation, fit, margin_mm
 //   [make]     sheets, copies, moire, wedge, holder, compare_sweep, tolerance, preview_lights
+//   [optimize] iterations, spacing_mm, core_weight: present, the pattern is optimised
+//              through the simulator (rfd pattern optimize) and the sheets print that one
 //
 // Paths are relative to the project file. Every key is checked like every other input
 // file: an unknown key or a value out of range is an error naming file, line and key.
@@ -50,6 +52,13 @@ struct Outputs {
     int preview_lights = 96;  ///< directions precomputed for the preview page (0: no light control)
 };
 
+/// `rfd pattern optimize`'s settings, when the project asks for an optimised pattern.
+struct Optimization {
+    int iterations = 40;
+    double spacing_mm = 0.1;
+    double core_weight = 0.0;
+};
+
 struct Project {
     std::filesystem::path file;      ///< the project file itself
     std::string name;
@@ -59,6 +68,7 @@ struct Project {
     Source source;
     Encoding encoding;
     Outputs outputs;
+    std::optional<Optimization> optimization;  ///< the [optimize] table, when present
 };
 
 /// Reads and checks a project file. Bundled names: designs ("design1": designs/design1.toml),

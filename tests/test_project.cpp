@@ -3,6 +3,7 @@
 // stand-in runner whose outputs depend on exactly the files a step names.
 
 #include <fstream>
+#include <map>
 #include <set>
 #include <string>
 
@@ -166,6 +167,28 @@ TEST(ProjectPlan, EveryStepReadsOnlyWhatEarlierStepsOrTheUserMade) {
     }
     // inkjet_720 prints one sheet: no back sheet.
     EXPECT_THAT(names, ::testing::ElementsAre("pattern", "sheet_front_pdf", "moire", "wedge", "holder", "compare", "tolerance", "preview", "verdict"));
+}
+
+// With [optimize], the optimised pattern is printed and predicted, and the preview page
+// gets the direct encoding's pictures beside it.
+TEST(ProjectPlan, AnOptimisedPatternIsWhatIsPrintedAndPredicted) {
+    TempDir dir;
+    write_small_field(dir / "field", 0.5f);
+    write(dir / "p.toml", kProject + "\n[optimize]\niterations = 12\ncore_weight = 30\n");
+    const Project project = load_project(dir / "p.toml");
+    ASSERT_TRUE(project.optimization);
+    EXPECT_EQ(project.optimization->iterations, 12);
+    EXPECT_EQ(project.optimization->spacing_mm, 0.1);
+    std::map<std::string, std::string> lines;
+    for (const Step& step : plan(project, dir / "out")) lines[step.name] = command_line(step);
+    ASSERT_TRUE(lines.count("optimize"));
+    EXPECT_THAT(lines["optimize"], AllOf(HasSubstr("pattern optimize"), HasSubstr("--from " + (dir / "out").string() + "/pattern.exr"),
+                                         HasSubstr("--iterations 12"), HasSubstr("--core-weight 30")));
+    for (const char* step : {"sheet_front_pdf", "compare", "tolerance", "preview"})
+        EXPECT_THAT(lines[step], HasSubstr("pattern_optimized.exr")) << step;
+    EXPECT_THAT(lines["preview"], HasSubstr("--direct " + (dir / "out").string() + "/pattern.exr"));
+    write(dir / "p.toml", kProject + "\n[optimize]\nspacing_mm = 0\n");
+    EXPECT_THAT(error_of([&] { load_project(dir / "p.toml"); }), HasSubstr("optimize.spacing_mm"));
 }
 
 TEST(Make, ASecondRunSkipsEveryStepAndAChangedFieldRemakesOnlyWhatDependsOnIt) {

@@ -93,7 +93,9 @@
   }
   page.setLight = setLight;
 
-  let predicted = null, relit = null;
+  // With an optimised pattern, the direct encoding's pictures too, and a switch between them.
+  let predicted = null, relit = null, direct = null;
+  page.pattern = "optimised";
   const canvases = {
     relit: document.getElementById("relit"),
     predicted: document.getElementById("predicted"),
@@ -169,7 +171,7 @@
       "light " + page.light.theta.toFixed(1) + "\u00b0 from the display's axis, azimuth " +
       page.light.phi.toFixed(1) + "\u00b0";
     if (!predicted || !page.weights) return;
-    const p = blend(predicted), r = blend(relit);
+    const p = blend(page.pattern === "direct" && direct ? direct : predicted), r = blend(relit);
     const difference = new Float32Array(p.length);
     for (let i = 0; i < p.length; ++i) difference[i] = Math.abs(p[i] - r[i]);
     show(canvases.predicted, p, 1);
@@ -207,13 +209,39 @@
     setLight(Math.hypot(x, y) / DEG, Math.atan2(y, x) / DEG);
   });
 
-  setLight(0, 0);
-  Promise.all([decode(data.predicted), decode(data.relit)]).then(([p, r]) => {
-    predicted = p;
-    relit = r;
+  if (data.predicted_direct) {
+    const figure = canvases.predicted.parentElement;
+    const choice = document.createElement("div");
+    choice.id = "pattern-choice";
+    for (const [value, label] of [["optimised", "optimised pattern"], ["direct", "direct encoding"]]) {
+      const option = document.createElement("label");
+      const input = document.createElement("input");
+      input.type = "radio";
+      input.name = "pattern";
+      input.value = value;
+      input.checked = value === page.pattern;
+      input.addEventListener("change", () => setPattern(value));
+      option.append(input, " " + label + " ");
+      choice.append(option);
+    }
+    figure.append(choice);
+  }
+  function setPattern(value) {
+    page.pattern = value;
+    for (const input of document.querySelectorAll("#pattern-choice input")) input.checked = input.value === value;
     draw();
-    page.ready = true;
-  });
+  }
+  page.setPattern = setPattern;
+
+  setLight(0, 0);
+  Promise.all([decode(data.predicted), decode(data.relit), data.predicted_direct ? decode(data.predicted_direct) : null])
+    .then(([p, r, d]) => {
+      predicted = p;
+      relit = r;
+      direct = d;
+      draw();
+      page.ready = true;
+    });
 
   // The holder in 3D, when three.js was vendored beside this page.
   const webgl = (() => {

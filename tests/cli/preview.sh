@@ -6,6 +6,8 @@
 #  - dragged between directions, then moved with arrow keys: the blend of its neighbours,
 #    within the interpolation error on this smooth field (PSNR >= 40 dB against simulate;
 #    51.7 dB measured);
+#  - switched to the direct encoding the pattern was optimised from: equal to rfd simulate
+#    of the direct pattern on a precomputed direction, as above;
 #  - no console message and no uncaught error from the page.
 # Usage: preview.sh RFD CHROMIUM OIIOTOOL SOURCE_DIR WORK_DIR
 set -euo pipefail
@@ -22,7 +24,7 @@ fail() {
 }
 
 # A smooth field (the spheres under 60 lights) on Design II, with nothing but the pattern
-# and the preview made.
+# (optimised, briefly) and the preview made.
 "$rfd" --quiet capture render "$source_dir/scenes/spheres.toml" --lights 60 --resolution 48x36 \
   --out "$work/field" > /dev/null
 cat > "$work/project.toml" <<TOML
@@ -39,6 +41,9 @@ holder = false
 compare_sweep = 0
 tolerance = false
 preview_lights = 48
+[optimize]
+iterations = 4
+spacing_mm = 0.25
 TOML
 "$rfd" make "$work/project.toml" --out "$work/out" > "$work/make.txt"
 
@@ -59,11 +64,11 @@ value() { sed -e "s/.*\"$1\":\([-0-9.e]*\).*/\1/" "$work/$2.json"; }
 
 # simulate NAME: rfd simulate at the light the page reports, at the page's scale.
 simulate() {
-  local theta phi stops
+  local theta phi stops pattern="${2:-pattern_optimized.exr}"
   theta=$(value theta "$1")
   phi=$(value phi "$1")
   stops=$(awk -v s="$(value scale "$1")" 'BEGIN { printf "%.10f", log(s) / log(2) }')
-  "$rfd" --quiet simulate designs/design2.toml "$work/out/pattern.exr" --light "$theta,$phi" --exposure "$stops" \
+  "$rfd" --quiet simulate designs/design2.toml "$work/out/$pattern" --light "$theta,$phi" --exposure "$stops" \
     --lenslets "$work/$1_simulate.png" --out "$work/$1_diffuser.exr" > /dev/null
 }
 
@@ -72,6 +77,14 @@ open_page "target=7" onto
 simulate onto
 "$oiiotool" "$work/onto_page.png" --ch R,G,B "$work/onto_simulate.png" --diff --fail 0.0079 --failpercent 0 > "$work/onto.diff" \
   || fail "on a precomputed direction the page differs from rfd simulate: $(cat "$work/onto.diff")"
+
+open_page "target=7&pattern=direct" direct
+grep -q '"pattern":"direct"' "$work/direct.json" || fail "the page did not switch to the direct encoding"
+simulate direct pattern.exr
+"$oiiotool" "$work/direct_page.png" --ch R,G,B "$work/direct_simulate.png" --diff --fail 0.0079 --failpercent 0 > "$work/direct.diff" \
+  || fail "switched to the direct encoding the page differs from rfd simulate of it: $(cat "$work/direct.diff")"
+"$oiiotool" "$work/direct_page.png" "$work/onto_page.png" --diff > "$work/switch.diff" \
+  && fail "the direct encoding and the optimised pattern show the same picture"
 
 open_page "drag=0.45,0.3&keys=3" between
 simulate between
