@@ -12,6 +12,7 @@
 #include "core/progress.hpp"
 #include "core/sphere.hpp"
 #include "core/units.hpp"
+#include "predict/optimize.hpp"
 
 namespace rfd::predict {
 namespace {
@@ -118,23 +119,18 @@ DisplayComparison::DisplayComparison(const optics::DisplaySimulator& simulator, 
 }
 
 Image DisplayComparison::transmittance(const Eigen::Vector3d& field_direction) const {
-    const Eigen::Vector3d v = field_direction.normalized();
-    const Eigen::Vector3d d = encoder_.options().mapping.display_direction(v);
+    const Eigen::Vector3d d = encoder_.options().mapping.display_direction(field_direction.normalized());
     const optics::Lattice& lattice = encoder_.lattice();
     Image out(lattice.count_x(), lattice.count_y(), 3);
     if (!(d.z() > 0.0)) return out;  // no light reaches the display from there
-    const double cos_kappa = d.z();
-    const relight::InterpolationWeights w = encoder_.interpolator().weights(v, encoder_.options().interpolation);
-    const int channels = encoder_.channels();
+    // t' = b + (1 - b) u: the black level on the desired transmittance.
+    const std::vector<double> u = desired_transmittance(encoder_, tone_, d);
+    const double black = tone_.stack_transmittance(0.0);
     for (int j = 0; j < lattice.count_y(); ++j)
         for (int i = 0; i < lattice.count_x(); ++i)
-            for (int c = 0; c < 3; ++c) {
-                const int channel = channels == 3 ? c : 0;
-                double value = 0.0;
-                for (std::size_t k = 0; k < w.count; ++k)
-                    value += w.weight[k] * encoder_.lenslet_sample({i, j}, w.index[k], channel);
-                out.at(i, lattice.count_y() - 1 - j, c) = static_cast<float>(tone_.stack_transmittance(value / cos_kappa));
-            }
+            for (int c = 0; c < 3; ++c)
+                out.at(i, lattice.count_y() - 1 - j, c) = static_cast<float>(
+                    black + (1.0 - black) * u[lattice.linear_index({i, j}) * 3 + static_cast<std::size_t>(c)]);
     return out;
 }
 
