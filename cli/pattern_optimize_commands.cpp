@@ -25,6 +25,7 @@
 #include "predict/compare.hpp"
 #include "predict/optimize.hpp"
 #include "print/printed.hpp"
+#include "relight/field.hpp"
 
 namespace rfd::cli {
 namespace {
@@ -73,7 +74,7 @@ void add_pattern_optimize_command(CLI::App& pattern) {
         "optimize", "Choose a Design I/II pattern through the display's own forward model: the printable pattern whose "
                     "predicted output comes closest to the field relit in software, over the field of view");
     struct Options {
-        std::string design, field, from, out, report, crop;
+        std::string design, field, from, out, report, crop, lights = "sweep";
         PrintOptions print;
         optics::ModelChoice model = optics::ModelChoice::Auto;
         double spacing = 0.1, tolerance = 1e-5, core_weight = 0.0;
@@ -89,6 +90,10 @@ void add_pattern_optimize_command(CLI::App& pattern) {
                     "its values are the start")
         ->required();
     cmd->add_option("--out", opt->out, "Optimised pattern file (.exr)")->required();
+    cmd->add_option("--lights", opt->lights,
+                    "The light directions to fit: sweep (the default: one per node inside a lenslet's cell, each "
+                    "weighted by the solid angle it stands for) or a light file (.lp, the field's frame: the lights "
+                    "the display will meet, equally weighted; those outside its field of view are left out)");
     cmd->add_option("--spacing", opt->spacing,
                     "Node spacing on the pattern plane, mm: the pattern's unknowns, per lenslet (default 0.1)")
         ->check(positive_number());
@@ -137,7 +142,20 @@ void add_pattern_optimize_command(CLI::App& pattern) {
         options.model = optics::resolve(opt->model, simulator.optics(),
                                         {direct.geometry().dot_x, direct.geometry().dot_y})
                             .model;
-        const predict::SweepDirections fit_sweep = predict::sweep_directions(encoder, nodes, false);
+        predict::SweepDirections fit_sweep;
+        if (opt->lights == "sweep") {
+            fit_sweep = predict::sweep_directions(encoder, nodes, false);
+        } else {
+            const predict::DisplayComparison fov(simulator, direct, encoder, tone);
+            for (const relight::LightEntry& light : relight::read_light_file(opt->lights)) {
+                const Eigen::Vector3d d = encoder.options().mapping.display_direction(light.direction);
+                if (d.z() > 0.0 && fov.inside_field_of_view(d)) fit_sweep.display.push_back(d.normalized());
+            }
+            if (fit_sweep.display.empty())
+                throw InputError(SourceLocation{opt->lights}, "--lights: no light of the file lies inside the display's "
+                                                              "field of view (through the pattern's tilt and turn)");
+            fit_sweep.weights.assign(fit_sweep.display.size(), 1.0);
+        }
         const predict::SweepDirections held_sweep = predict::sweep_directions(encoder, nodes, true);
         if (fit_sweep.display.empty()) throw InputError("--spacing: no node lies inside a lenslet's cell; use a smaller one");
 
@@ -208,6 +226,7 @@ void add_pattern_optimize_command(CLI::App& pattern) {
         attributes["optimized_rays"] = std::to_string(opt->rays);
         attributes["optimized_model"] = std::string(optics::to_string(options.model));
         attributes["optimized_directions"] = std::to_string(fit_sweep.display.size());
+        attributes["optimized_lights"] = opt->lights;
         attributes["optimized_brightness"] = format_number(tone.brightness);
         attributes["optimized_core_weight"] = format_number(opt->core_weight);
         if (fitted) attributes["optimized_crop"] = opt->crop;

@@ -34,6 +34,17 @@ if(NOT first STREQUAL second)
   message(FATAL_ERROR "the same inputs gave different patterns")
 endif()
 
+# A user's light set: two lights inside the field of view, one far outside it.
+file(WRITE ${OUT}/lights.lp "3\na.png 0 0 1\nb.png 0.1 0.05 0.99\nc.png 0.99 0 0.1\n")
+run(0 ${optimize} --out ${OUT}/lights.exr --lights ${OUT}/lights.lp --json)
+string(JSON directions GET "${last_output}" directions)
+if(NOT directions EQUAL 2)
+  message(FATAL_ERROR "expected the 2 lights inside the field of view, got ${directions}")
+endif()
+file(WRITE ${OUT}/outside.lp "1\nc.png 0.99 0 0.1\n")
+run(2 ${optimize} --out ${OUT}/bad.exr --lights ${OUT}/outside.lp)
+expect("outside.lp.*no light of the file lies inside")
+
 run(2 ${base} --out ${OUT}/bad.exr --spacing 0.001)
 expect("nodes per side of a lenslet")
 run(2 ${base} --out ${OUT}/bad.exr --crop 4,4,9,9)
