@@ -47,7 +47,7 @@
 //   NodeGrid nodes(lattice, geometry, 0.1);
 //   DisplayOperator A(simulator, nodes, directions, options);
 //   OptimizationProblem problem(A, targets, weights);
-//   OptimizationResult r = solve_bounded(problem, start, {});
+//   OptimizationResult r = solve(problem, direct_nodes(nodes, encoder, tone), {});
 
 #include <array>
 #include <cstdint>

@@ -340,7 +340,9 @@ struct LetterCorrelations {
     std::vector<std::vector<double>> excess_cores;  // [shown letter][other letter]
 };
 
-LetterCorrelations sig08_correlations(std::optional<std::pair<double, double>> optimise /* spacing, core weight */) {
+// `judge_rays` per side: cores need 32 (test_compare), whole cells are within a dB at 16.
+LetterCorrelations sig08_correlations(std::optional<std::pair<double, double>> optimise /* spacing, core weight */,
+                                      int judge_rays) {
     ProceduralOptions letters;
     letters.text = "SIG08";
     letters.width = 48;
@@ -363,7 +365,7 @@ LetterCorrelations sig08_correlations(std::optional<std::pair<double, double>> o
         printed = print_source(NodePattern(nodes, r.u, f.encoder->channels(), f.tone.white, 1.0), f.tone);
     }
     const DisplayComparison comparison(simulator, *printed, *f.encoder, f.tone);
-    optics::SimulationOptions judge = exact(32);
+    optics::SimulationOptions judge = exact(judge_rays);
     judge.pixels_per_pitch = 16.0;
     const std::size_t n = letters.text.size();
     std::vector<Image> pictures;
@@ -384,16 +386,16 @@ LetterCorrelations sig08_correlations(std::optional<std::pair<double, double>> o
 double mean(const std::vector<double>& v) { return std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size()); }
 
 // Fitting whole cells (the default) shows each letter at the display's resolution at least
-// as well as the direct pattern (mean correlation 0.983 -> 0.989 measured; no letter more
+// as well as the direct pattern (mean correlation 0.980 -> 0.987 measured; no letter more
 // than 0.005 lower). With the cores weighed in (30 times the cells, nodes 0.15 mm apart) the
 // letters pass test_compare's criterion for the direct pattern on the cores: each correlates
 // > 0.99 with its own picture and no more than + 0.02 with another than the two share.
 TEST(OptimizedPattern, Sig08LettersStillAppearEachUnderItsOwnLightOnly) {
-    const LetterCorrelations direct = sig08_correlations(std::nullopt);
-    const LetterCorrelations cells = sig08_correlations(std::make_pair(0.2, 0.0));
+    const LetterCorrelations direct = sig08_correlations(std::nullopt, 16);
+    const LetterCorrelations cells = sig08_correlations(std::make_pair(0.2, 0.0), 16);
     EXPECT_GT(mean(cells.own_cells), mean(direct.own_cells) + 0.003);
     for (std::size_t k = 0; k < direct.own_cells.size(); ++k) EXPECT_GT(cells.own_cells[k], direct.own_cells[k] - 0.005) << k;
-    const LetterCorrelations cores = sig08_correlations(std::make_pair(0.15, 30.0));
+    const LetterCorrelations cores = sig08_correlations(std::make_pair(0.15, 30.0), 32);
     for (std::size_t k = 0; k < cores.own_cores.size(); ++k) {
         EXPECT_GT(cores.own_cores[k], 0.99) << k;
         for (double excess : cores.excess_cores[k]) EXPECT_LT(excess, 0.02) << k;
