@@ -164,14 +164,20 @@ void add_pattern_optimize_command(CLI::App& pattern) {
         predict::DisplayOperator probe(simulator, nodes, {fit_sweep.display.front()}, options);
         if (fitted) sources = fitted->grown(probe.reach_rows() + 1);
         const bool fit_cores = opt->core_weight > 0.0;
+        Progress preparing("tracing and targets", 5);
         const predict::DisplayOperator fit_op(simulator, nodes, fit_sweep.display, options, sources, fit_cores);
+        preparing.advance();
         const predict::DisplayOperator held_op(simulator, nodes, held_sweep.display, options, sources);
+        preparing.advance();
         const std::vector<double> fit_target =
             predict::optimization_targets(fit_op, fit_op.flat_field(), encoder, tone);
+        preparing.advance();
         const std::vector<double> held_target =
             predict::optimization_targets(held_op, held_op.flat_field(), encoder, tone);
+        preparing.advance();
         const predict::OptimizationProblem problem(fit_op, fit_target, fit_sweep.weights, fitted, opt->core_weight);
         const std::vector<double> u0 = predict::nodes_from_pattern(nodes, direct, tone);
+        preparing.finish();
         const double prepare_s = seconds();
 
         struct ChartPoint {
@@ -185,13 +191,16 @@ void add_pattern_optimize_command(CLI::App& pattern) {
         auto fit_mean = [&](std::span<const double> u) {
             return mean_of(predict::direction_psnr(fit_op, fit_target, u, fitted));
         };
-        const double f0 = problem.objective([&] {
-            std::vector<double> y(fit_op.output_size());
-            fit_op.forward(u0, y);
-            return y;
-        }());
-        points.push_back({0, seconds(), f0, fit_mean(u0), held_mean(u0)});
+        // A chart point: the solver's time so far (without these evaluations) and the mean PSNR
+        // over the fitted and the held-out directions.
         double eval_seconds = 0.0;
+        auto record = [&](int it, double f, std::span<const double> u) {
+            const double now = seconds() - eval_seconds;
+            const auto t0 = Clock::now();
+            points.push_back({it, now, f, fit_mean(u), held_mean(u)});
+            eval_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
+        };
+        record(0, std::nan(""), u0);  // f at the start: the solver's first figure, below
         predict::SolverOptions solver;
         solver.iterations = opt->iterations;
         solver.tolerance = opt->tolerance;
@@ -199,20 +208,15 @@ void add_pattern_optimize_command(CLI::App& pattern) {
         Progress progress("optimizing", static_cast<std::size_t>(opt->iterations));
         solver.on_iteration = [&](int it, double f, std::span<const double> u) {
             progress.advance();
-            if (it % opt->chart_every != 0) return;
-            const auto t0 = Clock::now();
-            const double now = seconds() - eval_seconds;
-            const double fit = fit_mean(u), held = held_mean(u);
-            eval_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
-            points.push_back({it, now, f, fit, held});
+            if (it % opt->chart_every == 0) record(it, f, u);
         };
         const auto solve_start = Clock::now();
+        const double start_eval = eval_seconds;
         predict::OptimizationResult result = predict::solve(problem, u0, solver);
         progress.finish();
-        const double solve_s = std::chrono::duration<double>(Clock::now() - solve_start).count() - eval_seconds;
-        if (points.back().iteration != result.iterations)
-            points.push_back({result.iterations, seconds() - eval_seconds, result.objective.back(), fit_mean(result.u),
-                              held_mean(result.u)});
+        points.front().objective = result.objective.front();
+        const double solve_s = std::chrono::duration<double>(Clock::now() - solve_start).count() - (eval_seconds - start_eval);
+        if (points.back().iteration != result.iterations) record(result.iterations, result.objective.back(), result.u);
         for (double v : result.u)
             if (!std::isfinite(v)) throw Error("the optimiser produced a value that is not a number");
 
