@@ -20,25 +20,19 @@
 #include "patterns/encode.hpp"
 #include "patterns/procedural.hpp"
 #include "print/printer.hpp"
+#include "tests/support/displays.hpp"
 #include "tests/support/error_of.hpp"
 
 namespace rfd::predict {
 namespace {
 
 using namespace rfd::patterns;
+using rfd::testing::design2;
+using rfd::testing::pearson;
+using rfd::testing::small_design1;
 
 using ::testing::HasSubstr;
 using rfd::testing::error_of;
-
-const std::filesystem::path kDesigns = std::filesystem::path(RFD_SOURCE_DIR) / "designs";
-
-optics::Design design2() { return optics::load_design(kDesigns / "design2.toml"); }
-
-// Design I with fewer lenslets (same lenslets, pitch, planes and printer): the preset's
-// 63 x 73 lenslets make a 150 mm pattern, too large for a unit test.
-optics::Design small_design1(int count_x, int count_y) {
-    return optics::with_lenslet_count(optics::load_design(kDesigns / "design1.toml"), count_x, count_y);
-}
 
 // A field encoded and "printed" in memory: the encoder, and its pattern through the tone
 // mapping as the transparency the simulator sees (optionally shifted on the sheet by
@@ -102,18 +96,6 @@ optics::SimulationOptions converged() {
     return options;
 }
 
-double pearson(const Image& a, const Image& b) {
-    const auto x = a.samples(), y = b.samples();
-    const double n = static_cast<double>(x.size());
-    const double mx = std::accumulate(x.begin(), x.end(), 0.0) / n, my = std::accumulate(y.begin(), y.end(), 0.0) / n;
-    double sxy = 0, sxx = 0, syy = 0;
-    for (std::size_t k = 0; k < x.size(); ++k) {
-        sxy += (x[k] - mx) * (y[k] - my);
-        sxx += (x[k] - mx) * (x[k] - mx);
-        syy += (y[k] - my) * (y[k] - my);
-    }
-    return sxy / std::sqrt(sxx * syy);
-}
 
 TEST(CompareImages, KnownAnswers) {
     Image reference(3, 2, 3), prediction(3, 2, 3);

@@ -15,6 +15,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include "core/sphere.hpp"
 #include "core/units.hpp"
 #include "optics/display.hpp"
 #include "patterns/encode.hpp"
@@ -22,20 +23,16 @@
 #include "predict/compare.hpp"
 #include "predict/optimize.hpp"
 #include "print/printer.hpp"
-#include "core/sphere.hpp"
+#include "tests/support/displays.hpp"
 #include "tests/support/lambertian_sphere.hpp"
 
 namespace rfd::predict {
 namespace {
 
 using namespace rfd::patterns;
-
-const std::filesystem::path kDesigns = std::filesystem::path(RFD_SOURCE_DIR) / "designs";
-
-optics::Design design2() { return optics::load_design(kDesigns / "design2.toml"); }
-optics::Design small_design1(int count_x, int count_y) {
-    return optics::with_lenslet_count(optics::load_design(kDesigns / "design1.toml"), count_x, count_y);
-}
+using rfd::testing::design2;
+using rfd::testing::pearson;
+using rfd::testing::small_design1;
 
 PatternGeometry geometry_of(const optics::Design& design) {
     return pattern_geometry(design, design.printer.dpi_x, design.printer.dpi_y);
@@ -319,18 +316,6 @@ TEST(OptimizedPattern, DesignOneGainsAtLeastSixDecibelsOnDirectionsItWasNotFitte
         << "direct " << direct_sum / inside << " dB, optimised " << optimised_sum / inside << " dB";
 }
 
-double pearson(const Image& a, const Image& b) {
-    const auto x = a.samples(), y = b.samples();
-    const double n = static_cast<double>(x.size());
-    const double mx = std::accumulate(x.begin(), x.end(), 0.0) / n, my = std::accumulate(y.begin(), y.end(), 0.0) / n;
-    double sxy = 0, sxx = 0, syy = 0;
-    for (std::size_t k = 0; k < x.size(); ++k) {
-        sxy += (x[k] - mx) * (y[k] - my);
-        sxx += (x[k] - mx) * (x[k] - mx);
-        syy += (y[k] - my) * (y[k] - my);
-    }
-    return sxy / std::sqrt(sxx * syy);
-}
 
 // The SIG08 letters on Design II, direct and optimised, under each letter's own light: per
 // letter, the correlation of what the display shows (cores, whole cells) with every letter's
