@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cstddef>
+#include <cmath>
 #include <optional>
 #include <string>
 #include <utility>
@@ -28,6 +29,12 @@ namespace rfd::cli {
 /// A value for a JSON report, null when there is none.
 inline nlohmann::json json_or_null(const std::optional<double>& value) {
     return value ? nlohmann::json(*value) : nlohmann::json();
+}
+
+/// A figure for a JSON report, null when not finite: JSON cannot hold infinity (a PSNR of
+/// a perfect match) or NaN.
+inline nlohmann::json finite_or_null(double value) {
+    return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
 }
 
 /// Checks of a number option whose messages a user can read (CLI::PositiveNumber's names

@@ -7,7 +7,6 @@
 #include <cstdio>
 #include <limits>
 #include <memory>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -32,27 +31,15 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// --crop I,J,W,H: lenslets, from the bottom-left lenslet of the array.
+// --crop I,J,W,H: whole lenslets, from the bottom-left lenslet of the array.
 predict::LensletWindow parse_crop(const std::string& text, const optics::Lattice& lattice) {
-    std::stringstream in(text);
-    std::vector<int> values;
-    std::string item;
-    while (std::getline(in, item, ',')) {
-        std::size_t used = 0;
-        int value = -1;
-        try {
-            value = std::stoi(item, &used);
-        } catch (const std::exception&) {
-            used = 0;
-        }
-        if (used != item.size() || item.empty()) values.clear(), values.push_back(-1);
-        values.push_back(value);
-    }
-    if (values.size() != 4 || values[0] < 0 || values[1] < 0 || values[2] < 1 || values[3] < 1 ||
-        values[0] + values[2] > lattice.count_x() || values[1] + values[3] > lattice.count_y())
+    int i = 0, j = 0, w = 0, h = 0;
+    char tail = 0;
+    if (std::sscanf(text.c_str(), "%d,%d,%d,%d%c", &i, &j, &w, &h, &tail) != 4 || i < 0 || j < 0 || w < 1 || h < 1 ||
+        i + w > lattice.count_x() || j + h > lattice.count_y())
         throw InputError("--crop: expected I,J,W,H, whole lenslets inside the " + std::to_string(lattice.count_x()) +
                          " x " + std::to_string(lattice.count_y()) + " array, got '" + text + "'");
-    return {values[0], values[1], values[0] + values[2], values[1] + values[3]};
+    return {i, j, i + w, j + h};
 }
 
 // Over the directions with a finite PSNR: a direction whose picture is black (a letter
@@ -64,8 +51,6 @@ double mean_of(const std::vector<double>& values) {
         if (std::isfinite(v)) sum += v, ++count;
     return count ? sum / count : std::nan("");
 }
-
-nlohmann::json db(double value) { return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr); }
 
 }  // namespace
 
@@ -362,17 +347,17 @@ void add_pattern_optimize_command(CLI::App& pattern) {
                 {"converged", result.converged},
                 {"objective_start", first.objective},
                 {"objective_end", last.objective},
-                {"fitted_psnr_start_db", db(first.fitted_psnr)},
-                {"fitted_psnr_end_db", db(last.fitted_psnr)},
-                {"held_out_psnr_start_db", db(first.held_psnr)},
-                {"held_out_psnr_end_db", db(last.held_psnr)},
+                {"fitted_psnr_start_db", finite_or_null(first.fitted_psnr)},
+                {"fitted_psnr_end_db", finite_or_null(last.fitted_psnr)},
+                {"held_out_psnr_start_db", finite_or_null(first.held_psnr)},
+                {"held_out_psnr_end_db", finite_or_null(last.held_psnr)},
                 {"prepare_seconds", prepare_s},
                 {"solve_seconds", solve_s},
                 {"judged_directions", judged.size()},
-                {"judged_in_fov_psnr_direct_db", db(mean_db(in_fov.direct, in_fov.count))},
-                {"judged_in_fov_psnr_optimized_db", db(mean_db(in_fov.optimised, in_fov.count))},
-                {"judged_crosstalk_free_cell_psnr_direct_db", db(mean_db(clean_cells.direct, clean_cells.count))},
-                {"judged_crosstalk_free_cell_psnr_optimized_db", db(mean_db(clean_cells.optimised, clean_cells.count))},
+                {"judged_in_fov_psnr_direct_db", finite_or_null(mean_db(in_fov.direct, in_fov.count))},
+                {"judged_in_fov_psnr_optimized_db", finite_or_null(mean_db(in_fov.optimised, in_fov.count))},
+                {"judged_crosstalk_free_cell_psnr_direct_db", finite_or_null(mean_db(clean_cells.direct, clean_cells.count))},
+                {"judged_crosstalk_free_cell_psnr_optimized_db", finite_or_null(mean_db(clean_cells.optimised, clean_cells.count))},
             };
             std::printf("%s\n", summary.dump(2).c_str());
             return;

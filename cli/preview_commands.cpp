@@ -65,19 +65,20 @@ void add_simulate_preview_command(CLI::App& simulate) {
         options.model = optics::resolve(opt->model, simulator.optics(),
                                         {pattern.geometry().dot_x, pattern.geometry().dot_y}, 0.25)
                             .model;
-        predict::PreviewSet set =
-            predict::preview_set(simulator, comparison, reference.encoder().options().mapping, opt->count,
-                                 degrees_to_radians(max_angle_deg), options);
+        // The direct encoding an optimised pattern started from, for the page's switch.
+        std::optional<print::PrintedTransparency> direct;
+        std::optional<predict::DisplayComparison> direct_comparison;
         if (!opt->direct.empty()) {
-            const print::PrintedTransparency direct = printed_pattern(design, opt->direct, opt->print);
-            if (std::abs(direct.tone().white - pattern.tone().white) > 1e-6 * pattern.tone().white)
+            direct.emplace(printed_pattern(design, opt->direct, opt->print));
+            if (std::abs(direct->tone().white - pattern.tone().white) > 1e-6 * pattern.tone().white)
                 throw InputError(SourceLocation{opt->direct}, "--direct: not the pattern '" + opt->pattern +
                                                                   "' was optimised from (another rfd:white)");
-            const predict::DisplayComparison direct_comparison(simulator, direct, reference.encoder(), direct.tone());
-            set.predicted_direct = predict::preview_set(simulator, direct_comparison, reference.encoder().options().mapping,
-                                                        opt->count, degrees_to_radians(max_angle_deg), options)
-                                       .predicted;  // the same scale: the relit pictures set it
+            direct_comparison.emplace(simulator, *direct, reference.encoder(), direct->tone());
         }
+        const predict::PreviewSet set =
+            predict::preview_set(simulator, comparison, reference.encoder().options().mapping, opt->count,
+                                 degrees_to_radians(max_angle_deg), options,
+                                 direct_comparison ? &*direct_comparison : nullptr);
         project::write_preview_data(set, design.name, opt->out);
         std::printf("wrote %s/data.js: %zu light directions up to %.1f deg from the display's axis (display frame), "
                     "pictures of %d x %d lenslets, %s model, %d rays per side; scale %.6g (exposure %.4f stops)\n",

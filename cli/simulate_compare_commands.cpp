@@ -65,9 +65,6 @@ struct Stats {
     double mean() const { return count ? sum / count : std::nan(""); }
 };
 
-// JSON cannot hold infinity: a perfect match is reported as null.
-nlohmann::json db(double value) { return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr); }
-
 }  // namespace
 
 void add_simulate_compare_command(CLI::App& simulate) {
@@ -218,10 +215,10 @@ void add_simulate_compare_command(CLI::App& simulate) {
                             {"efficiency", r.efficiency},
                             {"peak", r.comparison.peak},
                             {"mse", r.comparison.mse},
-                            {"psnr_db", db(r.comparison.psnr_db)},
+                            {"psnr_db", finite_or_null(r.comparison.psnr_db)},
                             {"fitted_gain", r.comparison.fitted_gain},
-                            {"psnr_fitted_db", db(r.comparison.psnr_fitted_db)},
-                            {"psnr_cell_db", db(r.cell_comparison.psnr_db)},
+                            {"psnr_fitted_db", finite_or_null(r.comparison.psnr_fitted_db)},
+                            {"psnr_cell_db", finite_or_null(r.cell_comparison.psnr_db)},
                             {"rays", r.rays},
                             {"seconds", r.seconds}});
             csv += std::to_string(k) + "," + format_fixed(theta, 4) + "," + format_fixed(phi, 4) + "," +
@@ -292,16 +289,16 @@ void add_simulate_compare_command(CLI::App& simulate) {
                 if (r.inside_field_of_view || accuracy_directions == results.size()) used.push_back(&r);
             for (std::size_t k = 0; k < p.psnr_per_direction_db.size(); ++k)
                 per_direction.push_back({{"display_angle_deg", used[k]->display_angle_deg},
-                                         {"psnr_db", db(p.psnr_per_direction_db[k])},
-                                         {"fitted_psnr_db", db(p.fitted_psnr_per_direction_db[k])}});
+                                         {"psnr_db", finite_or_null(p.psnr_per_direction_db[k])},
+                                         {"fitted_psnr_db", finite_or_null(p.fitted_psnr_per_direction_db[k])}});
             accuracy.push_back({{"model", p.label},
                                 {"rays_per_side", p.rays_per_side},
                                 {"rays", p.rays},
                                 {"seconds", p.seconds},
                                 {"mse", p.mse},
-                                {"psnr_db", db(p.psnr_db)},
-                                {"worst_psnr_db", db(p.worst_psnr_db)},
-                                {"fitted_psnr_db", db(p.fitted_psnr_db)},
+                                {"psnr_db", finite_or_null(p.psnr_db)},
+                                {"worst_psnr_db", finite_or_null(p.worst_psnr_db)},
+                                {"fitted_psnr_db", finite_or_null(p.fitted_psnr_db)},
                                 {"per_direction", per_direction}});
         }
         if (opt->chart_accuracy) write_text_file(out / "accuracy_points.csv", table);
@@ -324,15 +321,15 @@ void add_simulate_compare_command(CLI::App& simulate) {
             {"macro_pixel_core", {{"fraction", comparison.core().fraction},
                                   {"magnification", comparison.core().magnification}}},
             {"inside_fov", fov.count},
-            {"min_psnr_in_fov_db", fov.count ? db(fov.min) : nlohmann::json(nullptr)},
-            {"mean_psnr_in_fov_db", fov.count ? db(fov.mean()) : nlohmann::json(nullptr)},
-            {"min_psnr_fitted_in_fov_db", fov.count ? db(fov_fitted.min) : nlohmann::json(nullptr)},
-            {"mean_psnr_fitted_in_fov_db", fov.count ? db(fov_fitted.mean()) : nlohmann::json(nullptr)},
-            {"min_psnr_cell_in_fov_db", fov.count ? db(fov_cell.min) : nlohmann::json(nullptr)},
+            {"min_psnr_in_fov_db", fov.count ? finite_or_null(fov.min) : nlohmann::json(nullptr)},
+            {"mean_psnr_in_fov_db", fov.count ? finite_or_null(fov.mean()) : nlohmann::json(nullptr)},
+            {"min_psnr_fitted_in_fov_db", fov.count ? finite_or_null(fov_fitted.min) : nlohmann::json(nullptr)},
+            {"mean_psnr_fitted_in_fov_db", fov.count ? finite_or_null(fov_fitted.mean()) : nlohmann::json(nullptr)},
+            {"min_psnr_cell_in_fov_db", fov.count ? finite_or_null(fov_cell.min) : nlohmann::json(nullptr)},
             {"crosstalk_free", clean.count},
-            {"min_psnr_crosstalk_free_db", clean.count ? db(clean.min) : nlohmann::json(nullptr)},
-            {"mean_psnr_crosstalk_free_db", clean.count ? db(clean.mean()) : nlohmann::json(nullptr)},
-            {"min_psnr_cell_crosstalk_free_db", clean.count ? db(clean_cell.min) : nlohmann::json(nullptr)},
+            {"min_psnr_crosstalk_free_db", clean.count ? finite_or_null(clean.min) : nlohmann::json(nullptr)},
+            {"mean_psnr_crosstalk_free_db", clean.count ? finite_or_null(clean.mean()) : nlohmann::json(nullptr)},
+            {"min_psnr_cell_crosstalk_free_db", clean.count ? finite_or_null(clean_cell.min) : nlohmann::json(nullptr)},
             {"accuracy_directions", accuracy_directions},
             {"accuracy", accuracy},
             {"seconds", seconds}};

@@ -76,8 +76,6 @@ bool trace_paraxial_ray(const SequentialSystem& system, ParaxialRay& ray, std::v
     return false;
 }
 
-
-
 // A light the display cannot show: InputError naming it (1-based, as the user gave them).
 void check_lights(const std::vector<DisplayLight>& lights, const std::string& file) {
     for (std::size_t i = 0; i < lights.size(); ++i) {
@@ -213,7 +211,6 @@ std::vector<TracedRay> trace_jobs(const DesignOptics& reference, std::size_t dif
     });
     return traced;
 }
-
 
 RepeatedRays repeated_rays(const DesignOptics& reference, const EntryGrid& grid, const std::vector<RayJob>& jobs,
                            const std::vector<TracedRay>& traced) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <string>
 
 #include <Eigen/Geometry>
@@ -19,9 +20,7 @@ namespace {
 constexpr int kMaxNodesPerSide = 256;
 
 double dot(std::span<const double> a, std::span<const double> b) {
-    double sum = 0.0;
-    for (std::size_t k = 0; k < a.size(); ++k) sum += a[k] * b[k];
-    return sum;
+    return std::inner_product(a.begin(), a.end(), b.begin(), 0.0);
 }
 
 }  // namespace
@@ -39,8 +38,8 @@ NodeGrid::NodeGrid(const optics::Lattice& lattice, const patterns::PatternGeomet
     if (per_side > kMaxNodesPerSide)
         throw InputError("a node spacing of " + std::to_string(spacing_mm) + " mm gives more than " +
                          std::to_string(kMaxNodesPerSide) + " nodes per side of a lenslet: use a larger one");
-    nodes_x_ = std::max(2, 2 * static_cast<int>(std::ceil(half_w / spacing_mm)));
-    nodes_y_ = std::max(2, 2 * static_cast<int>(std::ceil(half_h / spacing_mm)));
+    nodes_x_ = 2 * static_cast<int>(std::ceil(half_w / spacing_mm));
+    nodes_y_ = 2 * static_cast<int>(std::ceil(half_h / spacing_mm));
 }
 
 bool NodeGrid::stencil(const Eigen::Vector2d& point, Stencil& out) const {
@@ -78,7 +77,7 @@ DisplayOperator::DisplayOperator(const optics::DisplaySimulator& simulator, cons
                                  const optics::SimulationOptions& options, std::optional<LensletWindow> sources,
                                  bool cores)
     : nodes_(nodes),
-      sources_(sources.value_or(LensletWindow::whole(nodes.lattice()))),
+      sources_(sources.value_or(LensletWindow::whole(nodes.lattice())).clipped(nodes.lattice())),
       core_fraction_(cores ? macro_pixel_core(simulator.optics()).fraction : 1.0) {
     const optics::Lattice& lattice = nodes_.lattice();
     RFD_CHECK(lattice.count_x() == simulator.optics().lattice().count_x() &&
@@ -156,12 +155,9 @@ void DisplayOperator::forward_direction(std::size_t d, std::span<const double> u
                                         double outside) const {
     RFD_CHECK(u.size() == input_size() && y.size() == block_size());
     std::fill(y.begin(), y.end(), 0.0);
-    const optics::Lattice& lattice = nodes_.lattice();
     const std::size_t cores = regions() > 1 ? nodes_.lenslets() * 3 : 0;  // where the cores' block starts
-    const LensletWindow window{std::max(sources_.i0, 0), std::max(sources_.j0, 0),
-                               std::min(sources_.i1, lattice.count_x()), std::min(sources_.j1, lattice.count_y())};
-    for (int j = window.j0; j < window.j1; ++j)
-        for (int i = window.i0; i < window.i1; ++i)
+    for (int j = sources_.j0; j < sources_.j1; ++j)
+        for (int i = sources_.i0; i < sources_.i1; ++i)
             for_each_ray(directions_[d], {i, j},
                          [&](const Ray& ray, bool printed, std::size_t base, std::size_t landing) {
                              double* out = y.data() + landing * 3;
@@ -189,9 +185,7 @@ void DisplayOperator::forward(std::span<const double> u, std::span<double> y, do
 void DisplayOperator::adjoint(std::span<const double> y, std::span<double> g) const {
     RFD_CHECK(y.size() == output_size() && g.size() == input_size());
     std::fill(g.begin(), g.end(), 0.0);
-    const optics::Lattice& lattice = nodes_.lattice();
-    const LensletWindow window{std::max(sources_.i0, 0), std::max(sources_.j0, 0),
-                               std::min(sources_.i1, lattice.count_x()), std::min(sources_.j1, lattice.count_y())};
+    const LensletWindow& window = sources_;
     if (window.i0 >= window.i1 || window.j0 >= window.j1) return;
     const std::size_t block = block_size();
     const std::size_t cores = regions() > 1 ? nodes_.lenslets() * 3 : 0;
@@ -262,11 +256,6 @@ double OptimizationProblem::residual(std::span<const double> au, std::span<doubl
         f += w * e * e;
     }
     return 0.5 * f;
-}
-
-double OptimizationProblem::objective(std::span<const double> au) const {
-    std::vector<double> r(au.size());
-    return residual(au, r);
 }
 
 namespace {

@@ -49,6 +49,7 @@
 //   OptimizationProblem problem(A, targets, weights);
 //   OptimizationResult r = solve(problem, direct_nodes(nodes, encoder, tone), {});
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <functional>
@@ -71,6 +72,10 @@ struct LensletWindow {
     int i0 = 0, j0 = 0, i1 = 0, j1 = 0;
     bool contains(optics::CellIndex cell) const { return cell.i >= i0 && cell.i < i1 && cell.j >= j0 && cell.j < j1; }
     LensletWindow grown(int by) const { return {i0 - by, j0 - by, i1 + by, j1 + by}; }
+    /// The part inside the lattice's array.
+    LensletWindow clipped(const optics::Lattice& lattice) const {
+        return {std::max(i0, 0), std::max(j0, 0), std::min(i1, lattice.count_x()), std::min(j1, lattice.count_y())};
+    }
     static LensletWindow whole(const optics::Lattice& lattice) { return {0, 0, lattice.count_x(), lattice.count_y()}; }
 };
 
@@ -207,7 +212,6 @@ public:
     /// r = w (A u - target) per output value (w: the direction's weight, 0 outside the
     /// fitted cells), so that A^T r is the gradient; returns f.
     double residual(std::span<const double> au, std::span<double> r) const;
-    double objective(std::span<const double> au) const;
     /// The weight of output value k (0 outside the fitted window).
     double weight_of(std::size_t k) const;
 

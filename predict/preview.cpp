@@ -15,16 +15,18 @@ namespace rfd::predict {
 
 PreviewSet preview_set(const optics::DisplaySimulator& simulator, const DisplayComparison& comparison,
                        const patterns::AngularMapping& mapping, std::size_t count, double max_angle_rad,
-                       const optics::SimulationOptions& options) {
+                       const optics::SimulationOptions& options, const DisplayComparison* direct) {
     PreviewSet set;
     set.max_angle_deg = radians_to_degrees(max_angle_rad);
     set.directions = cone_directions(count, max_angle_rad, 1);
     {
         Progress progress("predicting the preview's lights", set.directions.size());
         for (const Eigen::Vector3d& toward : set.directions) {
-            const DirectionComparison r = comparison.compare(mapping.field_direction(travel_from(toward)), options);
+            const Eigen::Vector3d field_direction = mapping.field_direction(travel_from(toward));
+            const DirectionComparison r = comparison.compare(field_direction, options);
             set.predicted.push_back(r.cell_prediction);
             set.relit.push_back(r.cell_reference);
+            if (direct) set.predicted_direct.push_back(direct->compare(field_direction, options).cell_prediction);
             progress.advance();
         }
     }
@@ -35,6 +37,7 @@ PreviewSet preview_set(const optics::DisplaySimulator& simulator, const DisplayC
     for (std::size_t k = 0; k < set.directions.size(); ++k) {
         set.predicted[k] = set.predicted[k].exposed(std::log2(set.scale));
         set.relit[k] = set.relit[k].exposed(std::log2(set.scale));
+        if (direct) set.predicted_direct[k] = set.predicted_direct[k].exposed(std::log2(set.scale));
     }
 
     const relight::SphericalInterpolator interpolator(set.directions);

@@ -45,9 +45,10 @@ struct PreviewSet {
 };
 
 /// Predicts and relights `count` directions over the cone of `max_angle_rad` about the
-/// display's axis (cone_directions, seed 1). `options` are the simulation's.
+/// display's axis (cone_directions, seed 1). `options` are the simulation's. With `direct`
+/// (the same field's direct encoding, beside an optimised pattern), its predictions too.
 PreviewSet preview_set(const optics::DisplaySimulator& simulator, const DisplayComparison& comparison,
                        const patterns::AngularMapping& mapping, std::size_t count, double max_angle_rad,
-                       const optics::SimulationOptions& options);
+                       const optics::SimulationOptions& options, const DisplayComparison* direct = nullptr);
 
 }  // namespace rfd::predict
