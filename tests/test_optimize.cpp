@@ -101,6 +101,32 @@ TEST(NodeGrid, InterpolatesWithinALensletAndKeepsPrintableValues) {
     EXPECT_THROW(NodeGrid(lattice, geometry_of(design), 1e-3), InputError);
 }
 
+// The simulator's view of node values (NodeTransparency) is the printed pattern's
+// (NodePattern) through the tone map: the same dot, the black level added; off the sheet 0.
+TEST(NodeTransparency, IsThePrintedPatternThroughTheBlackLevel) {
+    const optics::Design design = small_design1(3, 3);
+    const optics::DesignOptics optics(design);
+    const PatternGeometry geometry = geometry_of(design);
+    const NodeGrid nodes(optics.lattice(), geometry, 0.25);
+    const std::vector<double> u = random_values(nodes.size(), 7);
+    const double black = 0.02, white = 0.8;
+    const NodePattern pattern(nodes, u, 3, white, 1.0);
+    const NodeTransparency seen(nodes, u, black);
+    std::vector<float> row(static_cast<std::size_t>(geometry.width) * 3);
+    for (int py : {0, geometry.height / 3, geometry.height / 2}) {
+        pattern.render_row(py, row);
+        std::vector<Eigen::Vector2d> points;
+        for (int px = 0; px < geometry.width; ++px) points.push_back(geometry.dot_centre(px, py));
+        std::vector<float> sampled(points.size() * 3);
+        seen.sample(points, sampled);
+        for (std::size_t k = 0; k < sampled.size(); ++k)
+            ASSERT_NEAR(sampled[k], black + (1.0 - black) * row[k] / white, 1e-6) << py << " " << k;
+    }
+    std::vector<float> off(3);
+    seen.sample(std::vector<Eigen::Vector2d>{Eigen::Vector2d(1e3, 0.0)}, off);
+    EXPECT_EQ(off, std::vector<float>(3, 0.0f));
+}
+
 // <A u, y> = <u, A^T y> to rounding, for Design I with its wrap-over and edge and for
 // Design II's corrective pair.
 TEST(DisplayOperator, AdjointIsTheTranspose) {
