@@ -1,11 +1,14 @@
 // rfd make: a project file into the pattern, the print sheets, the holder and the
 // predicted display, skipping what is up to date (project/make.hpp).
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -40,16 +43,24 @@ void add_make_command(CLI::App& app) {
     struct Options {
         std::string project, out;
         bool force = false, dry_run = false;
+        int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+        std::vector<std::string> only;
     };
     auto opt = std::make_shared<Options>();
     cmd->add_option("PROJECT", opt->project, "Project file (TOML; examples/ has two)")->required();
     cmd->add_option("--out", opt->out, "Output folder")->required();
     cmd->add_flag("--force", opt->force, "Make every step again, whatever the manifest says");
-    cmd->add_flag("--dry-run", opt->dry_run, "Print the steps' commands and make nothing");
+    cmd->add_flag("--dry-run", opt->dry_run, "Print the steps' commands (run from the output folder) and make nothing");
+    cmd->add_option("--jobs,-j", opt->jobs, "Steps run side by side at most (the outputs are the same for any)")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 64));
+    cmd->add_option("--only", opt->only, "Make only these steps (names as rfd make prints them) and the steps they read from")
+        ->expected(1, -1);
     cmd->callback([opt] {
         const project::Project project = project::load_project(opt->project);
         if (opt->dry_run) {
-            for (const project::Step& step : project::plan(project, opt->out))
+            std::printf("cd %s\n", shell_quoted(opt->out).c_str());
+            for (const project::Step& step : project::plan(project))
                 std::printf("# %s: %s\n%s\n", step.name.c_str(), step.title.c_str(), command_line(step).c_str());
             return;
         }
@@ -57,34 +68,22 @@ void add_make_command(CLI::App& app) {
         project::MakeOptions options;
         options.rfd_identity = std::string("rfd ") + RFD_VERSION + " " + project::content_hash(program);
         options.force = opt->force;
-        const project::StepRunner run = [&](const std::vector<std::string>& arguments) {
-            std::string command = shell_quoted(program.string()) + " --quiet";
-            for (const std::string& argument : arguments) command += " " + shell_quoted(argument);
-            const CommandResult result = run_command(command);
-            return project::StepResult{result.exit_code, result.output};
-        };
+        options.jobs = opt->jobs;
+        options.only = opt->only;
+        project::ProcessStepRunner runner(program);
         std::printf("%s -> %s\n", opt->project.c_str(), opt->out.c_str());
         std::fflush(stdout);
         project::MakeListener listener;
-        listener.starting = [](const project::Step& step, int index, int count) {
+        listener.finished = [](const project::StepOutcome& step, int done, int count) {
             const int digits = count >= 10 ? 2 : 1;
-            std::printf("  [%*d/%d] %-16s ", digits, index + 1, count, step.name.c_str());
-            std::fflush(stdout);
-        };
-        listener.finished = [](const project::StepOutcome& step) {
+            std::printf("  [%*d/%d] %-16s ", digits, done, count, step.name.c_str());
             if (step.ran) std::printf("made in %.1f s\n", step.seconds);
             else std::printf("up to date\n");
             std::fflush(stdout);
         };
-        std::vector<project::StepOutcome> outcomes;
-        try {
-            outcomes = project::make(project, opt->out, run, options, listener);
-        } catch (const Error&) {
-            std::printf("failed\n");
-            throw;
-        }
+        const std::vector<project::StepOutcome> outcomes = project::make(project, opt->out, runner, options, listener);
         std::ifstream verdict(fs::path(opt->out) / "verdict.json");
-        if (verdict) {
+        if (verdict && opt->only.empty()) {
             const nlohmann::json v = nlohmann::json::parse(verdict, nullptr, false);
             if (!v.is_discarded() && v.contains("line")) std::printf("verdict: %s\n", v["line"].get<std::string>().c_str());
         }

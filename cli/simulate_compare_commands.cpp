@@ -219,8 +219,7 @@ void add_simulate_compare_command(CLI::App& simulate) {
                             {"fitted_gain", r.comparison.fitted_gain},
                             {"psnr_fitted_db", finite_or_null(r.comparison.psnr_fitted_db)},
                             {"psnr_cell_db", finite_or_null(r.cell_comparison.psnr_db)},
-                            {"rays", r.rays},
-                            {"seconds", r.seconds}});
+                            {"rays", r.rays}});
             csv += std::to_string(k) + "," + format_fixed(theta, 4) + "," + format_fixed(phi, 4) + "," +
                    format_fixed(r.display_angle_deg, 4) + "," + (r.inside_field_of_view ? "1" : "0") + "," +
                    (r.crosstalk_free ? "1" : "0") + "," +
@@ -331,8 +330,7 @@ void add_simulate_compare_command(CLI::App& simulate) {
             {"mean_psnr_crosstalk_free_db", clean.count ? finite_or_null(clean.mean()) : nlohmann::json(nullptr)},
             {"min_psnr_cell_crosstalk_free_db", clean.count ? finite_or_null(clean_cell.min) : nlohmann::json(nullptr)},
             {"accuracy_directions", accuracy_directions},
-            {"accuracy", accuracy},
-            {"seconds", seconds}};
+            {"accuracy", accuracy}};
         write_text_file(out / "summary.json", summary.dump(2) + "\n");
         write_line_chart(chart, out / "psnr");
         if (opt->chart_accuracy) {

@@ -220,8 +220,7 @@ void add_simulate_tolerance_command(CLI::App& simulate) {
                                      {"lights", lights.size()},
                                      {"nominal_peak", report.nominal_peak},
                                      {"summary", sentence},
-                                     {"curves", curves},
-                                     {"seconds", seconds}};
+                                     {"curves", curves}};
         write_text_file(out / "summary.json", json.dump(2) + "\n");
         if (opt->json) {
             std::printf("%s\n", json.dump(2).c_str());

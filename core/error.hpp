@@ -1,5 +1,5 @@
 #pragma once
-// Errors in rfd travel on three channels that are never mixed (see STYLE.md):
+// Errors in rfd travel on three channels that are never mixed:
 //  1. programmer invariants: RFD_CHECK (always on) and RFD_DCHECK (debug only) abort;
 //  2. expected physical outcomes (a ray that misses, total internal reflection) are values,
 //     never exceptions: numerical code does not throw;
@@ -49,6 +49,16 @@ class ToolError : public Error {
 public:
     using Error::Error;
     int exit_code() const override { return 4; }
+};
+
+/// The program was asked to stop by a signal, and stopped after cleaning up.
+class Interrupted : public Error {
+public:
+    Interrupted(int signal, const std::string& message) : Error(message), signal_(signal) {}
+    int exit_code() const override { return 128 + signal_; }
+
+private:
+    int signal_;
 };
 
 /// Throws an error of the same kind as `cause`, so with the same exit code, at `where` with

@@ -1,12 +1,14 @@
 #include "core/files.hpp"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <signal.h>
 #include <unistd.h>
 
 #include <array>
 #include <atomic>
 #include <cctype>
+#include <cerrno>
 #include <climits>
 #include <cstring>
 #include <fstream>
@@ -161,6 +163,21 @@ bool is_blank_or_comment(const std::string& line) {
         if (!std::isspace(static_cast<unsigned char>(c))) return false;
     }
     return true;
+}
+
+ExclusiveLock::ExclusiveLock(const std::filesystem::path& file, const std::string& busy_message) {
+    descriptor_ = open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (descriptor_ < 0) throw IoError("cannot create the lock file " + file.string() + ": " + std::strerror(errno));
+    if (flock(descriptor_, LOCK_EX | LOCK_NB) != 0) {
+        const int error = errno;
+        close(descriptor_);
+        if (error == EWOULDBLOCK) throw IoError(busy_message);
+        throw IoError("cannot lock " + file.string() + ": " + std::strerror(error));
+    }
+}
+
+ExclusiveLock::~ExclusiveLock() {
+    if (descriptor_ >= 0) close(descriptor_);  // closing releases the lock
 }
 
 }  // namespace rfd

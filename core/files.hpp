@@ -56,6 +56,21 @@ private:
     std::filesystem::path path_;
 };
 
+/// An exclusive advisory lock (flock) on `file`, created if needed and left in place, held
+/// for this object's life; a process that ends, however it ends, lets it go.
+class ExclusiveLock {
+public:
+    /// Takes the lock, or throws IoError with `busy_message` when another process holds it
+    /// (and IoError naming the file when it cannot be created).
+    ExclusiveLock(const std::filesystem::path& file, const std::string& busy_message);
+    ~ExclusiveLock();
+    ExclusiveLock(const ExclusiveLock&) = delete;
+    ExclusiveLock& operator=(const ExclusiveLock&) = delete;
+
+private:
+    int descriptor_ = -1;
+};
+
 /// True for a line of a text data file that holds nothing: blank, or a '#' comment.
 bool is_blank_or_comment(const std::string& line);
 

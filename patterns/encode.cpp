@@ -301,8 +301,12 @@ relight::ReflectanceField load_field_for(const optics::Design& design, const std
     const std::vector<relight::LightEntry> entries = relight::read_light_file(lp);
     std::vector<Eigen::Vector3d> directions;
     for (const auto& e : entries) directions.push_back(e.direction);
+    const std::vector<std::size_t> needed = needed_field_directions(design, directions, options);
+    if (needed.empty())
+        throw InputError(SourceLocation{lp.string()}, "no light direction of the field lies near the display's range");
+    relight::check_field_images(lp, entries);  // every image, also those the display does not need
     relight::ReflectanceField out;
-    for (std::size_t i : needed_field_directions(design, directions, options)) {
+    for (std::size_t i : needed) {
         const relight::LightEntry& e = entries[i];
         Image image;
         try {
@@ -316,8 +320,6 @@ relight::ReflectanceField load_field_for(const optics::Design& design, const std
         out.directions.push_back(e.direction);
         out.images.push_back(std::move(image));
     }
-    if (out.images.empty())
-        throw InputError(SourceLocation{lp.string()}, "no light direction of the field lies near the display's range");
     return out;
 }
 

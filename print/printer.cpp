@@ -82,7 +82,7 @@ PrinterProfile default_printer(Dpi dpi_x, Dpi dpi_y) {
     return printer;
 }
 
-PrinterProfile load_printer(const std::string& name_or_path) {
+std::filesystem::path printer_file(const std::string& name_or_path) {
     std::filesystem::path path(name_or_path);
     std::error_code ec;
     // A bare name without a folder or extension is a bundled profile.
@@ -97,6 +97,11 @@ PrinterProfile load_printer(const std::string& name_or_path) {
                       "cannot open printer profile: no such file or bundled profile (bundled: " +
                           known + ")");
     }
+    return path;
+}
+
+PrinterProfile load_printer(const std::string& name_or_path) {
+    const std::filesystem::path path = printer_file(name_or_path);
     ConfigTable root = ConfigTable::parse_file(path);
     return read_profile(root);
 }

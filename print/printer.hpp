@@ -66,6 +66,10 @@ struct PrinterProfile {
 /// printers/ ("epson_stylus_pro_4800"). Throws InputError naming file:line and key for a
 /// missing, unknown or out-of-range key, IoError when the file cannot be read.
 PrinterProfile load_printer(const std::string& name_or_path);
+
+/// The profile file a printer name stands for: a file by that path, else a bundled profile
+/// (a bare name: "epson_stylus_pro_4800"). IoError listing the bundled ones when neither.
+std::filesystem::path printer_file(const std::string& name_or_path);
 /// The same from TOML text; `name` stands for the file in messages.
 PrinterProfile parse_printer(const std::string& toml_text, const std::string& name);
 /// Folder of the bundled profiles (the source tree's printers/).

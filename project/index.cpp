@@ -196,7 +196,8 @@ void write_index(const Project& project, const fs::path& out, const std::vector<
     const std::string title = project.name + ": a passive reflectance-field display";
 
     const VerdictText verdict = read_verdict(out);
-    std::string text = title + "\nMade by rfd make from " + project.file.string() + ". Paths are relative to this folder.\n";
+    std::string text = title + "\nMade by rfd make from " + fs::absolute(project.file).lexically_normal().string() +
+                       ". Paths are relative to this folder; run the commands below from it.\n";
     if (!verdict.line.empty()) {
         text += "\nVerdict: " + verdict.line + "\n";
         for (const std::string& figure : verdict.figures) text += "  " + figure + "\n";
@@ -209,8 +210,8 @@ void write_index(const Project& project, const fs::path& out, const std::vector<
             for (const std::string& file : item.files) text += "    " + file + "\n";
         }
     }
-    text += "\nHow each file was made (run `rfd make` again to re-make only what changed; any line alone to vary "
-            "it)\n";
+    text += "\nHow each file was made, each command run from this folder (run `rfd make` again to re-make only what "
+            "changed; any line alone to vary it)\n";
     for (const Step& step : steps) text += "- " + step.title + "\n    " + command_line(step) + "\n";
     write_text_file(out / "README.txt", text);
 
@@ -222,7 +223,7 @@ void write_index(const Project& project, const fs::path& out, const std::vector<
                        "#light-disc{cursor:crosshair;touch-action:none}\n#light-readout{width:220px;font-size:90%}\n#holder-view{min-height:2em}\n</style>\n"
                        "</head>\n<body>\n<h1>" +
                        html_escaped(title) + "</h1>\n<p>Made by <code>rfd make</code> from <code>" +
-                       html_escaped(project.file.string()) + "</code>.</p>\n";
+                       html_escaped(fs::absolute(project.file).lexically_normal().string()) + "</code>.</p>\n";
     if (!verdict.line.empty()) {
         html += "<div class=\"verdict " + html_escaped(verdict.call) + "\"><strong>" + html_escaped(verdict.line) +
                 "</strong><ul>\n";

@@ -69,6 +69,8 @@ std::string content_hash(const fs::path& path) {
             update(state.get(), file.generic_string());
             update_with_file(state.get(), path / file);
         }
+    } else if (fs::exists(path, ec) && !fs::is_regular_file(path, ec)) {
+        throw IoError(SourceLocation{path.string()}, "not a regular file (a device or a pipe?): rfd reads files and folders");
     } else {
         update_with_file(state.get(), path);
     }

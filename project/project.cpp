@@ -36,10 +36,19 @@ fs::path resolve(ConfigTable& table, const std::string& key, const fs::path& pro
                     "bundled name in " + bundled_folder.string());
 }
 
-fs::path existing(ConfigTable& table, const std::string& key, const fs::path& project_folder) {
-    const fs::path path = (project_folder / table.string(key)).lexically_normal();
+// A source the project names: a regular file, or a folder where `folder_too`. Checked
+// before anything reads it: a device or a pipe would be read forever.
+fs::path existing(ConfigTable& table, const std::string& key, const fs::path& project_folder, bool folder_too) {
+    const std::string value = table.string(key);
+    const std::string expected = folder_too ? "a folder or a regular file" : "a regular file";
+    if (value.empty()) table.fail(key, "expected " + expected + ", got an empty name");
+    const fs::path path = (project_folder / value).lexically_normal();
     std::error_code ec;
     if (!fs::exists(path, ec)) table.fail(key, "cannot open '" + path.string() + "': no such file or folder");
+    if (fs::is_directory(path, ec) ? !folder_too : !fs::is_regular_file(path, ec))
+        table.fail(key, "'" + path.string() + "' is " +
+                            (fs::is_directory(path, ec) ? "a folder" : "not a regular file (a device or a pipe?)") +
+                            "; expected " + expected);
     return path;
 }
 
@@ -57,9 +66,9 @@ Source read_source(ConfigTable& table, const fs::path& folder) {
         table.fail(table.has("scene") ? "scene" : "field",
                    "expected exactly one of field (a field folder or .lp file), scene (a scene to render) and "
                    "procedural (a test field)");
-    if (table.has("field")) source.field = existing(table, "field", folder);
+    if (table.has("field")) source.field = existing(table, "field", folder, true);
     if (table.has("scene")) {
-        source.scene = existing(table, "scene", folder);
+        source.scene = existing(table, "scene", folder, false);
         source.lights = static_cast<int>(table.optional_integer("lights", 3, 100000).value_or(source.lights));
     }
     if (table.has("procedural")) {
@@ -142,11 +151,17 @@ Project load_project(const fs::path& file) {
     // A bundled printer is passed on by name, so the pattern records the name users know.
     const std::string printer = head.optional_string("printer").value_or("epson_stylus_pro_4800");
     if (is_file(folder / printer)) project.printer = (folder / printer).lexically_normal().string();
-    else if (printer.find('/') == std::string::npos && is_file(print::bundled_printer_folder() / (printer + ".toml")))
+    else if (fs::path(printer).has_parent_path())
+        head.fail("printer", "cannot open printer profile '" + printer + "': no such file (relative to the project file)");
+    else {
+        try {
+            print::printer_file(printer);
+        } catch (const Error&) {
+            head.fail("printer", "cannot open printer profile '" + printer + "': no such file (relative to the project "
+                                 "file) or bundled name in " + print::bundled_printer_folder().string());
+        }
         project.printer = printer;
-    else
-        head.fail("printer", "cannot open printer profile '" + printer + "': no such file (relative to the project "
-                             "file) or bundled name in " + print::bundled_printer_folder().string());
+    }
     project.printer_3d = head.has("printer_3d")
                              ? resolve(head, "printer_3d", folder, bundled_holder_profile_folder(), "3D printer profile")
                              : bundled_holder_profile_folder() / "fdm_0.4mm.toml";

@@ -156,12 +156,40 @@ void write_light_file(const std::filesystem::path& lp_path, const std::vector<st
     write_text_file(lp_path, text);
 }
 
+void check_field_images(const std::filesystem::path& lp_path, const std::vector<LightEntry>& entries) {
+    ImageSize first;
+    for (const LightEntry& entry : entries) {
+        std::error_code ec;
+        if (std::filesystem::exists(entry.path, ec) && !std::filesystem::is_regular_file(entry.path, ec))
+            throw InputError(at(lp_path, entry.line),
+                             "image '" + entry.file + "' (" + entry.path.string() + ") is not a regular file");
+        ImageSize size;
+        try {
+            size = read_image_size(entry.path);
+        } catch (const Error& error) {
+            rethrow_at(error, at(lp_path, entry.line), "image '" + entry.file + "': " + error.what());
+        }
+        const auto text = [](const ImageSize& s) {
+            return std::to_string(s.width) + " x " + std::to_string(s.height) + " pixels, " +
+                   std::to_string(s.channels) + (s.channels == 1 ? " channel" : " channels");
+        };
+        if (&entry == &entries.front()) first = size;
+        else if (size.width != first.width || size.height != first.height || size.channels != first.channels)
+            throw InputError(at(lp_path, entry.line), "image '" + entry.file + "' is " + text(size) +
+                                                          ", the field's first image '" + entries.front().file +
+                                                          "' is " + text(first));
+    }
+}
+
 std::filesystem::path light_file_of(const std::filesystem::path& field) {
     namespace fs = std::filesystem;
     std::error_code ec;
     if (!fs::is_directory(field, ec)) {
         if (!fs::exists(field, ec))
             throw IoError(SourceLocation{field.string()}, "no such field (folder or .lp file)");
+        if (!fs::is_regular_file(field, ec))
+            throw InputError(SourceLocation{field.string()},
+                             "not a field: expected a folder or a regular .lp light file, not a device or pipe");
         return field;
     }
     std::vector<fs::path> found;
@@ -220,6 +248,7 @@ ReflectanceField read_field(const std::filesystem::path& field_path, const Image
     const std::filesystem::path lp = light_file_of(field_path);
     const std::vector<LightEntry> entries = read_light_file(lp);
     if (entries.empty()) throw InputError(at(lp, 1), "a field needs at least one image");
+    check_field_images(lp, entries);
     ReflectanceField field;
     bool any_kernel = false;
     for (const LightEntry& entry : entries) {

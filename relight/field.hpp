@@ -75,6 +75,11 @@ struct LightEntry {
 /// field, an unparsable number or a zero-length direction; IoError if it cannot be read.
 std::vector<LightEntry> read_light_file(const std::filesystem::path& lp_path);
 
+/// Checks, from the files' headers alone, that every image `entries` names is a regular file
+/// (not a folder, a device or a pipe) of the first image's size. InputError at the light
+/// file's line naming the image and both sizes; IoError when one cannot be read.
+void check_field_images(const std::filesystem::path& lp_path, const std::vector<LightEntry>& entries);
+
 /// Writes directions (and kernel radii when `kernel_radii` is non-empty) as a light file.
 void write_light_file(const std::filesystem::path& lp_path, const std::vector<std::string>& files,
                       const std::vector<Eigen::Vector3d>& directions,

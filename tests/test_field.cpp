@@ -274,7 +274,7 @@ TEST_F(MalformedLightFile, MissingCoordinate) {
 TEST_F(MalformedLightFile, DifferentSizes) {
     write_image(dir / "b.exr", random_image(5, 3, 3, 2));
     EXPECT_THAT(read_error("2\na.exr 0 0 1\n# comment\nb.exr 1 0 1\n"),
-                HasSubstr("f.lp:4: image 'b.exr' is 5x3x3, the first image is 4x3x3"));
+                HasSubstr("f.lp:4: image 'b.exr' is 5 x 3 pixels, 3 channels, the field's first image 'a.exr' is 4 x 3 pixels, 3 channels"));
 }
 TEST_F(MalformedLightFile, NaNPixels) {
     // OpenImageIO writes NaN when asked to; rfd refuses to read it back.

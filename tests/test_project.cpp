@@ -2,7 +2,10 @@
 // for what it may not), the plan of steps, and the manifest's skip and re-run, with a
 // stand-in runner whose outputs depend on exactly the files a step names.
 
+#include <algorithm>
+#include <deque>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <set>
 #include <string>
@@ -10,6 +13,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "core/error.hpp"
 #include "core/files.hpp"
 #include "core/image.hpp"
 #include "project/make.hpp"
@@ -57,26 +61,38 @@ field = "field"
 sheets = ["pdf"]
 )";
 
-// Stands in for rfd: writes every path after an output option, its content the command
-// line and the content of every existing file or folder the command names, so outputs
-// change exactly when what a step reads changes. Folders (no extension) get one file, the
-// preview's folder the three files rfd make checks for.
-struct FakeRfd {
+// Stands in for rfd: writes every path after an output option (relative to the output
+// folder, where a step runs), its content the command line and the content of every
+// existing field the command names, so outputs change exactly when what a step reads
+// changes. Folders (no extension) get one file, the preview's folder the three files rfd
+// make checks for. Steps end in the order `last_first` says: as started, or the latest
+// first, as steps running side by side may.
+struct FakeRfd : StepRunner {
     std::vector<std::string> calls;  // the first two words of each command
     std::string fail_on;             // a command ("print sheet") that exits 2
-    StepResult operator()(const std::vector<std::string>& arguments) {
+    bool last_first = false;
+    std::deque<Ended> ending;
+    long handles = 0;
+
+    long start(const Step& step, const fs::path& out, const fs::path& log) override {
+        const std::vector<std::string>& arguments = step.arguments;
         const std::string command = arguments.at(0) + " " + arguments.at(1);
         calls.push_back(command);
-        if (command == fail_on) return {2, "rfd: error: the printer is out of ink\n"};
+        ++handles;
+        if (command == fail_on) {
+            std::ofstream(log, std::ios::app) << "rfd: error: the printer is out of ink\n";
+            ending.push_back({handles, 2});
+            return handles;
+        }
         std::string content;
         for (const std::string& argument : arguments) {
             content += argument + "\n";
-            if (fs::exists(argument) && argument.find("field") != std::string::npos)
-                content += content_hash(argument) + "\n";
+            if (fs::exists(out / argument) && argument.find("field") != std::string::npos)
+                content += content_hash(out / argument) + "\n";
         }
         for (std::size_t k = 0; k + 1 < arguments.size(); ++k) {
             if (arguments[k] != "--out" && arguments[k] != "--preview" && arguments[k] != "--stl") continue;
-            fs::path target = arguments[k + 1];
+            fs::path target = out / arguments[k + 1];
             if (command == "simulate preview") {
                 for (const char* file : {"data.js", "predicted.png", "relit.png"}) write(target / file, content);
                 continue;
@@ -85,19 +101,30 @@ struct FakeRfd {
             if (arguments[k] == "--stl") target.replace_filename("holder_base.stl");
             write(target, content);
         }
-        return {0, "made\n"};
+        std::ofstream(log, std::ios::app) << "made\n";
+        ending.push_back({handles, 0});
+        return handles;
+    }
+    Ended wait() override {
+        const Ended ended = last_first ? ending.back() : ending.front();
+        if (last_first) ending.pop_back();
+        else ending.pop_front();
+        return ended;
     }
 };
 
 struct MadeSteps {
     std::set<std::string> ran;
 };
-MadeSteps run_make(const Project& project, const fs::path& out, FakeRfd& rfd, bool force = false) {
+MadeSteps run_make(const Project& project, const fs::path& out, FakeRfd& rfd, bool force = false, int jobs = 1,
+                   std::vector<std::string> only = {}) {
     MakeOptions options;
     options.rfd_identity = "rfd test";
     options.force = force;
+    options.jobs = jobs;
+    options.only = std::move(only);
     MadeSteps made;
-    for (const StepOutcome& step : make(project, out, std::ref(rfd), options))
+    for (const StepOutcome& step : make(project, out, rfd, options))
         if (step.ran) made.ran.insert(step.name);
     return made;
 }
@@ -153,18 +180,26 @@ TEST(ProjectPlan, EveryStepReadsOnlyWhatEarlierStepsOrTheUserMade) {
     TempDir dir;
     write_small_field(dir / "field", 0.5f);
     write(dir / "p.toml", kProject);
-    const std::vector<Step> steps = plan(load_project(dir / "p.toml"), dir / "out");
+    const std::vector<Step> steps = plan(load_project(dir / "p.toml"));
     std::vector<std::string> names;
     std::set<fs::path> made;
+    int made_inputs = 0;
     for (const Step& step : steps) {
         names.push_back(step.name);
         for (const fs::path& input : step.inputs) {
-            if (input.string().starts_with((dir / "out").string())) {
-                EXPECT_TRUE(made.count(fs::relative(input, dir / "out"))) << step.name << " reads " << input;
+            // What a step made is named relative to the output folder, the user's files absolutely.
+            if (input.is_relative()) {
+                EXPECT_TRUE(made.count(input)) << step.name << " reads " << input;
+                ++made_inputs;
+            } else {
+                EXPECT_TRUE(fs::exists(input)) << step.name << " reads " << input;
             }
         }
+        for (const std::string& argument : step.arguments)
+            EXPECT_EQ(argument.find((dir / "out").string()), std::string::npos) << step.name << ": " << argument;
         for (const fs::path& output : step.outputs) made.insert(output);
     }
+    EXPECT_EQ(made_inputs, 6);  // the pattern by the sheet, compare, tolerance and preview; their two by the verdict
     // inkjet_720 prints one sheet: no back sheet.
     EXPECT_THAT(names, ::testing::ElementsAre("pattern", "sheet_front_pdf", "moire", "wedge", "holder", "compare", "tolerance", "preview", "verdict"));
 }
@@ -180,13 +215,13 @@ TEST(ProjectPlan, AnOptimisedPatternIsWhatIsPrintedAndPredicted) {
     EXPECT_EQ(project.optimization->iterations, 12);
     EXPECT_EQ(project.optimization->spacing_mm, 0.1);
     std::map<std::string, std::string> lines;
-    for (const Step& step : plan(project, dir / "out")) lines[step.name] = command_line(step);
+    for (const Step& step : plan(project)) lines[step.name] = command_line(step);
     ASSERT_TRUE(lines.count("optimize"));
-    EXPECT_THAT(lines["optimize"], AllOf(HasSubstr("pattern optimize"), HasSubstr("--from " + (dir / "out").string() + "/pattern.exr"),
+    EXPECT_THAT(lines["optimize"], AllOf(HasSubstr("pattern optimize"), HasSubstr("--from pattern.exr"),
                                          HasSubstr("--iterations 12"), HasSubstr("--core-weight 30")));
     for (const char* step : {"sheet_front_pdf", "compare", "tolerance", "preview"})
         EXPECT_THAT(lines[step], HasSubstr("pattern_optimized.exr")) << step;
-    EXPECT_THAT(lines["preview"], HasSubstr("--direct " + (dir / "out").string() + "/pattern.exr"));
+    EXPECT_THAT(lines["preview"], HasSubstr("--direct pattern.exr"));
     write(dir / "p.toml", kProject + "\n[optimize]\nspacing_mm = 0\n");
     EXPECT_THAT(error_of([&] { load_project(dir / "p.toml"); }), HasSubstr("optimize.spacing_mm"));
 }
@@ -244,6 +279,182 @@ TEST(Make, ADamagedManifestRemakesEverythingAfterANote) {
     write(dir / "out/manifest.json", "{\"steps\": 3");
     EXPECT_EQ(run_make(project, dir / "out", rfd).ran.size(), 9u);
     EXPECT_TRUE(run_make(project, dir / "out", rfd).ran.empty());
+}
+
+// Steps side by side, ending in any order, start only once what they read is made, and
+// leave the same files as one at a time.
+TEST(Make, StepsSideBySideWaitForWhatTheyReadAndMakeTheSameFiles) {
+    TempDir dir;
+    write_small_field(dir / "field", 0.5f);
+    write(dir / "p.toml", kProject);
+    const Project project = load_project(dir / "p.toml");
+    const std::vector<Step> steps = plan(project);
+    const std::vector<std::vector<std::size_t>> needs = dependencies(steps);
+    int edges = 0;
+    for (const auto& step_needs : needs) edges += static_cast<int>(step_needs.size());
+    EXPECT_EQ(edges, 6);  // the sheet, compare, tolerance and preview read the pattern, the verdict two of them
+
+    // A runner that records when each step started and ended, ending the latest first.
+    struct Recording : FakeRfd {
+        std::vector<std::string> events;
+        std::map<long, std::string> names;
+        long start(const Step& step, const fs::path& out, const fs::path& log) override {
+            events.push_back("start " + step.name);
+            const long handle = FakeRfd::start(step, out, log);
+            names[handle] = step.name;
+            return handle;
+        }
+        Ended wait() override {
+            const Ended ended = FakeRfd::wait();
+            events.push_back("end " + names[ended.handle]);
+            return ended;
+        }
+    };
+    Recording parallel;
+    parallel.last_first = true;
+    EXPECT_EQ(run_make(project, dir / "parallel", parallel, false, 3).ran.size(), 9u);
+    const auto at = [&](const std::string& event) {
+        return std::find(parallel.events.begin(), parallel.events.end(), event) - parallel.events.begin();
+    };
+    int side_by_side = 0, running = 0, checked = 0;
+    for (const std::string& event : parallel.events) {
+        running += event.starts_with("start") ? 1 : -1;
+        side_by_side = std::max(side_by_side, running);
+    }
+    for (std::size_t k = 0; k < steps.size(); ++k)
+        for (const std::size_t j : needs[k]) {
+            EXPECT_LT(at("end " + steps[j].name), at("start " + steps[k].name)) << steps[k].name << " after " << steps[j].name;
+            ++checked;
+        }
+    EXPECT_EQ(checked, edges);
+    EXPECT_EQ(side_by_side, 3);
+
+    FakeRfd serial;
+    run_make(project, dir / "serial", serial);
+    std::vector<std::string> files;
+    for (const auto& entry : fs::recursive_directory_iterator(dir / "serial"))
+        if (entry.is_regular_file()) files.push_back(fs::relative(entry.path(), dir / "serial").generic_string());
+    EXPECT_GE(files.size(), 15u);
+    for (const std::string& file : files)
+        EXPECT_EQ(content_hash(dir / "serial" / file), content_hash(dir / "parallel" / file)) << file;
+}
+
+TEST(Make, OnlyMakesTheNamedStepsAndWhatTheyRead) {
+    TempDir dir;
+    write_small_field(dir / "field", 0.5f);
+    write(dir / "p.toml", kProject);
+    const Project project = load_project(dir / "p.toml");
+    FakeRfd rfd;
+    EXPECT_THAT(run_make(project, dir / "out", rfd, false, 1, {"sheet_front_pdf"}).ran,
+                UnorderedElementsAre("pattern", "sheet_front_pdf"));
+    EXPECT_FALSE(fs::exists(dir / "out/README.txt"));  // written by a whole make only
+    EXPECT_THAT(run_make(project, dir / "out", rfd, false, 1, {"verdict", "wedge"}).ran,
+                UnorderedElementsAre("compare", "tolerance", "verdict", "wedge"));
+    EXPECT_THAT(error_of([&] { run_make(project, dir / "out", rfd, false, 1, {"sheets"}); }),
+                AllOf(HasSubstr("no step 'sheets'"), HasSubstr("sheet_front_pdf")));
+}
+
+// Turning an output off removes what an earlier make made of it, from the folder, the
+// manifest and README.txt.
+TEST(Make, WhatThePlanNoLongerMakesIsRemovedAndNotListed) {
+    TempDir dir;
+    write_small_field(dir / "field", 0.5f);
+    write(dir / "p.toml", kProject);
+    FakeRfd rfd;
+    run_make(load_project(dir / "p.toml"), dir / "out", rfd);
+    ASSERT_TRUE(fs::exists(dir / "out/print/moire.pdf"));
+    write(dir / "p.toml", kProject + "moire = false\n");
+    EXPECT_TRUE(run_make(load_project(dir / "p.toml"), dir / "out", rfd).ran.empty());
+    EXPECT_FALSE(fs::exists(dir / "out/print/moire.pdf"));
+    EXPECT_FALSE(fs::exists(dir / "out/print/moire.png"));
+    EXPECT_FALSE(fs::exists(dir / "out/logs/moire.txt"));
+    EXPECT_TRUE(fs::exists(dir / "out/print/wedge.pdf"));
+    EXPECT_FALSE(Manifest::read(dir / "out").steps().count("moire"));
+    std::ifstream readme(dir / "out/README.txt");
+    const std::string text{std::istreambuf_iterator<char>(readme), std::istreambuf_iterator<char>()};
+    EXPECT_THAT(text, HasSubstr("wedge.pdf"));
+    EXPECT_EQ(text.find("moire"), std::string::npos);
+}
+
+TEST(Make, ASecondMakeIntoTheSameFolderIsRefusedWhileTheFirstRuns) {
+    TempDir dir;
+    write_small_field(dir / "field", 0.5f);
+    write(dir / "p.toml", kProject);
+    FakeRfd rfd;
+    fs::create_directories(dir / "out");
+    {
+        const ExclusiveLock first(dir / "out/.rfd-make.lock", "busy");
+        EXPECT_THAT(error_of([&] { run_make(load_project(dir / "p.toml"), dir / "out", rfd); }),
+                    AllOf(HasSubstr("another rfd make is making into"), HasSubstr("out")));
+        EXPECT_TRUE(rfd.calls.empty());
+    }
+    EXPECT_EQ(run_make(load_project(dir / "p.toml"), dir / "out", rfd).ran.size(), 9u);
+}
+
+// A signal while steps run: the running steps' outputs and logs are removed, what ended
+// before stays made, and the next make makes the rest.
+TEST(Make, AStopSignalRemovesWhatTheRunningStepsWroteAndKeepsTheRest) {
+    TempDir dir;
+    write_small_field(dir / "field", 0.5f);
+    write(dir / "p.toml", kProject);
+    const Project project = load_project(dir / "p.toml");
+    struct Stopped : FakeRfd {
+        int started = 0;
+        long start(const Step& step, const fs::path& out, const fs::path& log) override {
+            ++started;
+            return FakeRfd::start(step, out, log);
+        }
+        int stop_signal() const override { return started >= 3 ? 15 : 0; }  // during the third step
+    };
+    Stopped rfd;
+    MakeOptions options;
+    options.rfd_identity = "rfd test";
+    try {
+        make(project, dir / "out", rfd, options);
+        ADD_FAILURE() << "make went on after the signal";
+    } catch (const Interrupted& stop) {
+        EXPECT_EQ(stop.exit_code(), 128 + 15);
+    }
+    EXPECT_EQ(rfd.started, 3);
+    EXPECT_TRUE(fs::exists(dir / "out/pattern.exr"));
+    EXPECT_TRUE(fs::exists(dir / "out/print/front.pdf"));
+    EXPECT_FALSE(fs::exists(dir / "out/print/moire.pdf"));  // the third step, stopped
+    for (const auto& entry : fs::recursive_directory_iterator(dir / "out"))
+        EXPECT_FALSE(entry.path().filename().string().starts_with(".running")) << entry.path();
+    EXPECT_EQ(Manifest::read(dir / "out").steps().size(), 2u);
+    FakeRfd again;
+    EXPECT_EQ(run_make(project, dir / "out", again).ran.size(), 7u);
+}
+
+TEST(Make, TheSameProjectMadeIntoTwoFoldersGivesTheSameFiles) {
+    TempDir dir;
+    write_small_field(dir / "field", 0.5f);
+    write(dir / "p.toml", kProject);
+    const Project project = load_project(dir / "p.toml");
+    FakeRfd rfd;
+    run_make(project, dir / "one", rfd);
+    run_make(project, dir / "deeper/two", rfd);
+    int compared = 0;
+    for (const auto& entry : fs::recursive_directory_iterator(dir / "one")) {
+        if (!entry.is_regular_file()) continue;
+        const fs::path file = fs::relative(entry.path(), dir / "one");
+        EXPECT_EQ(content_hash(entry.path()), content_hash(dir / "deeper/two" / file)) << file;
+        ++compared;
+    }
+    EXPECT_GE(compared, 15);
+}
+
+TEST(ProjectFile, SourcesMustBeRegularFilesOrFolders) {
+    TempDir dir;
+    write_small_field(dir / "field", 0.5f);
+    const auto error_for = [&](const std::string& source) {
+        write(dir / "p.toml", "[project]\ndesign = \"design2\"\n[source]\n" + source + "\n");
+        return error_of([&] { load_project(dir / "p.toml"); });
+    };
+    EXPECT_THAT(error_for("field = \"/dev/zero\""), AllOf(HasSubstr("source.field"), HasSubstr("not a regular file")));
+    EXPECT_THAT(error_for("scene = \"field\""), AllOf(HasSubstr("source.scene"), HasSubstr("is a folder")));
+    EXPECT_THAT(error_for("scene = \"\""), AllOf(HasSubstr("source.scene"), HasSubstr("empty name")));
+    EXPECT_EQ(error_for("field = \"field\""), "");
 }
 
 TEST(ContentHash, FoldersHashNamesAndContents) {

@@ -5,7 +5,14 @@
 #     project's printer;
 #  2. an RTIBuilder-style capture (absolute Windows paths, CRLF, JPEGs in jpeg-exports/, a
 #     bright "sphere" in a corner outside the object) made through a `region`, no edits;
-#  3. a project that names an unknown key: exit 2, the file and line, nothing made.
+#  3. a project that names an unknown key: exit 2, the file and line, nothing made;
+#  4. the same project into a deeper folder with -j 1 gives the same bytes as -j 2 (logs aside);
+#     a command of README.txt run from a copy of the folder re-makes its file as it was;
+#     --only makes the named step and what it reads;
+#  5. SIGTERM while a step runs: exit 143, the step's process ended, no temporary or
+#     half-written file, and the next make finishes the rest; a second make into a folder
+#     another one is making into is refused;
+#  6. sources that are not regular files (a device, a folder as scene) are refused at once.
 # Usage: make.sh RFD OIIOTOOL SOURCE_DIR WORK_DIR
 set -euo pipefail
 rfd="$1"
@@ -127,4 +134,64 @@ set -e
 [ "$code" = 2 ] || fail "a bad project file exited $code"
 grep -q "bad.toml:3:.*project.colour: unknown key" "$work/bad.txt" || fail "message: $(cat "$work/bad.txt")"
 [ ! -e "$work/bad_out" ] || fail "a bad project file made something"
+# 4. Two folders, one and two steps at a time: the same files, byte for byte.
+"$rfd" make "$work/letters.toml" --out "$work/deeper/folder/out" -j 1 > "$work/run_j1.txt"
+grep -q "9 step(s) made" "$work/run_j1.txt" || fail "-j 1: $(cat "$work/run_j1.txt")"
+diff -r --exclude=logs "$work/out" "$work/deeper/folder/out" > "$work/diff.txt" \
+  || fail "-j 1 into another folder differs from -j 2: $(head -5 "$work/diff.txt")"
+grep -rq -- "$work/out" "$work/out" --exclude-dir=logs && fail "an output records the output folder's path"
+# README.txt's commands run from its folder, wherever it has moved.
+cp -r "$work/out" "$work/moved"
+sheet_command=$(grep -E '^    rfd print sheet .*front.pdf' "$work/moved/README.txt")
+[ -n "$sheet_command" ] || fail "README.txt has no sheet command"
+rm "$work/moved/print/front.pdf"
+(cd "$work/moved" && PATH="$(dirname "$rfd"):$PATH" && eval "$sheet_command --quiet" > /dev/null) \
+  || fail "README.txt's command failed from its folder: $sheet_command"
+cmp -s "$work/moved/print/front.pdf" "$work/out/print/front.pdf" || fail "README.txt's command made another sheet"
+"$rfd" make "$work/letters.toml" --out "$work/only" --only sheet_front_pdf > "$work/only.txt"
+grep -q "2 step(s) made" "$work/only.txt" || fail "--only: $(cat "$work/only.txt")"
+[ -s "$work/only/print/front.pdf" ] && [ ! -e "$work/only/print/moire.pdf" ] || fail "--only made the wrong files"
+
+# 5. SIGTERM while a step runs, and a second make meanwhile.
+running_step() {  # waits until a step of folder $1 runs; prints its log's name
+  for _ in $(seq 1 1500); do
+    found=$(find "$1/logs" -name '.running-*' 2>/dev/null | head -1)
+    [ -n "$found" ] && { echo "$found"; return 0; }
+    sleep 0.01
+  done
+  return 1
+}
+"$rfd" make "$work/letters.toml" --out "$work/killed" -j 1 > "$work/killed.txt" 2>&1 &
+make_pid=$!
+running_step "$work/killed" > /dev/null || fail "no step of the make to stop ever ran"
+set +e
+"$rfd" make "$work/letters.toml" --out "$work/killed" > /dev/null 2> "$work/second.txt"
+second=$?
+kill -TERM "$make_pid"
+wait "$make_pid"
+code=$?
+set -e
+[ "$second" = 3 ] || fail "a second make into a busy folder exited $second"
+grep -q "another rfd make is making into" "$work/second.txt" || fail "second make: $(cat "$work/second.txt")"
+[ "$code" = 143 ] || fail "rfd make stopped by SIGTERM exited $code: $(cat "$work/killed.txt")"
+for proc in /proc/[0-9]*; do
+  [ "$(readlink "$proc/cwd" 2>/dev/null)" = "$work/killed" ] && fail "a step still runs after SIGTERM: $(cat "$proc/cmdline" | tr '\0' ' ')"
+done
+leftovers=$(find "$work/killed" -name '.tmp*' -o -name '.running-*')
+[ -z "$leftovers" ] || fail "SIGTERM left $leftovers"
+"$rfd" make "$work/letters.toml" --out "$work/killed" > "$work/killed2.txt" || fail "the make after SIGTERM failed"
+diff -r --exclude=logs "$work/out" "$work/killed" > /dev/null || fail "the make after SIGTERM differs"
+
+# 6. Sources that are not regular files: refused at once, naming the key.
+printf '[project]\ndesign = "design2"\n[source]\nfield = "/dev/zero"\n' > "$work/device.toml"
+printf '[project]\ndesign = "design2"\n[source]\nscene = "field"\n' > "$work/folder.toml"
+for project in device folder; do
+  set +e
+  timeout 20 "$rfd" make "$work/$project.toml" --out "$work/${project}_out" --dry-run > /dev/null 2> "$work/$project.txt"
+  code=$?
+  set -e
+  [ "$code" = 2 ] || fail "a $project as source exited $code: $(cat "$work/$project.txt")"
+  grep -q "source\.\(field\|scene\)" "$work/$project.txt" || fail "message: $(cat "$work/$project.txt")"
+done
+
 echo "rfd make: all checks passed"
