@@ -47,15 +47,33 @@ namespace {
 // floating point lands a rounding error away from the next plane's z.
 constexpr double kTouching = 1e-6;  // mm
 
+// What a design's lengths may be: from a micrometre (below, a print dot is larger than the
+// part) to 100 m. Beyond them every figure the optics derive would be 0, huge or NaN.
+constexpr double kShortestLength = 1e-3, kLongestLength = 1e5;  // mm
+// A nearly flat surface has a radius and focal length far beyond any part's size.
+constexpr double kLongestRadius = 1e9;  // mm
+
+double length(ConfigTable& t, const std::string& key) { return t.number(key, kShortestLength, kLongestLength); }
+double radius(ConfigTable& t, const std::string& key) { return t.number(key, kShortestLength, kLongestRadius); }
+
+std::array<double, 2> length_pair(ConfigTable& t, const std::string& key) {
+    const std::array<double, 2> pair = t.positive_pair(key);
+    for (const double value : pair)
+        if (value < kShortestLength || value > kLongestLength)
+            t.fail(key, "expected lengths from " + format_number(kShortestLength) + " to " +
+                            format_number(kLongestLength) + " mm, found " + format_number(value));
+    return pair;
+}
+
 PlanoConvex read_plano_convex(ConfigTable& t) {
     PlanoConvex lens;
-    lens.radius = t.positive("radius_mm");
+    lens.radius = radius(t, "radius_mm");
     lens.conic = t.optional_number("conic", -1e3, 1e3).value_or(0.0);
-    lens.center_thickness = t.positive("center_thickness_mm");
+    lens.center_thickness = length(t, "center_thickness_mm");
     lens.material = t.optional_string("material").value_or("");
     lens.index = read_medium(t);
     if (lens.index <= 1.0) t.fail(t.has("index") ? "index" : "material", "a lens needs an index above 1");
-    lens.nominal_focal_length = t.positive("focal_length_mm");
+    lens.nominal_focal_length = radius(t, "focal_length_mm");
     const double computed = focal_length(lens);
     // Makers round their focal lengths; 2% catches a wrong radius, index or unit.
     if (std::abs(computed - lens.nominal_focal_length) > 0.02 * lens.nominal_focal_length)
@@ -87,15 +105,16 @@ Lattice read_lattice(ConfigTable& t) {
         double pitch = 0.0;
         if (t.has("lenses_per_cm2")) {
             // A hexagonal cell has area pitch^2 sqrt(3)/2.
-            const double density = t.positive("lenses_per_cm2");
+            // 1e-4 to 1e6 per cm^2: pitches from about 10 um to 1 m, within the lengths above.
+            const double density = t.number("lenses_per_cm2", 1e-4, 1e6);
             pitch = std::sqrt(100.0 / density / (std::sqrt(3.0) / 2.0));
             if (t.has("pitch_mm")) t.fail("pitch_mm", "give either pitch_mm or lenses_per_cm2");
         } else {
-            pitch = t.positive("pitch_mm");
+            pitch = length(t, "pitch_mm");
         }
         return Lattice::hexagonal(pitch, static_cast<int>(count[0]), static_cast<int>(count[1]));
     }
-    const auto pitch = t.positive_pair("pitch_mm");
+    const auto pitch = length_pair(t, "pitch_mm");
     return Lattice::rectangular(pitch[0], pitch[1], static_cast<int>(count[0]),
                                 static_cast<int>(count[1]));
 }
@@ -104,7 +123,7 @@ Part read_part(ConfigTable& t) {
     const std::string type = t.choice("type", {"lens", "lenslet_array", "sheet"});
     t.optional_string("source");  // free text: maker, catalogue number, datasheet
     if (type == "lens") {
-        LensPart part{read_plano_convex(t), t.positive("diameter_mm")};
+        LensPart part{read_plano_convex(t), length(t, "diameter_mm")};
         check_reach(t, part.lens, part.diameter / 2, "the rim");
         return part;
     }
@@ -115,7 +134,7 @@ Part read_part(ConfigTable& t) {
         return LensletArrayPart{lens, lattice};
     }
     SheetPart sheet;
-    sheet.thickness = t.positive("thickness_mm");
+    sheet.thickness = length(t, "thickness_mm");
     sheet.material = t.optional_string("material").value_or("");
     sheet.index = read_medium(t);
     return sheet;
@@ -211,7 +230,7 @@ Design build_design(ConfigTable& root) {
     if (auto t = root.optional_table("macro")) {
         MacroGrid macro;
         const auto count = t->integer_pair("count", 1, 1000);
-        const auto pitch = t->positive_pair("pitch_mm");
+        const auto pitch = length_pair(*t, "pitch_mm");
         macro = {static_cast<int>(count[0]), static_cast<int>(count[1]), pitch[0], pitch[1]};
         t->finish();
         design.macro = macro;

@@ -180,7 +180,22 @@ TEST(Design, NegativeDistancesAreRejected) {
 TEST(Design, NegativeThicknessIsRejected) {
     const std::string text = replace(kDesignI, "thickness_mm = 0.13", "thickness_mm = -0.13");
     EXPECT_THAT(error_of(text), HasSubstr("parts.diffuser.thickness_mm"));
-    EXPECT_THAT(error_of(text), HasSubstr("expected a positive number"));
+    EXPECT_THAT(error_of(text), HasSubstr("outside the allowed range [0.001, 100000]"));
+}
+
+// Values no part has, which would make every derived figure 0, huge or NaN, are refused
+// with their key (rfd design show printed "pitch 0.0000 mm" and "nan um" for 3e38).
+TEST(Design, LengthsAndDensitiesOutsideWhatPartsHaveAreRejected) {
+    const std::string dense = replace(kDesignI, "pitch_mm = 2.358", "lenses_per_cm2 = 3e38");
+    EXPECT_THAT(error_of(dense), AllOf(HasSubstr("parts.array.lenses_per_cm2"), HasSubstr("outside the allowed range")));
+    EXPECT_EQ(error_of(replace(kDesignI, "pitch_mm = 2.358", "lenses_per_cm2 = 20.77")), "");
+    EXPECT_THAT(error_of(replace(kDesignI, "pitch_mm = 2.358", "pitch_mm = 1e-9")),
+                AllOf(HasSubstr("parts.array.pitch_mm"), HasSubstr("outside the allowed range")));
+    EXPECT_THAT(error_of(replace(kDesignI, "radius_mm = 1.4751", "radius_mm = 1e300")),
+                HasSubstr("parts.array.radius_mm"));
+    const std::string rectangular = replace(replace(kDesignI, "lattice = \"hexagonal\"", "lattice = \"rectangular\""),
+                                            "pitch_mm = 2.358", "pitch_mm = [2.358, 1e7]");
+    EXPECT_THAT(error_of(rectangular), AllOf(HasSubstr("parts.array.pitch_mm"), HasSubstr("expected lengths from")));
 }
 
 TEST(Design, FocalLengthMustMatchThePrescription) {
