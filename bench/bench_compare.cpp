@@ -1,4 +1,4 @@
-// rfd simulate compare's unit of work (patterns/compare.hpp): one light direction on
+// rfd simulate compare's unit of work (predict/compare.hpp): one light direction on
 // Design II with the diamonds test field, 32 x 32 rays per lenslet, paraxial and exact in
 // the same run so the exact model's cost reads as a ratio. The pattern is encoded and tone
 // mapped in memory, so the figure is the comparison's (two simulations, the clear print's

@@ -1,5 +1,5 @@
 // Predicted display output against the software relighting of the same field
-// (patterns/compare.hpp), as numbers: Design II shows its field at >= 30 dB inside its field
+// (predict/compare.hpp), as numbers: Design II shows its field at >= 30 dB inside its field
 // of view; Design I, whose partial images slide on the diffuser as the light moves, only near
 // its axis; a pattern shifted on the sheet loses many dB (the comparison can fail); the SIG08
 // letters of the thesis's Design II demonstration each appear under their own light and
