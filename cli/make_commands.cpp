@@ -10,11 +10,10 @@
 #include <thread>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "cli/commands.hpp"
 #include "core/command.hpp"
 #include "core/error.hpp"
+#include "predict/summaries.hpp"
 #include "project/make.hpp"
 #include "project/manifest.hpp"
 #include "project/project.hpp"
@@ -82,11 +81,9 @@ void add_make_command(CLI::App& app) {
             std::fflush(stdout);
         };
         const std::vector<project::StepOutcome> outcomes = project::make(project, opt->out, runner, options, listener);
-        std::ifstream verdict(fs::path(opt->out) / "verdict.json");
-        if (verdict && opt->only.empty()) {
-            const nlohmann::json v = nlohmann::json::parse(verdict, nullptr, false);
-            if (!v.is_discarded() && v.contains("line")) std::printf("verdict: %s\n", v["line"].get<std::string>().c_str());
-        }
+        if (opt->only.empty() && fs::exists(fs::path(opt->out) / "verdict.json"))
+            std::printf("verdict: %s\n",
+                        predict::read_summary<predict::VerdictReport>(fs::path(opt->out) / "verdict.json").line.c_str());
         int ran = 0;
         for (const auto& step : outcomes) ran += step.ran ? 1 : 0;
         std::printf("%d step(s) made, %zu up to date. What to print and how to assemble: %s/README.txt (and "

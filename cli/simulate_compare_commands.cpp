@@ -12,8 +12,6 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "core/error.hpp"
@@ -25,6 +23,7 @@
 #include "core/units.hpp"
 #include "optics/display.hpp"
 #include "predict/compare.hpp"
+#include "predict/summaries.hpp"
 #include "patterns/encode.hpp"
 #include "print/printed.hpp"
 #include "core/text.hpp"
@@ -54,16 +53,141 @@ std::vector<int> parse_ray_counts(const std::string& text) {
 }
 
 // Min and mean PSNR over the directions a predicate keeps.
-struct Stats {
-    int count = 0;
-    double min = std::numeric_limits<double>::infinity(), sum = 0.0;
-    void add(double value) {
-        ++count;
-        min = std::min(min, value);
-        sum += value;
+std::string optional_text(const std::optional<double>& value) {
+    return value ? format_fixed(*value, 4) : std::string();
+}
+
+// directions.csv: summary.json's directions as a table (no times: byte-identical reruns).
+std::string directions_csv(const predict::CompareSummary& summary) {
+    std::string csv = "index,field_theta_deg,field_phi_deg,display_angle_deg,inside_fov,crosstalk_free,efficiency,"
+                      "peak,mse,psnr_db,psnr_own_peak_db,fitted_gain,psnr_fitted_db,psnr_cell_db\n";
+    for (std::size_t k = 0; k < summary.directions.size(); ++k) {
+        const predict::CompareDirection& d = summary.directions[k];
+        csv += std::to_string(k) + "," + format_fixed(d.field_theta_deg, 4) + "," + format_fixed(d.field_phi_deg, 4) +
+               "," + format_fixed(d.display_angle_deg, 4) + "," + (d.inside_fov ? "1" : "0") + "," +
+               (d.crosstalk_free ? "1" : "0") + "," + format_number(d.efficiency) + "," + format_number(d.peak) + "," +
+               format_number(d.mse) + "," + optional_text(d.psnr_db) + "," + optional_text(d.psnr_own_peak_db) + "," +
+               format_number(d.fitted_gain) + "," + optional_text(d.psnr_fitted_db) + "," +
+               optional_text(d.psnr_cell_db) + "\n";
     }
-    double mean() const { return count ? sum / count : std::nan(""); }
-};
+    return csv;
+}
+
+// PSNR against the light's angle from the display's axis, inside and outside the FOV.
+LineChart psnr_chart(const predict::CompareSummary& summary, bool cores) {
+    std::vector<const predict::CompareDirection*> order;
+    for (const auto& d : summary.directions) order.push_back(&d);
+    std::stable_sort(order.begin(), order.end(),
+                     [](const auto* a, const auto* b) { return a->display_angle_deg < b->display_angle_deg; });
+    LineChart chart;
+    chart.title = "Predicted output against software relighting: " + summary.design;
+    chart.x_label = "light's angle to the display's axis (degrees)";
+    chart.y_label = "PSNR against the field's brightest (dB)";
+    chart.key_position = "bottom left";
+    PlotSeries clean{"crosstalk-free", {}, {}}, crosstalk{"inside the FOV, with crosstalk", {}, {}},
+        outside{"outside the FOV (wrap-over)", {}, {}}, cells{"over whole cells", {}, {}};
+    const auto value = [](const std::optional<double>& v) { return v.value_or(std::nan("")); };
+    for (const predict::CompareDirection* d : order) {
+        PlotSeries& zone = d->crosstalk_free ? clean : d->inside_fov ? crosstalk : outside;
+        zone.x.push_back(d->display_angle_deg);
+        zone.y.push_back(value(d->psnr_db));
+        if (cores) {
+            cells.x.push_back(d->display_angle_deg);
+            cells.y.push_back(value(d->psnr_cell_db));
+        }
+    }
+    for (PlotSeries* series : {&clean, &crosstalk, &outside, &cells})
+        if (!series->x.empty()) chart.series.push_back(*series);
+    return chart;
+}
+
+std::optional<double> finite(double value) {
+    return std::isfinite(value) ? std::optional<double>(value) : std::nullopt;
+}
+
+// One accuracy point as summary.json records it; `angles` are its directions' angles.
+predict::AccuracyRecord accuracy_record(const predict::AccuracyPoint& p, const std::vector<double>& angles) {
+    predict::AccuracyRecord record{p.label, p.rays_per_side, static_cast<long long>(p.rays), p.seconds, p.mse,
+                                   finite(p.psnr_db), finite(p.worst_psnr_db), finite(p.fitted_psnr_db), {}};
+    for (std::size_t k = 0; k < p.psnr_per_direction_db.size() && k < angles.size(); ++k)
+        record.per_direction.push_back(
+            {angles[k], finite(p.psnr_per_direction_db[k]), finite(p.fitted_psnr_per_direction_db[k])});
+    return record;
+}
+
+std::string accuracy_csv(const std::vector<predict::AccuracyPoint>& points) {
+    std::string table = "model,rays_per_side,rays,seconds,mse,psnr_db,worst_psnr_db,fitted_psnr_db\n";
+    for (const auto& p : points)
+        table += p.label + "," + std::to_string(p.rays_per_side) + "," + std::to_string(p.rays) + "," +
+                 format_fixed(p.seconds, 5) + "," + format_number(p.mse) + "," + format_fixed(p.psnr_db, 4) + "," +
+                 format_fixed(p.worst_psnr_db, 4) + "," + format_fixed(p.fitted_psnr_db, 4) + "\n";
+    return table;
+}
+
+LineChart accuracy_chart(const std::string& design, const std::vector<predict::AccuracyModel>& models,
+                         const std::vector<predict::AccuracyPoint>& points, std::size_t directions, int reference_rays) {
+    LineChart speed;
+    speed.title = "Simulator speed against accuracy: " + design;
+    speed.x_label = "simulation time over " + std::to_string(directions) + " directions in the field of view (s)";
+    speed.y_label = "PSNR per lenslet against exact, " + std::to_string(reference_rays) + " rays per side (dB)";
+    speed.key_position = "bottom right";
+    for (const auto& model : models) {
+        PlotSeries raw{model.label, {}, {}}, fitted{model.label + ", scale fitted", {}, {}};
+        for (const auto& p : points)
+            if (p.label == model.label) {
+                raw.x.push_back(p.seconds);
+                raw.y.push_back(std::isfinite(p.psnr_db) ? p.psnr_db : std::nan(""));
+                fitted.x.push_back(p.seconds);
+                fitted.y.push_back(std::isfinite(p.fitted_psnr_db) ? p.fitted_psnr_db : std::nan(""));
+            }
+        speed.series.push_back(raw);
+        speed.series.push_back(fitted);
+    }
+    return speed;
+}
+
+void print_comparison(const std::string& out, const predict::CompareSummary& s,
+                      const std::vector<predict::AccuracyPoint>& points, int reference_rays) {
+    const auto db = [](const std::optional<double>& v) { return v ? format_fixed(*v, 2) : std::string("-"); };
+    std::printf("%s: '%s' predicted against the relit field at %d x %d lenslets (model %s, %d rays per side)\n",
+                out.c_str(), s.design.c_str(), s.lenslets[0], s.lenslets[1], s.model.c_str(), s.rays_per_side);
+    if (s.core_fraction < 1.0)
+        std::printf("  macro-pixels %.3fx their cells: PSNR over each cell's core (%.0f %% of its width), "
+                    "\"cell\" over whole cells\n",
+                    s.core_magnification, 100.0 * s.core_fraction);
+    std::printf("  PSNR against the field's brightest value, %s\n", format_number(s.field_peak).c_str());
+    std::printf("  %-5s %8s %8s %8s %9s %8s %9s %9s %9s %9s\n", "light", "theta", "phi", "angle", "fov", "eta",
+                "PSNR dB", "own peak", "fitted dB", "cell dB");
+    for (std::size_t k = 0; k < s.directions.size(); ++k) {
+        const predict::CompareDirection& d = s.directions[k];
+        std::printf("  %-5zu %8.2f %8.2f %8.2f %9s %8.4f %9s %9s %9s %9s\n", k, d.field_theta_deg, d.field_phi_deg,
+                    d.display_angle_deg, d.crosstalk_free ? "in" : d.inside_fov ? "crosstalk" : "out", d.efficiency,
+                    db(d.psnr_db).c_str(), db(d.psnr_own_peak_db).c_str(), db(d.psnr_fitted_db).c_str(),
+                    db(d.psnr_cell_db).c_str());
+    }
+    const std::size_t count = s.directions.size();
+    if (s.crosstalk_free.count)
+        std::printf("  crosstalk-free (%d of %zu): PSNR min %s dB, mean %s dB (cells: min %s dB)\n",
+                    s.crosstalk_free.count, count, db(s.crosstalk_free.min_psnr_db).c_str(),
+                    db(s.crosstalk_free.mean_psnr_db).c_str(), db(s.crosstalk_free.min_psnr_cell_db).c_str());
+    if (s.in_fov.count)
+        std::printf("  inside the field of view (%d of %zu): PSNR min %s dB, mean %s dB (fitted gain: min %s, "
+                    "mean %s; cells: min %s dB)\n",
+                    s.in_fov.count, count, db(s.in_fov.min_psnr_db).c_str(), db(s.in_fov.mean_psnr_db).c_str(),
+                    db(s.in_fov.min_psnr_fitted_db).c_str(), db(s.in_fov.mean_psnr_fitted_db).c_str(),
+                    db(s.in_fov.min_psnr_cell_db).c_str());
+    else
+        std::printf("  no direction inside the field of view\n");
+    if (!points.empty()) {
+        std::printf("  speed against accuracy over %zu directions (reference: exact, %d rays per side):\n",
+                    s.accuracy_directions, reference_rays);
+        std::printf("  %-16s %6s %10s %10s %9s %9s %10s\n", "model", "rays", "traced", "seconds", "PSNR dB", "worst dB",
+                    "fitted dB");
+        for (const auto& p : points)
+            std::printf("  %-16s %6d %10zu %10.4f %9.2f %9.2f %10.2f\n", p.label.c_str(), p.rays_per_side, p.rays,
+                        p.seconds, p.psnr_db, p.worst_psnr_db, p.fitted_psnr_db);
+    }
+}
 
 }  // namespace
 
@@ -181,10 +305,7 @@ void add_simulate_compare_command(CLI::App& simulate) {
         // Everything computed: now the files (no half-written folder on a refused input).
         ensure_directory(opt->out);
         const std::filesystem::path out(opt->out);
-        nlohmann::json rows = nlohmann::json::array();
-        std::string csv = "index,field_theta_deg,field_phi_deg,display_angle_deg,inside_fov,crosstalk_free,efficiency,"
-                          "peak,mse,psnr_db,fitted_gain,psnr_fitted_db,psnr_cell_db\n";
-        Stats fov, fov_fitted, fov_cell, clean, clean_cell;
+        std::vector<std::string> images;
         std::vector<Image> panels;  // prediction | reference | error, per direction
         for (std::size_t k = 0; k < results.size(); ++k) {
             const predict::DirectionComparison& r = results[k];
@@ -195,76 +316,23 @@ void add_simulate_compare_command(CLI::App& simulate) {
             write_image(out / (std::string(stem) + "_error.exr"), r.comparison.error);
             panels.push_back(predict::side_by_side(r, view_pixels, opt->error_gain));
             write_image(out / (std::string(stem) + ".png"), panels.back());
-            const SphericalAngles a = angles_of(r.field_direction);
-            const double theta = radians_to_degrees(a.theta), phi = radians_to_degrees(a.phi);
-            if (r.inside_field_of_view) {
-                fov.add(r.comparison.psnr_db);
-                fov_fitted.add(r.comparison.psnr_fitted_db);
-                fov_cell.add(r.cell_comparison.psnr_db);
-            }
-            if (r.crosstalk_free) {
-                clean.add(r.comparison.psnr_db);
-                clean_cell.add(r.cell_comparison.psnr_db);
-            }
-            rows.push_back({{"image", std::string(stem) + ".png"},
-                            {"field_theta_deg", theta},
-                            {"field_phi_deg", phi},
-                            {"display_angle_deg", r.display_angle_deg},
-                            {"inside_fov", r.inside_field_of_view},
-                            {"crosstalk_free", r.crosstalk_free},
-                            {"efficiency", r.efficiency},
-                            {"peak", r.comparison.peak},
-                            {"mse", r.comparison.mse},
-                            {"psnr_db", finite_or_null(r.comparison.psnr_db)},
-                            {"fitted_gain", r.comparison.fitted_gain},
-                            {"psnr_fitted_db", finite_or_null(r.comparison.psnr_fitted_db)},
-                            {"psnr_cell_db", finite_or_null(r.cell_comparison.psnr_db)},
-                            {"rays", r.rays}});
-            csv += std::to_string(k) + "," + format_fixed(theta, 4) + "," + format_fixed(phi, 4) + "," +
-                   format_fixed(r.display_angle_deg, 4) + "," + (r.inside_field_of_view ? "1" : "0") + "," +
-                   (r.crosstalk_free ? "1" : "0") + "," +
-                   format_number(r.efficiency) + "," + format_number(r.comparison.peak) + "," +
-                   format_number(r.comparison.mse) + "," + format_fixed(r.comparison.psnr_db, 4) + "," +
-                   format_number(r.comparison.fitted_gain) + "," + format_fixed(r.comparison.psnr_fitted_db, 4) + "," +
-                   format_fixed(r.cell_comparison.psnr_db, 4) + "\n";  // no times: byte-identical reruns
+            images.push_back(std::string(stem) + ".png");
         }
-        write_text_file(out / "directions.csv", csv);
+        predict::CompareSummary summary = predict::summarise_comparison(results, images);
+        summary.design = design.name;
+        summary.pattern = opt->pattern;
+        summary.field = opt->field;
+        summary.model = std::string(optics::to_string(options.model));
+        summary.model_choice = std::string(name_of(optics::kModelChoiceNames, opt->model));
+        summary.paraxial_error_dots = choice.paraxial_error_dots;
+        summary.rays_per_side = options.rays_per_side;
+        summary.lenslets = {count_x, encoder.lattice().count_y()};
+        summary.display_range_deg = radians_to_degrees(encoder.display_range().max_angle_rad);
+        write_text_file(out / "directions.csv", directions_csv(summary));
         // Every direction's panels on one page, in the order of directions.csv.
         write_image(out / "contact_sheet.png", tiled(panels, 3, 4, 1.0f));
 
-        // PSNR against the light's angle from the display's axis, inside and outside the FOV.
-        std::vector<std::size_t> order(results.size());
-        for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
-        std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-            return results[a].display_angle_deg < results[b].display_angle_deg;
-        });
-        LineChart chart;
-        chart.title = "Predicted output against software relighting: " + design.name;
-        chart.x_label = "light's angle to the display's axis (degrees)";
-        chart.y_label = "PSNR per lenslet (dB)";
-        chart.key_position = "bottom left";
-        PlotSeries all{"PSNR", {}, {}}, clean_series{"crosstalk-free", {}, {}},
-            crosstalk{"inside the FOV, with crosstalk", {}, {}}, outside{"outside the FOV (wrap-over)", {}, {}},
-            cells{"over whole cells", {}, {}};
-        auto finite = [](double v) { return std::isfinite(v) ? v : std::nan(""); };
-        for (std::size_t k : order) {
-            const auto& r = results[k];
-            all.x.push_back(r.display_angle_deg);
-            all.y.push_back(finite(r.comparison.psnr_db));
-            PlotSeries& zone = r.crosstalk_free ? clean_series : r.inside_field_of_view ? crosstalk : outside;
-            zone.x.push_back(r.display_angle_deg);
-            zone.y.push_back(finite(r.comparison.psnr_db));
-            if (comparison.core().fraction < 1.0) {
-                cells.x.push_back(r.display_angle_deg);
-                cells.y.push_back(finite(r.cell_comparison.psnr_db));
-            }
-        }
-        for (PlotSeries* series : {&clean_series, &crosstalk, &outside, &cells})
-            if (!series->x.empty()) chart.series.push_back(*series);
-
-        nlohmann::json accuracy = nlohmann::json::array();
         std::vector<predict::AccuracyPoint> points;
-        std::size_t accuracy_directions = 0;
         if (opt->chart_accuracy) {
             // Inside the field of view, where a model's error matters (all when none is).
             std::vector<Eigen::Vector3d> display_directions;
@@ -272,128 +340,30 @@ void add_simulate_compare_command(CLI::App& simulate) {
                 if (r.inside_field_of_view) display_directions.push_back(r.display_direction);
             if (display_directions.empty())
                 for (const auto& r : results) display_directions.push_back(r.display_direction);
-            accuracy_directions = display_directions.size();
+            summary.accuracy_directions = display_directions.size();
             points = predict::accuracy_sweep(simulator, pattern, display_directions, accuracy_models, accuracy_rays,
                                               opt->reference_rays, options);
-        }
-        // Charts last: a missing gnuplot still leaves every number on disk.
-        std::string table = "model,rays_per_side,rays,seconds,mse,psnr_db,worst_psnr_db,fitted_psnr_db\n";
-        for (const auto& p : points) {
-            table += p.label + "," + std::to_string(p.rays_per_side) + "," + std::to_string(p.rays) + "," +
-                     format_fixed(p.seconds, 5) + "," + format_number(p.mse) + "," + format_fixed(p.psnr_db, 4) + "," +
-                     format_fixed(p.worst_psnr_db, 4) + "," + format_fixed(p.fitted_psnr_db, 4) + "\n";
-            nlohmann::json per_direction = nlohmann::json::array();
-            std::vector<const predict::DirectionComparison*> used;
+            std::vector<double> angles;
             for (const auto& r : results)
-                if (r.inside_field_of_view || accuracy_directions == results.size()) used.push_back(&r);
-            for (std::size_t k = 0; k < p.psnr_per_direction_db.size(); ++k)
-                per_direction.push_back({{"display_angle_deg", used[k]->display_angle_deg},
-                                         {"psnr_db", finite_or_null(p.psnr_per_direction_db[k])},
-                                         {"fitted_psnr_db", finite_or_null(p.fitted_psnr_per_direction_db[k])}});
-            accuracy.push_back({{"model", p.label},
-                                {"rays_per_side", p.rays_per_side},
-                                {"rays", p.rays},
-                                {"seconds", p.seconds},
-                                {"mse", p.mse},
-                                {"psnr_db", finite_or_null(p.psnr_db)},
-                                {"worst_psnr_db", finite_or_null(p.worst_psnr_db)},
-                                {"fitted_psnr_db", finite_or_null(p.fitted_psnr_db)},
-                                {"per_direction", per_direction}});
+                if (r.inside_field_of_view || summary.accuracy_directions == results.size())
+                    angles.push_back(r.display_angle_deg);
+            for (const auto& p : points) summary.accuracy.push_back(accuracy_record(p, angles));
+            write_text_file(out / "accuracy_points.csv", accuracy_csv(points));
         }
-        if (opt->chart_accuracy) write_text_file(out / "accuracy_points.csv", table);
-
-        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        const nlohmann::json summary = {
-            {"design", design.name},
-            {"pattern", opt->pattern},
-            {"field", opt->field},
-            {"out", opt->out},
-            {"model", std::string(optics::to_string(options.model))},
-            {"model_choice", std::string(name_of(optics::kModelChoiceNames, opt->model))},
-            {"paraxial_error_dots", json_or_null(choice.paraxial_error_dots)},
-            {"rays_per_side", options.rays_per_side},
-            {"lenslets", {count_x, encoder.lattice().count_y()}},
-            {"display_range_deg", radians_to_degrees(encoder.display_range().max_angle_rad)},
-            {"peak", "largest reference value per direction"},
-            {"reference_scale", "the display's simulated response to a clear print under the same light (not fitted)"},
-            {"directions", rows},
-            {"macro_pixel_core", {{"fraction", comparison.core().fraction},
-                                  {"magnification", comparison.core().magnification}}},
-            {"inside_fov", fov.count},
-            {"min_psnr_in_fov_db", fov.count ? finite_or_null(fov.min) : nlohmann::json(nullptr)},
-            {"mean_psnr_in_fov_db", fov.count ? finite_or_null(fov.mean()) : nlohmann::json(nullptr)},
-            {"min_psnr_fitted_in_fov_db", fov.count ? finite_or_null(fov_fitted.min) : nlohmann::json(nullptr)},
-            {"mean_psnr_fitted_in_fov_db", fov.count ? finite_or_null(fov_fitted.mean()) : nlohmann::json(nullptr)},
-            {"min_psnr_cell_in_fov_db", fov.count ? finite_or_null(fov_cell.min) : nlohmann::json(nullptr)},
-            {"crosstalk_free", clean.count},
-            {"min_psnr_crosstalk_free_db", clean.count ? finite_or_null(clean.min) : nlohmann::json(nullptr)},
-            {"mean_psnr_crosstalk_free_db", clean.count ? finite_or_null(clean.mean()) : nlohmann::json(nullptr)},
-            {"min_psnr_cell_crosstalk_free_db", clean.count ? finite_or_null(clean_cell.min) : nlohmann::json(nullptr)},
-            {"accuracy_directions", accuracy_directions},
-            {"accuracy", accuracy}};
-        write_text_file(out / "summary.json", summary.dump(2) + "\n");
-        write_line_chart(chart, out / "psnr");
-        if (opt->chart_accuracy) {
-            LineChart speed;
-            speed.title = "Simulator speed against accuracy: " + design.name;
-            speed.x_label = "simulation time over " + std::to_string(accuracy_directions) +
-                            " directions in the field of view (s)";
-            speed.y_label = "PSNR per lenslet against exact, " + std::to_string(opt->reference_rays) + " rays per side (dB)";
-            speed.key_position = "bottom right";
-            for (const auto& model : accuracy_models) {
-                PlotSeries raw{model.label, {}, {}}, fitted{model.label + ", scale fitted", {}, {}};
-                for (const auto& p : points)
-                    if (p.label == model.label) {
-                        raw.x.push_back(p.seconds);
-                        raw.y.push_back(std::isfinite(p.psnr_db) ? p.psnr_db : std::nan(""));
-                        fitted.x.push_back(p.seconds);
-                        fitted.y.push_back(std::isfinite(p.fitted_psnr_db) ? p.fitted_psnr_db : std::nan(""));
-                    }
-                speed.series.push_back(raw);
-                speed.series.push_back(fitted);
-            }
-            write_line_chart(speed, out / "accuracy");
-        }
+        predict::write_summary(out / "summary.json", summary);
+        // Charts last: a missing gnuplot still leaves every number on disk.
+        write_line_chart(psnr_chart(summary, comparison.core().fraction < 1.0), out / "psnr");
+        if (opt->chart_accuracy)
+            write_line_chart(accuracy_chart(design.name, accuracy_models, points, summary.accuracy_directions,
+                                            opt->reference_rays),
+                             out / "accuracy");
 
         if (opt->json) {
-            std::printf("%s\n", summary.dump(2).c_str());
+            std::printf("%s", predict::summary_text(summary).c_str());
             return;
         }
-        std::printf("%s: '%s' predicted against the relit field at %d x %d lenslets (model %s, %d rays per side)\n",
-                    opt->out.c_str(), design.name.c_str(), count_x, encoder.lattice().count_y(),
-                    std::string(optics::to_string(options.model)).c_str(), options.rays_per_side);
-        if (comparison.core().fraction < 1.0)
-            std::printf("  macro-pixels %.3fx their cells: PSNR over each cell's core (%.0f %% of its width), "
-                        "\"cell\" over whole cells\n",
-                        comparison.core().magnification, 100.0 * comparison.core().fraction);
-        std::printf("  %-5s %8s %8s %8s %9s %8s %9s %9s %9s\n", "light", "theta", "phi", "angle", "fov", "eta", "PSNR dB",
-                    "fitted dB", "cell dB");
-        for (std::size_t k = 0; k < results.size(); ++k) {
-            const auto& r = results[k];
-            const SphericalAngles a = angles_of(r.field_direction);
-            std::printf("  %-5zu %8.2f %8.2f %8.2f %9s %8.4f %9.2f %9.2f %9.2f\n", k, radians_to_degrees(a.theta),
-                        radians_to_degrees(a.phi), r.display_angle_deg,
-                        r.crosstalk_free ? "in" : r.inside_field_of_view ? "crosstalk" : "out", r.efficiency,
-                        r.comparison.psnr_db, r.comparison.psnr_fitted_db, r.cell_comparison.psnr_db);
-        }
-        if (clean.count)
-            std::printf("  crosstalk-free (%d of %zu): PSNR min %.2f dB, mean %.2f dB (cells: min %.2f dB)\n", clean.count,
-                        results.size(), clean.min, clean.mean(), clean_cell.min);
-        if (fov.count)
-            std::printf("  inside the field of view (%d of %zu): PSNR min %.2f dB, mean %.2f dB (fitted gain: min %.2f, "
-                        "mean %.2f; cells: min %.2f dB)\n",
-                        fov.count, results.size(), fov.min, fov.mean(), fov_fitted.min, fov_fitted.mean(), fov_cell.min);
-        else
-            std::printf("  no direction inside the field of view\n");
-        if (!points.empty()) {
-            std::printf("  speed against accuracy over %zu directions (reference: exact, %d rays per side):\n",
-                        accuracy_directions, opt->reference_rays);
-            std::printf("  %-16s %6s %10s %10s %9s %9s %10s\n", "model", "rays", "traced", "seconds", "PSNR dB", "worst dB",
-                        "fitted dB");
-            for (const auto& p : points)
-                std::printf("  %-16s %6d %10zu %10.4f %9.2f %9.2f %10.2f\n", p.label.c_str(), p.rays_per_side, p.rays,
-                            p.seconds, p.psnr_db, p.worst_psnr_db, p.fitted_psnr_db);
-        }
+        print_comparison(opt->out, summary, points, opt->reference_rays);
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         std::printf("  time         %.2f s\n", seconds);
     });
 }

@@ -13,8 +13,6 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "core/error.hpp"
@@ -24,6 +22,7 @@
 #include "core/plot.hpp"
 #include "optics/display.hpp"
 #include "optics/tolerance.hpp"
+#include "predict/summaries.hpp"
 #include "patterns/encode.hpp"
 #include "print/printed.hpp"
 
@@ -147,7 +146,7 @@ void add_simulate_tolerance_command(CLI::App& simulate) {
 
         ensure_directory(opt->out);
         const std::filesystem::path out(opt->out);
-        nlohmann::json curves = nlohmann::json::array();
+        predict::ToleranceSummary record;
         std::ostringstream table;
         std::vector<std::string> phrases;
         for (const optics::ToleranceCurve& curve : report.curves) {
@@ -162,7 +161,7 @@ void add_simulate_tolerance_command(CLI::App& simulate) {
             PlotSeries psnr{"PSNR vs error-free", {}, {}, false};
             PlotSeries threshold{"threshold " + format(opt->threshold) + " dB", {}, {}, false};
             PlotSeries shift{"picture shift (right axis)", {}, {}, true};
-            nlohmann::json points = nlohmann::json::array();
+            predict::ToleranceCurveRecord curve_record{name, shown.unit, 0.0, std::nullopt, {}, {}, name + ".svg"};
             for (const optics::TolerancePoint& p : curve.sweep) {
                 const double x = p.error * shown.factor;
                 psnr.x.push_back(x);
@@ -171,11 +170,10 @@ void add_simulate_tolerance_command(CLI::App& simulate) {
                 threshold.y.push_back(opt->threshold);
                 shift.x.push_back(x);
                 shift.y.push_back(p.shift_lenslets);
-                points.push_back({{"error", x}, {"psnr_db", p.psnr_db}, {"shift_lenslets", p.shift_lenslets}});
+                curve_record.sweep.push_back({x, p.psnr_db, p.shift_lenslets});
             }
-            nlohmann::json refined = nlohmann::json::array();
             for (const optics::TolerancePoint& p : curve.refinement)
-                refined.push_back({{"error", p.error * shown.factor}, {"psnr_db", p.psnr_db}});
+                curve_record.refinement.push_back({p.error * shown.factor, p.psnr_db, std::nullopt});
             chart.series = {psnr, threshold, shift};
             const double largest = curve.sweep.back().error * shown.factor;
             std::string verdict;
@@ -193,15 +191,9 @@ void add_simulate_tolerance_command(CLI::App& simulate) {
             char row[256];
             std::snprintf(row, sizeof row, "  %-24s %s\n", shown.label, verdict.c_str());
             table << row;
-            curves.push_back({{"kind", name},
-                              {"unit", shown.unit},
-                              {"max", largest},
-                              {"tolerance", curve.tolerance ? nlohmann::json(*curve.tolerance * shown.factor)
-                                                            : nlohmann::json(nullptr)},
-                              {"within_sweep", curve.tolerance.has_value()},
-                              {"sweep", points},
-                              {"refinement", refined},
-                              {"chart", (out / (name + ".svg")).string()}});
+            curve_record.max = largest;
+            if (curve.tolerance) curve_record.tolerance = *curve.tolerance * shown.factor;
+            record.curves.push_back(std::move(curve_record));
         }
         std::string sentence;
         for (std::size_t k = 0; k < phrases.size(); ++k)
@@ -214,16 +206,15 @@ void add_simulate_tolerance_command(CLI::App& simulate) {
                 << " light(s), " << optics::to_string(options.simulation.model) << " model):\n"
                 << table.str() << sentence << ".\n";
         write_text_file(out / "summary.txt", summary.str());
-        const nlohmann::json json = {{"design", design.name},
-                                     {"threshold_db", opt->threshold},
-                                     {"model", std::string(optics::to_string(options.simulation.model))},
-                                     {"lights", lights.size()},
-                                     {"nominal_peak", report.nominal_peak},
-                                     {"summary", sentence},
-                                     {"curves", curves}};
-        write_text_file(out / "summary.json", json.dump(2) + "\n");
+        record.design = design.name;
+        record.threshold_db = opt->threshold;
+        record.model = std::string(optics::to_string(options.simulation.model));
+        record.lights = lights.size();
+        record.nominal_peak = report.nominal_peak;
+        record.summary = sentence;
+        predict::write_summary(out / "summary.json", record);
         if (opt->json) {
-            std::printf("%s\n", json.dump(2).c_str());
+            std::printf("%s", predict::summary_text(record).c_str());
             return;
         }
         std::printf("%s  time %.1f s; charts in %s\n", summary.str().c_str(), seconds, opt->out.c_str());

@@ -7,8 +7,6 @@
 #include <set>
 #include <string>
 
-#include <nlohmann/json.hpp>
-
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "core/error.hpp"
@@ -17,28 +15,10 @@
 #include "optics/analysis.hpp"
 #include "optics/design.hpp"
 #include "optics/design_optics.hpp"
+#include "predict/summaries.hpp"
 #include "predict/verdict.hpp"
 
 namespace rfd::cli {
-namespace {
-
-// A summary.json another command wrote, with errors that name it.
-nlohmann::json read_summary(const std::filesystem::path& folder, const std::string& option) {
-    const std::filesystem::path file = folder / "summary.json";
-    std::ifstream in(file);
-    if (!in) throw IoError(SourceLocation{file.string(), 0, 0, option}, "cannot open (expected the folder that rfd simulate " + option.substr(2) + " --out wrote)");
-    try {
-        return nlohmann::json::parse(in);
-    } catch (const nlohmann::json::exception& error) {
-        throw InputError(SourceLocation{file.string()}, std::string("not a summary rfd wrote: ") + error.what());
-    }
-}
-
-std::optional<double> optional_number(const nlohmann::json& value) {
-    return value.is_number() ? std::optional<double>(value.get<double>()) : std::nullopt;
-}
-
-}  // namespace
 
 void add_simulate_verdict_command(CLI::App& simulate) {
     auto* cmd = simulate.add_subcommand(
@@ -65,59 +45,38 @@ void add_simulate_verdict_command(CLI::App& simulate) {
             if (onset)
                 inputs.crosstalk_free_cone_deg = std::min(inputs.crosstalk_free_cone_deg.value_or(1e300), 2.0 * *onset);
         inputs.warnings = analysis.warnings;
-        const nlohmann::json compare = read_summary(opt->compare, "--compare");
-        try {
-            for (const auto& d : compare.at("directions"))
-                inputs.directions.push_back({d.at("display_angle_deg").get<double>(), d.at("inside_fov").get<bool>(),
-                                             d.at("crosstalk_free").get<bool>(), d.at("mse").get<double>(),
-                                             d.at("peak").get<double>()});
-            if (!opt->tolerance.empty()) {
-                predict::AssemblyTolerances t;
-                const nlohmann::json tolerance = read_summary(opt->tolerance, "--tolerance");
-                for (const auto& curve : tolerance.at("curves")) {
-                    const std::string kind = curve.at("kind").get<std::string>();
-                    // A sweep that never fell below the threshold bounds the tolerance from
-                    // below by its largest error.
-                    std::optional<double> value = optional_number(curve.at("tolerance"));
-                    if (!value) {
-                        value = optional_number(curve.at("max"));
-                        if (value) at_least.insert(kind);
-                    }
-                    if (kind == "shift") t.shift_mm = value;
-                    if (kind == "rotation") t.rotation_deg = value;
-                    if (kind == "pitch_error") t.pitch_ppm = value;
-                    if (kind == "spacer") t.spacer_mm = value;
-                }
-                inputs.tolerances = t;
+        const auto summary = [](const std::string& folder, const char* option) {
+            const std::filesystem::path file = std::filesystem::path(folder) / "summary.json";
+            if (!std::filesystem::exists(file))
+                throw IoError(SourceLocation{file.string(), 0, 0, option},
+                              std::string("cannot open (expected the folder that rfd simulate ") + (option + 2) +
+                                  " --out wrote)");
+            return file;
+        };
+        const auto compare = predict::read_summary<predict::CompareSummary>(summary(opt->compare, "--compare"));
+        for (const predict::CompareDirection& d : compare.directions)
+            inputs.directions.push_back({d.display_angle_deg, d.inside_fov, d.crosstalk_free, d.mse, d.peak});
+        if (!opt->tolerance.empty()) {
+            predict::AssemblyTolerances t;
+            const auto tolerance = predict::read_summary<predict::ToleranceSummary>(summary(opt->tolerance, "--tolerance"));
+            for (const predict::ToleranceCurveRecord& curve : tolerance.curves) {
+                // A sweep that never fell below the threshold bounds the tolerance from below
+                // by its largest error.
+                const double value = curve.tolerance.value_or(curve.max);
+                if (!curve.tolerance) at_least.insert(curve.kind);
+                if (curve.kind == "shift") t.shift_mm = value;
+                if (curve.kind == "rotation") t.rotation_deg = value;
+                if (curve.kind == "pitch_error") t.pitch_ppm = value;
+                if (curve.kind == "spacer") t.spacer_mm = value;
             }
-        } catch (const nlohmann::json::exception& error) {
-            throw InputError(std::string("a summary.json lacks what rfd simulate writes: ") + error.what());
+            inputs.tolerances = t;
         }
         const predict::Verdict v = predict::judge(inputs);
-        const auto tolerance_json = [&](const std::optional<double>& value) { return json_or_null(value); };
-        nlohmann::json tolerances = nullptr;
-        if (inputs.tolerances)
-            tolerances = {{"shift_mm", tolerance_json(inputs.tolerances->shift_mm)},
-                          {"rotation_deg", tolerance_json(inputs.tolerances->rotation_deg)},
-                          {"pitch_error_ppm", tolerance_json(inputs.tolerances->pitch_ppm)},
-                          {"spacer_mm", tolerance_json(inputs.tolerances->spacer_mm)},
-                          {"at_least", at_least}};
-        const nlohmann::json json = {{"design", design.name},
-                                     {"call", std::string(predict::to_string(v.call))},
-                                     {"reason", v.reason},
-                                     {"line", v.line()},
-                                     {"psnr_mean_in_fov_db", json_or_null(v.psnr_mean_in_fov_db)},
-                                     {"psnr_min_in_fov_db", json_or_null(v.psnr_min_in_fov_db)},
-                                     {"psnr_mean_crosstalk_free_db", json_or_null(v.psnr_mean_crosstalk_free_db)},
-                                     {"directions_in_fov", v.directions_in_fov},
-                                     {"directions_crosstalk_free", v.directions_crosstalk_free},
-                                     {"field_of_view_deg", json_or_null(inputs.field_of_view_deg)},
-                                     {"crosstalk_free_cone_deg", json_or_null(inputs.crosstalk_free_cone_deg)},
-                                     {"tolerances", tolerances},
-                                     {"warnings", inputs.warnings}};
-        if (!opt->out.empty()) write_text_file(opt->out, json.dump(2) + "\n");
+        const predict::VerdictReport report =
+            predict::verdict_report(v, std::vector<std::string>(at_least.begin(), at_least.end()));
+        if (!opt->out.empty()) predict::write_summary(opt->out, report);
         if (opt->json) {
-            std::printf("%s\n", json.dump(2).c_str());
+            std::printf("%s", predict::summary_text(report).c_str());
             return;
         }
         const auto number = [](const std::optional<double>& value, const char* unit) {

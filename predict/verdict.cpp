@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/text.hpp"
+#include "predict/summaries.hpp"
 
 namespace rfd::predict {
 namespace {
@@ -45,11 +46,8 @@ Verdict judge(const VerdictInputs& inputs, const VerdictRules& rules) {
     v.inputs = inputs;
     double field_peak = 0.0;
     for (const ComparedDirection& d : inputs.directions) field_peak = std::max(field_peak, d.peak);
-    // PSNR against the field's brightest value; a perfect match counts as 100 dB so that
-    // means stay finite.
-    const auto psnr = [&](const ComparedDirection& d) {
-        return d.mse > 0.0 ? std::min(100.0, 10.0 * std::log10(field_peak * field_peak / d.mse)) : 100.0;
-    };
+    // The one PSNR of a display against its field (summaries.hpp); a black field is caught below.
+    const auto psnr = [&](const ComparedDirection& d) { return psnr_against_field_db(d.mse, field_peak).value_or(0.0); };
     double sum_fov = 0.0, sum_free = 0.0, min_fov = 1e300;
     const ComparedDirection* worst = nullptr;
     for (const ComparedDirection& d : inputs.directions) {

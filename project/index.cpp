@@ -5,11 +5,12 @@
 #include <string>
 #include <system_error>
 
-#include <nlohmann/json.hpp>
 
+#include "core/error.hpp"
 #include "core/files.hpp"
 #include "core/text.hpp"
 #include "optics/design.hpp"
+#include "predict/summaries.hpp"
 #include "print/printer.hpp"
 #include "holders/profile.hpp"
 #include "project/preview.hpp"
@@ -159,33 +160,34 @@ struct VerdictText {
     std::vector<std::string> figures;
 };
 VerdictText read_verdict(const fs::path& out) {
-    std::ifstream in(out / "verdict.json");
-    if (!in) return {};
-    const nlohmann::json v = nlohmann::json::parse(in, nullptr, false);
-    if (v.is_discarded() || !v.contains("line")) return {};
-    VerdictText text{v.value("call", ""), v.value("line", ""), {}};
-    const auto number = [](const nlohmann::json& value, const std::string& unit) {
-        return value.is_number() ? format_fixed(value.get<double>(), 2) + unit : std::string("-");
-    };
-    text.figures.push_back("predicted PSNR over the field of view: mean " + number(v["psnr_mean_in_fov_db"], " dB") +
-                           ", min " + number(v["psnr_min_in_fov_db"], " dB") + " (against the field's brightest)");
-    text.figures.push_back("crosstalk-free cone " + number(v["crosstalk_free_cone_deg"], " deg") + " (PSNR " +
-                           number(v["psnr_mean_crosstalk_free_db"], " dB") + "), field of view " +
-                           number(v["field_of_view_deg"], " deg"));
-    if (v["tolerances"].is_object()) {
-        const nlohmann::json& t = v["tolerances"];
-        const nlohmann::json at_least = t.value("at_least", nlohmann::json::array());
-        const auto bound = [&](const char* key, const char* kind, const std::string& unit) {
-            const bool more = std::find(at_least.begin(), at_least.end(), kind) != at_least.end();
-            return number(t[key], unit) + (more ? " or more" : "");
-        };
-        text.figures.push_back("assemble within: shift " + bound("shift_mm", "shift", " mm") + ", rotation " +
-                               bound("rotation_deg", "rotation", " deg") + ", pitch " +
-                               bound("pitch_error_ppm", "pitch_error", " ppm") + ", spacer " +
-                               bound("spacer_mm", "spacer", " mm"));
+    std::error_code ec;
+    if (!fs::exists(out / "verdict.json", ec)) return {};
+    predict::VerdictReport v;
+    try {
+        v = predict::read_summary<predict::VerdictReport>(out / "verdict.json");
+    } catch (const Error&) {
+        return {};  // not what the verdict step wrote: the step re-makes it next time
     }
-    for (const auto& warning : v.value("warnings", nlohmann::json::array()))
-        if (warning.is_string()) text.figures.push_back("design warning: " + warning.get<std::string>());
+    VerdictText text{v.call, v.line, {}};
+    const auto number = [](const std::optional<double>& value, const std::string& unit) {
+        return value ? format_fixed(*value, 2) + unit : std::string("-");
+    };
+    text.figures.push_back("predicted PSNR over the field of view: mean " + number(v.psnr_mean_in_fov_db, " dB") +
+                           ", min " + number(v.psnr_min_in_fov_db, " dB") + " (against the field's brightest)");
+    text.figures.push_back("crosstalk-free cone " + number(v.crosstalk_free_cone_deg, " deg") + " (PSNR " +
+                           number(v.psnr_mean_crosstalk_free_db, " dB") + "), field of view " +
+                           number(v.field_of_view_deg, " deg"));
+    if (const auto& t = v.tolerances) {
+        const auto bound = [&](const std::optional<double>& value, const char* kind, const std::string& unit) {
+            const bool more = std::find(t->at_least.begin(), t->at_least.end(), kind) != t->at_least.end();
+            return number(value, unit) + (more ? " or more" : "");
+        };
+        text.figures.push_back("assemble within: shift " + bound(t->shift_mm, "shift", " mm") + ", rotation " +
+                               bound(t->rotation_deg, "rotation", " deg") + ", pitch " +
+                               bound(t->pitch_error_ppm, "pitch_error", " ppm") + ", spacer " +
+                               bound(t->spacer_mm, "spacer", " mm"));
+    }
+    for (const std::string& warning : v.warnings) text.figures.push_back("design warning: " + warning);
     return text;
 }
 
