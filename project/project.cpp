@@ -174,13 +174,16 @@ Project load_project(const fs::path& file) {
         project.encoding = read_encoding(*encode);
         encode->finish();
     }
+    // The best rfd makes is the default: the pattern chosen through the simulator (Designs I
+    // and II, the ones rfd make builds); `enabled = false` prints the direct encoding.
+    project.optimization = Optimization{};
     if (auto optimize = root.optional_table("optimize")) {
-        Optimization o;
+        Optimization& o = *project.optimization;
         o.iterations = static_cast<int>(optimize->optional_integer("iterations", 0, 100000).value_or(o.iterations));
         o.spacing_mm = optimize->optional_number("spacing_mm", 0.005, 2.0).value_or(o.spacing_mm);
         o.core_weight = optimize->optional_number("core_weight", 0.0, 1e6).value_or(o.core_weight);
+        if (!optimize->optional_boolean("enabled").value_or(true)) project.optimization.reset();
         optimize->finish();
-        project.optimization = o;
     }
     if (auto make = root.optional_table("make")) {
         project.outputs = read_outputs(*make);

@@ -7,8 +7,9 @@
 //              resolution; region, scale
 //   [encode]   tilt_deg, turn_deg, angle_scale, model, interpolation, fit, margin_mm
 //   [make]     sheets, copies, moire, wedge, holder, compare_sweep, tolerance, preview_lights
-//   [optimize] iterations, spacing_mm, core_weight: present, the pattern is optimised
-//              through the simulator (rfd pattern optimize) and the sheets print that one
+//   [optimize] enabled, iterations, spacing_mm, core_weight: the pattern is optimised through
+//              the simulator (rfd pattern optimize) and the sheets print that one, unless
+//              enabled = false
 //
 // Paths are relative to the project file. Every key is checked like every other input
 // file: an unknown key or a value out of range is an error naming file, line and key.
@@ -68,7 +69,7 @@ struct Project {
     Source source;
     Encoding encoding;
     Outputs outputs;
-    std::optional<Optimization> optimization;  ///< the [optimize] table, when present
+    std::optional<Optimization> optimization;  ///< nullopt: [optimize] enabled = false, the direct encoding
 };
 
 /// Reads and checks a project file. Bundled names: designs ("design1": designs/design1.toml),

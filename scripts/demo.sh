@@ -36,7 +36,7 @@ index_entry bottle_design1/print/front.tif "Design I's front sheet also as a TIF
 # frame, --frame field): on the display's axis (field theta 45, phi 90, with the 45-degree
 # tilt) and 7 degrees off it.
 field="$out/bottle_design1/field"
-pattern1="$out/bottle_design1/pattern.exr"
+pattern1="$out/bottle_design1/pattern_optimized.exr"  # what the sheets print
 index_section predicted "The predicted display"
 mkdir -p "$out/predicted"
 for case in "axis:--light 45,90" "side:--light 45,80"; do

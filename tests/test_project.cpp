@@ -64,8 +64,8 @@ sheets = ["pdf"]
 // Stands in for rfd: writes every path after an output option (relative to the output
 // folder, where a step runs), its content the command line and the content of every
 // existing field the command names, so outputs change exactly when what a step reads
-// changes. Folders (no extension) get one file, the preview's folder the three files rfd
-// make checks for. Steps end in the order `last_first` says: as started, or the latest
+// changes. Folders (no extension) get one file, the preview's folder the files rfd make
+// checks for. Steps end in the order `last_first` says: as started, or the latest
 // first, as steps running side by side may.
 struct FakeRfd : StepRunner {
     std::vector<std::string> calls;  // the first two words of each command
@@ -91,10 +91,14 @@ struct FakeRfd : StepRunner {
                 content += content_hash(out / argument) + "\n";
         }
         for (std::size_t k = 0; k + 1 < arguments.size(); ++k) {
-            if (arguments[k] != "--out" && arguments[k] != "--preview" && arguments[k] != "--stl") continue;
+            if (arguments[k] != "--out" && arguments[k] != "--preview" && arguments[k] != "--stl" &&
+                arguments[k] != "--report")
+                continue;
             fs::path target = out / arguments[k + 1];
             if (command == "simulate preview") {
                 for (const char* file : {"data.js", "predicted.png", "relit.png"}) write(target / file, content);
+                if (std::find(arguments.begin(), arguments.end(), "--direct") != arguments.end())
+                    write(target / "direct.png", content);
                 continue;
             }
             if (target.extension().empty()) target /= "made.txt";
@@ -199,9 +203,12 @@ TEST(ProjectPlan, EveryStepReadsOnlyWhatEarlierStepsOrTheUserMade) {
             EXPECT_EQ(argument.find((dir / "out").string()), std::string::npos) << step.name << ": " << argument;
         for (const fs::path& output : step.outputs) made.insert(output);
     }
-    EXPECT_EQ(made_inputs, 6);  // the pattern by the sheet, compare, tolerance and preview; their two by the verdict
+    // The direct pattern by the optimiser and the preview; the optimised one by the sheet,
+    // compare, tolerance and preview; compare's and tolerance's by the verdict.
+    EXPECT_EQ(made_inputs, 8);
     // inkjet_720 prints one sheet: no back sheet.
-    EXPECT_THAT(names, ::testing::ElementsAre("pattern", "sheet_front_pdf", "moire", "wedge", "holder", "compare", "tolerance", "preview", "verdict"));
+    EXPECT_THAT(names, ::testing::ElementsAre("pattern", "optimize", "sheet_front_pdf", "moire", "wedge", "holder",
+                                              "compare", "tolerance", "preview", "verdict"));
 }
 
 // With [optimize], the optimised pattern is printed and predicted, and the preview page
@@ -226,13 +233,33 @@ TEST(ProjectPlan, AnOptimisedPatternIsWhatIsPrintedAndPredicted) {
     EXPECT_THAT(error_of([&] { load_project(dir / "p.toml"); }), HasSubstr("optimize.spacing_mm"));
 }
 
+// Optimisation is the default; `enabled = false` prints the direct encoding.
+TEST(ProjectPlan, PatternsAreOptimisedUnlessTheProjectSaysNot) {
+    TempDir dir;
+    write_small_field(dir / "field", 0.5f);
+    const auto steps_of = [&](const std::string& text) {
+        write(dir / "p.toml", text);
+        std::map<std::string, std::string> lines;
+        for (const Step& step : plan(load_project(dir / "p.toml"))) lines[step.name] = command_line(step);
+        return lines;
+    };
+    auto lines = steps_of(kProject);
+    ASSERT_TRUE(lines.count("optimize"));
+    EXPECT_THAT(lines["optimize"], AllOf(HasSubstr("--iterations 40"), HasSubstr("--core-weight 0")));
+    EXPECT_THAT(lines["sheet_front_pdf"], HasSubstr("pattern_optimized.exr"));
+    lines = steps_of(kProject + "\n[optimize]\nenabled = false\n");
+    EXPECT_FALSE(lines.count("optimize"));
+    EXPECT_THAT(lines["sheet_front_pdf"], AllOf(HasSubstr(" pattern.exr"), ::testing::Not(HasSubstr("optimized"))));
+    EXPECT_FALSE(lines["preview"].find("--direct") != std::string::npos);
+}
+
 TEST(Make, ASecondRunSkipsEveryStepAndAChangedFieldRemakesOnlyWhatDependsOnIt) {
     TempDir dir;
     write_small_field(dir / "field", 0.5f);
     write(dir / "p.toml", kProject);
     const Project project = load_project(dir / "p.toml");
     FakeRfd rfd;
-    EXPECT_EQ(run_make(project, dir / "out", rfd).ran.size(), 9u);
+    EXPECT_EQ(run_make(project, dir / "out", rfd).ran.size(), 10u);
     EXPECT_TRUE(fs::exists(dir / "out/README.txt"));
     EXPECT_TRUE(fs::exists(dir / "out/index.html"));
     EXPECT_TRUE(run_make(project, dir / "out", rfd).ran.empty());
@@ -240,14 +267,15 @@ TEST(Make, ASecondRunSkipsEveryStepAndAChangedFieldRemakesOnlyWhatDependsOnIt) {
     fs::remove_all(dir / "field");
     write_small_field(dir / "field", 0.75f);
     EXPECT_THAT(run_make(project, dir / "out", rfd).ran,
-                UnorderedElementsAre("pattern", "sheet_front_pdf", "compare", "tolerance", "preview", "verdict"));
+                UnorderedElementsAre("pattern", "optimize", "sheet_front_pdf", "compare", "tolerance", "preview",
+                                     "verdict"));
 
     // An output removed by hand is made again; what reads it is not, as it comes out the same.
     fs::remove(dir / "out/print/moire.pdf");
     EXPECT_THAT(run_make(project, dir / "out", rfd).ran, UnorderedElementsAre("moire"));
     fs::remove(dir / "out/pattern.png");
     EXPECT_THAT(run_make(project, dir / "out", rfd).ran, UnorderedElementsAre("pattern"));
-    EXPECT_EQ(run_make(project, dir / "out", rfd, true).ran.size(), 9u);
+    EXPECT_EQ(run_make(project, dir / "out", rfd, true).ran.size(), 10u);
 }
 
 TEST(Make, AFailingStepSaysWhichAndKeepsTheStepsBeforeIt) {
@@ -277,7 +305,7 @@ TEST(Make, ADamagedManifestRemakesEverythingAfterANote) {
     FakeRfd rfd;
     run_make(project, dir / "out", rfd);
     write(dir / "out/manifest.json", "{\"steps\": 3");
-    EXPECT_EQ(run_make(project, dir / "out", rfd).ran.size(), 9u);
+    EXPECT_EQ(run_make(project, dir / "out", rfd).ran.size(), 10u);
     EXPECT_TRUE(run_make(project, dir / "out", rfd).ran.empty());
 }
 
@@ -292,7 +320,7 @@ TEST(Make, StepsSideBySideWaitForWhatTheyReadAndMakeTheSameFiles) {
     const std::vector<std::vector<std::size_t>> needs = dependencies(steps);
     int edges = 0;
     for (const auto& step_needs : needs) edges += static_cast<int>(step_needs.size());
-    EXPECT_EQ(edges, 6);  // the sheet, compare, tolerance and preview read the pattern, the verdict two of them
+    EXPECT_EQ(edges, 8);  // as made_inputs in ProjectPlan.EveryStepReadsOnlyWhatEarlierStepsOrTheUserMade
 
     // A runner that records when each step started and ended, ending the latest first.
     struct Recording : FakeRfd {
@@ -312,7 +340,7 @@ TEST(Make, StepsSideBySideWaitForWhatTheyReadAndMakeTheSameFiles) {
     };
     Recording parallel;
     parallel.last_first = true;
-    EXPECT_EQ(run_make(project, dir / "parallel", parallel, false, 3).ran.size(), 9u);
+    EXPECT_EQ(run_make(project, dir / "parallel", parallel, false, 3).ran.size(), 10u);
     const auto at = [&](const std::string& event) {
         return std::find(parallel.events.begin(), parallel.events.end(), event) - parallel.events.begin();
     };
@@ -346,7 +374,7 @@ TEST(Make, OnlyMakesTheNamedStepsAndWhatTheyRead) {
     const Project project = load_project(dir / "p.toml");
     FakeRfd rfd;
     EXPECT_THAT(run_make(project, dir / "out", rfd, false, 1, {"sheet_front_pdf"}).ran,
-                UnorderedElementsAre("pattern", "sheet_front_pdf"));
+                UnorderedElementsAre("pattern", "optimize", "sheet_front_pdf"));
     EXPECT_FALSE(fs::exists(dir / "out/README.txt"));  // written by a whole make only
     EXPECT_THAT(run_make(project, dir / "out", rfd, false, 1, {"verdict", "wedge"}).ran,
                 UnorderedElementsAre("compare", "tolerance", "verdict", "wedge"));
@@ -388,7 +416,7 @@ TEST(Make, ASecondMakeIntoTheSameFolderIsRefusedWhileTheFirstRuns) {
                     AllOf(HasSubstr("another rfd make is making into"), HasSubstr("out")));
         EXPECT_TRUE(rfd.calls.empty());
     }
-    EXPECT_EQ(run_make(load_project(dir / "p.toml"), dir / "out", rfd).ran.size(), 9u);
+    EXPECT_EQ(run_make(load_project(dir / "p.toml"), dir / "out", rfd).ran.size(), 10u);
 }
 
 // A signal while steps run: the running steps' outputs and logs are removed, what ended
@@ -417,13 +445,13 @@ TEST(Make, AStopSignalRemovesWhatTheRunningStepsWroteAndKeepsTheRest) {
     }
     EXPECT_EQ(rfd.started, 3);
     EXPECT_TRUE(fs::exists(dir / "out/pattern.exr"));
-    EXPECT_TRUE(fs::exists(dir / "out/print/front.pdf"));
-    EXPECT_FALSE(fs::exists(dir / "out/print/moire.pdf"));  // the third step, stopped
+    EXPECT_TRUE(fs::exists(dir / "out/pattern_optimized.exr"));
+    EXPECT_FALSE(fs::exists(dir / "out/print/front.pdf"));  // the third step, stopped
     for (const auto& entry : fs::recursive_directory_iterator(dir / "out"))
         EXPECT_FALSE(entry.path().filename().string().starts_with(".running")) << entry.path();
     EXPECT_EQ(Manifest::read(dir / "out").steps().size(), 2u);
     FakeRfd again;
-    EXPECT_EQ(run_make(project, dir / "out", again).ran.size(), 7u);
+    EXPECT_EQ(run_make(project, dir / "out", again).ran.size(), 8u);
 }
 
 TEST(Make, TheSameProjectMadeIntoTwoFoldersGivesTheSameFiles) {
