@@ -13,7 +13,11 @@ RFD := build/bin/rfd
 
 all: build
 
+# Each stage of `make test` says when it starts, so a CI log shows where the time goes.
+STAGE = @echo "== $$(date +%T) $@"
+
 deps:
+	$(STAGE)
 	@./scripts/install-deps.sh
 
 configure: deps
@@ -24,9 +28,11 @@ build: configure
 	cmake --build build -j $(JOBS) --target rfd
 
 build-tests: configure
+	$(STAGE)
 	cmake --build build -j $(JOBS) --target rfd rfd_tests
 
 build-asan: deps
+	$(STAGE)
 	cmake --preset asan
 	cmake --build build-asan -j $(JOBS) --target rfd rfd_tests
 
@@ -37,10 +43,13 @@ build-asan-all: build-asan
 test: test-release test-asan
 
 test-release: build-tests
+	$(STAGE)
 	ctest --preset release -j $(JOBS)
 
 test-asan: build-asan
+	$(STAGE)
 	ctest --preset asan -j $(JOBS)
+	$(STAGE) done
 
 test-all: build-tests build-asan-all
 	ctest --preset release -j $(JOBS)
