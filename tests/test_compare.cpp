@@ -340,6 +340,18 @@ TEST(DisplayComparison, DesignOneLosesToDesignTwoOnStructuredFields) {
     EXPECT_LT(r1.comparison.psnr_db, r2.comparison.psnr_db - 6.0);
 }
 
+// The thesis's SIG08 letters on Design II, encoded with nearest interpolation as the demo
+// does, printed in memory and ready to compare. Not movable: the comparison keeps the
+// simulator and the print by reference.
+struct Sig08Display {
+    std::string text = "SIG08";
+    optics::Design design = design2();
+    relight::ReflectanceField field = procedural_field(ProceduralOptions{.text = text, .width = 48, .height = 40});
+    Printed p = print_field(design, field, EncodeOptions{.interpolation = relight::Interpolation::Nearest});
+    optics::DisplaySimulator simulator{design};
+    DisplayComparison comparison{simulator, *p.transparency, *p.encoder, p.tone};
+};
+
 // The thesis's Design II demonstration: "SIG08", one letter per light direction along the
 // horizontal arc (5 degrees apart), encoded with nearest interpolation as the demo does.
 // At 6 x 5 lenslets the letters' pictures overlap by shape and colour (S and 8 correlate
@@ -349,18 +361,10 @@ TEST(DisplayComparison, DesignOneLosesToDesignTwoOnStructuredFields) {
 // two pictures share (+ 0.02), and fitted as a mixture of all five pictures it holds less
 // than 3 % of any other letter (measured <= 1.7 %).
 TEST(DisplayComparison, Sig08LettersAppearEachUnderItsOwnLightOnly) {
-    const optics::Design design = design2();
-    ProceduralOptions letters;
-    letters.text = "SIG08";
-    letters.width = 48;
-    letters.height = 40;
-    const relight::ReflectanceField field = procedural_field(letters);
-    EncodeOptions options;
-    options.interpolation = relight::Interpolation::Nearest;
-    const Printed p = print_field(design, field, options);
-    const optics::DisplaySimulator simulator(design);
-    const DisplayComparison comparison(simulator, *p.transparency, *p.encoder, p.tone);
-    const std::size_t n = letters.text.size();
+    const Sig08Display sig08;
+    const relight::ReflectanceField& field = sig08.field;
+    const DisplayComparison& comparison = sig08.comparison;
+    const std::size_t n = sig08.text.size();
     std::vector<Image> pictures;
     for (std::size_t k = 0; k < n; ++k) pictures.push_back(comparison.transmittance(field.directions[k]));
     Eigen::MatrixXd basis(static_cast<Eigen::Index>(pictures[0].samples().size()), static_cast<Eigen::Index>(n));
@@ -369,7 +373,7 @@ TEST(DisplayComparison, Sig08LettersAppearEachUnderItsOwnLightOnly) {
             basis(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k)) = pictures[k].samples()[i];
     for (std::size_t k = 0; k < n; ++k) {
         const DirectionComparison r = comparison.compare(field.directions[k], converged());
-        SCOPED_TRACE(std::string("letter ") + letters.text[k]);
+        SCOPED_TRACE(std::string("letter ") + sig08.text[k]);
         EXPECT_TRUE(r.crosstalk_free);
         std::vector<double> correlation(n);
         for (std::size_t j = 0; j < n; ++j) correlation[j] = pearson(r.prediction, pictures[j]);
@@ -377,7 +381,7 @@ TEST(DisplayComparison, Sig08LettersAppearEachUnderItsOwnLightOnly) {
         for (std::size_t j = 0; j < n; ++j) {
             if (j == k) continue;
             // No more of letter j than letter k itself shares with it.
-            EXPECT_LT(correlation[j], pearson(pictures[k], pictures[j]) + 0.02) << "letter " << letters.text[j];
+            EXPECT_LT(correlation[j], pearson(pictures[k], pictures[j]) + 0.02) << "letter " << sig08.text[j];
         }
         Eigen::VectorXd shown(basis.rows());
         for (std::size_t i = 0; i < r.prediction.samples().size(); ++i)
@@ -386,7 +390,7 @@ TEST(DisplayComparison, Sig08LettersAppearEachUnderItsOwnLightOnly) {
         for (std::size_t j = 0; j < n; ++j) {
             if (j == k) continue;
             EXPECT_LT(std::abs(mixture(static_cast<Eigen::Index>(j))), 0.03 * mixture(static_cast<Eigen::Index>(k)))
-                << "letter " << letters.text[j] << " correlation " << correlation[j];
+                << "letter " << sig08.text[j] << " correlation " << correlation[j];
         }
     }
 }
@@ -396,17 +400,8 @@ TEST(DisplayComparison, Sig08LettersAppearEachUnderItsOwnLightOnly) {
 // letters) read what the display shows there, not -60 dB for a faint residue against
 // their own faint peak; and the summary's mean over the field of view is the verdict's.
 TEST(CompareSummary, Sig08DarkDirectionsStayMeaningfulAndTheSummaryAgreesWithTheVerdict) {
-    const optics::Design design = design2();
-    ProceduralOptions letters;
-    letters.text = "SIG08";
-    letters.width = 48;
-    letters.height = 40;
-    const relight::ReflectanceField field = procedural_field(letters);
-    EncodeOptions options;
-    options.interpolation = relight::Interpolation::Nearest;
-    const Printed p = print_field(design, field, options);
-    const optics::DisplaySimulator simulator(design);
-    const DisplayComparison comparison(simulator, *p.transparency, *p.encoder, p.tone);
+    const Sig08Display sig08;
+    const DisplayComparison& comparison = sig08.comparison;
     optics::SimulationOptions simulation = converged();
     simulation.rays_per_side = 16;
     std::vector<DirectionComparison> results;
