@@ -3,13 +3,14 @@
 # make test      installs dependencies, builds and runs the tests, then again under ASan+UBSan
 # make studies   the research reproductions (sampling, implicit relighting, upsampling) into out/studies/
 # make bench     builds and runs the benchmarks
+# make docs      regenerates docs/options.md from the program's options (ctest doc_options checks it)
 # make test-all  every test in both builds, the ones `make test` leaves to the Release build too
 
 JOBS ?= $(shell nproc)
 RFD := build/bin/rfd
 
 .PHONY: all deps configure build build-tests build-asan build-asan-all test test-release test-asan test-all \
-        bench demo studies clean
+        bench demo docs studies clean
 
 all: build
 
@@ -58,6 +59,9 @@ test-all: build-tests build-asan-all
 bench: configure
 	cmake --build build -j $(JOBS) --target rfd_bench
 	./build/bin/rfd_bench --benchmark_counters_tabular=true
+
+docs: build
+	$(RFD) options-doc > docs/options.md
 
 demo: build
 	./scripts/demo.sh $(RFD) out/demo

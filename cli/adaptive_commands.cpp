@@ -13,6 +13,8 @@
 
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
+#include "core/text.hpp"
+#include "core/csv.hpp"
 #include "core/error.hpp"
 #include "core/files.hpp"
 #include "core/progress.hpp"
@@ -76,15 +78,13 @@ std::unique_ptr<relight::CaptureDevice> make_device(const AdaptiveCommandOptions
                                                            opt.window.window());
 }
 
-std::string iterations_csv(const relight::AdaptiveRun& run) {
-    std::string csv = "iteration,images,analysis_seconds\n";
+CsvTable iterations_csv(const relight::AdaptiveRun& run) {
+    CsvTable table({"iteration", "images", "analysis_seconds"});
     for (std::size_t k = 0; k < run.images_after.size(); ++k) {
-        char line[96];
         const double seconds = k == 0 ? 0.0 : run.analysis_seconds[k - 1];
-        std::snprintf(line, sizeof line, "%zu,%zu,%.6f\n", k, run.images_after[k], seconds);
-        csv += line;
+        table.add_row({std::to_string(k), std::to_string(run.images_after[k]), format_fixed(seconds, 6)});
     }
-    return csv;
+    return table;
 }
 
 }  // namespace
@@ -100,26 +100,26 @@ void add_adaptive_command(CLI::App& capture) {
     cmd->add_option("--device", opt->device,
                     "Rig command instead of a scene; placeholders {x} {y} {z} {theta} {phi} {kernel} {out}");
     add_window_options(*cmd, opt->window);
-    cmd->add_option("--scratch", opt->scratch, "Folder for the rig command's images (default OUT/capture)");
+    cmd->add_option("--scratch", opt->scratch, "Folder for the rig command's images (default: OUT/capture)");
     cmd->add_option("--narrow-radius", opt->narrow_radius_deg, "Rig: angular radius of its narrow light, degrees")
         ->check(CLI::Range(0.0, 90.0));
     cmd->add_option("--wide-radius", opt->wide_radius_deg, "Rig: angular radius of its wide light, degrees")
         ->check(CLI::Range(0.0, 90.0));
-    cmd->add_option("--initial", opt->initial, "Initial directions, near-uniform by repulsion (default 256)")
+    cmd->add_option("--initial", opt->initial, "Initial directions, near-uniform by repulsion")
         ->check(CLI::Range(std::size_t{3}, std::size_t{100000}));
     cmd->add_option("--initial-lights", opt->initial_lights, "Initial directions from a .lp file instead");
-    cmd->add_option("--per-iteration", opt->per_iteration, "Directions inserted per iteration, m (default 16)")
+    cmd->add_option("--per-iteration", opt->per_iteration, "Directions inserted per iteration, m")
         ->check(CLI::Range(std::size_t{1}, std::size_t{100000}));
-    cmd->add_option("--total", opt->total, "Stop at this many images (default 1024)")
+    cmd->add_option("--total", opt->total, "Stop at this many images")
         ->check(CLI::Range(std::size_t{3}, std::size_t{1000000}));
     cmd->add_option("--min-separation", opt->min_separation_deg,
-                    "Density limit: no two directions closer, degrees (default 2)")
+                    "Density limit: no two directions closer, degrees")
         ->check(CLI::Range(0.01, 45.0));
     cmd->add_option("--two-level", opt->two_level_deg,
                     "Re-capture initial directions whose neighbours are all farther than this many "
                     "degrees with the wide light (thesis: 9)")
         ->check(CLI::Range(0.0, 90.0));
-    cmd->add_option("--seed", opt->seed, "Seed of the initial pattern (default 1)");
+    cmd->add_option("--seed", opt->seed, "Seed of the initial pattern");
     cmd->add_option("--out", opt->out, "Output field folder")->required();
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
     cmd->callback([opt] {
@@ -155,7 +155,7 @@ void add_adaptive_command(CLI::App& capture) {
 
         const std::filesystem::path out(opt->out);
         relight::write_field(out, field);
-        write_text_file(out / "adaptive.csv", iterations_csv(run));
+        iterations_csv(run).write(out / "adaptive.csv");
 
         const double analysis = std::accumulate(run.analysis_seconds.begin(), run.analysis_seconds.end(), 0.0);
         const double per_image = analysis / static_cast<double>(std::max<std::size_t>(field.size(), 1));

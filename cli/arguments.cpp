@@ -12,6 +12,7 @@
 #include "core/error.hpp"
 #include "core/number.hpp"
 #include "core/sphere.hpp"
+#include "core/text.hpp"
 #include "core/units.hpp"
 #include "predict/display_lights.hpp"
 #include "patterns/raster.hpp"
@@ -133,6 +134,28 @@ CLI::Validator lower_bound(const char* name, bool allow_zero) {
 
 }  // namespace
 
+CLI::Validator number_range(double min, double max) {
+    const std::string range = format_number(min) + " to " + format_number(max);
+    return CLI::Validator(
+        [min, max, range](std::string& text) -> std::string {
+            double value = 0.0;
+            if (!CLI::detail::lexical_cast(text, value)) return "expected a number, got " + text;
+            if (value >= min && value <= max) return {};
+            return "expected a number from " + range + ", got " + text;
+        },
+        // As CLI::Range describes itself, so that --help and docs/options.md read the same.
+        "in [" + format_number(min) + " - " + format_number(max) + "]");
+}
+
+CLI::Option* add_option(CLI::App& command, const NumberOption& option, double& target) {
+    target = option.fallback;
+    std::string names(option.flag);
+    if (!option.alias.empty()) names += "," + std::string(option.alias);
+    return command.add_option(names, target, help_text(option))
+        ->check(number_range(option.min, option.max))
+        ->default_str(format_number(option.fallback));
+}
+
 CLI::Validator positive_number() { return lower_bound("POSITIVE", false); }
 CLI::Validator non_negative_number() { return lower_bound("NONNEGATIVE", true); }
 
@@ -149,11 +172,10 @@ CLI::Validator finite_number_check() {
 
 void add_print_options(CLI::App& command, PrintOptions& options) {
     command.add_option("--printer", options.printer,
-                       "Printer profile (tone mapping); default the one the pattern was encoded for, else the Epson's "
-                       "at the pattern's dpi");
-    command.add_option("--brightness", options.brightness, "Tone mapping: transmittance = brightness * value / white")
-        ->check(positive_number());
-    command.add_option("--sheets", options.sheets, "Sheets back to back (1 or 2); default the profile's");
+                       "Printer profile (tone mapping) (default: the one the pattern was encoded for, else the Epson's "
+                       "at the pattern's dpi)");
+    add_option(command, print::kBrightnessOption, options.brightness);
+    add_option(command, print::kSheetsOption, options.sheets);
 }
 
 print::PrintedTransparency printed_pattern(const optics::Design& design, const std::string& pattern_file,
@@ -185,8 +207,7 @@ void add_window_options(CLI::App& command, WindowOptions& options) {
     command.add_option("--region", options.region,
                        "Only this part of every image of the field, X,Y,W,H in pixels (leave out a capture's "
                        "calibration spheres and frame)");
-    command.add_option("--scale", options.scale, "Scale every image of the field by this, after --region (0.5 halves)")
-        ->check(CLI::Range(0.01, 16.0));
+    add_option(command, relight::kFieldScaleOption, options.scale);
 }
 
 double field_of_view_half_angle_deg(const optics::DesignOptics& optics, const std::string& design_file) {
@@ -197,9 +218,10 @@ double field_of_view_half_angle_deg(const optics::DesignOptics& optics, const st
 }
 
 void add_frame_option(CLI::App& command, predict::LightFrame& frame) {
+    frame = predict::kDefaultLightFrame;
     add_choice(command, "--frame", frame, predict::kLightFrameNames,
-               "The frame --light is named in: display (default: 0,0 is a lamp straight behind the display, THETA "
-               "the angle to its axis) or field (as the field was captured, before --tilt/--turn/--angle-scale)");
+               "The frame --light is named in: display (0,0 is a lamp straight behind the display, THETA the angle "
+               "to its axis) or field (as the field was captured, before --tilt/--turn/--angle-scale)");
 }
 
 }  // namespace rfd::cli

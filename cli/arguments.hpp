@@ -12,6 +12,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "core/options.hpp"
 #include "optics/design.hpp"
 #include "optics/display.hpp"
 #include "optics/model.hpp"
@@ -35,6 +36,23 @@ inline nlohmann::json json_or_null(const std::optional<double>& value) {
 /// a perfect match) or NaN.
 inline nlohmann::json finite_or_null(double value) {
     return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
+}
+
+/// MIN <= value <= MAX, with a message that names both ends as a user would write them
+/// (CLI::Range prints 0.000001 to 1000000.000000).
+CLI::Validator number_range(double min, double max);
+
+/// An option declared once (core/options.hpp) added to `command` into `target`: `target`
+/// set to its default (shown in --help), its range checked, its older spelling accepted.
+CLI::Option* add_option(CLI::App& command, const NumberOption& option, double& target);
+template <class Int>
+CLI::Option* add_option(CLI::App& command, const IntegerOption& option, Int& target) {
+    target = static_cast<Int>(option.fallback);
+    std::string names(option.flag);
+    if (!option.alias.empty()) names += "," + std::string(option.alias);
+    return command.add_option(names, target, help_text(option))
+        ->check(number_range(static_cast<double>(option.min), static_cast<double>(option.max)))
+        ->default_str(std::to_string(option.fallback));
 }
 
 /// Checks of a number option whose messages a user can read (CLI::PositiveNumber's names
@@ -90,8 +108,8 @@ void print_environment_line(const std::string& file, const predict::EnvironmentS
 /// --brightness, --sheets (added to `command` by add_print_options).
 struct PrintOptions {
     std::string printer;
-    double brightness = 1.0;
-    int sheets = 0;  ///< 0: the profile's
+    double brightness = print::kBrightnessOption.fallback;
+    int sheets = static_cast<int>(print::kSheetsOption.fallback);  ///< 0: the profile's
 };
 void add_print_options(CLI::App& command, PrintOptions& options);
 /// The pattern file as printed with those options, checked against the design.
@@ -106,14 +124,13 @@ patterns::AngularMapping read_pattern_mapping(const std::string& pattern_file);
 /// at (theta, phi) goes through `mapping`, so it shows what the field shows under a light
 /// from there; a display-frame one is where the display meets it.
 std::vector<optics::DisplayLight> to_display_lights(const std::vector<std::string>& texts,
-                                                    const patterns::AngularMapping& mapping,
-                                                    predict::LightFrame frame = predict::LightFrame::Field);
+                                                    const patterns::AngularMapping& mapping, predict::LightFrame frame);
 
 /// --region X,Y,W,H and --scale S for a command that reads a field: filled into `window`
 /// when the command's callback runs (the region is parsed there).
 struct WindowOptions {
     std::string region;
-    double scale = 1.0;
+    double scale = relight::kFieldScaleOption.fallback;
     relight::ImageWindow window() const;
 };
 void add_window_options(CLI::App& command, WindowOptions& options);
@@ -123,7 +140,7 @@ void add_window_options(CLI::App& command, WindowOptions& options);
 /// design has no field-of-view edge.
 double field_of_view_half_angle_deg(const optics::DesignOptics& optics, const std::string& design_file);
 
-/// --frame display|field for --light (default display), with its help.
+/// --frame display|field for --light (predict::kDefaultLightFrame), with its help.
 void add_frame_option(CLI::App& command, predict::LightFrame& frame);
 
 }  // namespace rfd::cli

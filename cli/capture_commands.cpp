@@ -95,10 +95,10 @@ void add_pattern_command(CLI::App& capture) {
     };
     auto opt = std::make_shared<Options>();
     cmd->add_option("--count", opt->count, "Number of directions")->required()->check(CLI::Range(1, 100000));
-    cmd->add_option("--seed", opt->seed, "Seed of the starting positions (default 1)");
+    cmd->add_option("--seed", opt->seed, "Seed of the starting positions");
     cmd->add_option("--out", opt->out, "Light file to write (.lp)")->required();
     cmd->add_option("--image-prefix", opt->image_prefix,
-                    "Image names listed in the light file are PREFIX0000.exr, PREFIX0001.exr... (default img_)");
+                    "Image names listed in the light file are PREFIX0000.exr, PREFIX0001.exr...");
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
     cmd->callback([opt] {
         const auto directions = relight::repulsion_pattern(opt->count, opt->seed);

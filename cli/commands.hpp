@@ -54,4 +54,7 @@ void add_holder_commands(CLI::App& app);
 /// `make`: a project file into every output (project/make.hpp).
 void add_make_command(CLI::App& app);
 
+/// `options-doc` (hidden): every other command's options as Markdown, docs/options.md.
+void add_options_doc_command(CLI::App& app);
+
 }  // namespace rfd::cli

@@ -15,6 +15,8 @@
 
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
+#include "core/text.hpp"
+#include "core/csv.hpp"
 #include "core/error.hpp"
 #include "core/files.hpp"
 #include "core/image_io.hpp"
@@ -91,7 +93,7 @@ void add_train(CLI::App& implicit) {
         ->required();
     cmd->add_option("--probe-box", opt->box,
                     "The probe's bounding box X,Y,WIDTH,HEIGHT in pixels (default: probe.json beside the images)");
-    cmd->add_option("--probe-size", opt->size, "Probe resolution after scaling (default 64)")->check(CLI::Range(8, 512));
+    cmd->add_option("--probe-size", opt->size, "Probe resolution after scaling")->check(CLI::Range(8, 512));
     cmd->add_option("--out", opt->out, "Model folder to write")->required();
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
     cmd->callback([opt] {
@@ -309,21 +311,21 @@ void add_capture_implicit_command(CLI::App& capture) {
     cmd->add_option("SCENE", opt->scene, "Scene file (TOML) with a probe sphere, e.g. scenes/snooker.toml")->required();
     cmd->add_option("--out", opt->out, "Folder to write: training/, test/photos/, test/truth/")->required();
     cmd->add_option("--lights", opt->lights,
-                    "Training lights: overlapping smooth lights of 15, 25 and 40 degrees radius (default 272)")
+                    "Training lights: overlapping smooth lights of 15, 25 and 40 degrees radius")
         ->check(CLI::Range(2, 100000));
-    cmd->add_option("--held-out", opt->held_out, "Held-out test lights: smooth, 10 to 25 degrees radius, random directions (default 16)")
+    cmd->add_option("--held-out", opt->held_out, "Held-out test lights: smooth, 10 to 25 degrees radius, random directions")
         ->check(CLI::Range(0, 10000));
     cmd->add_option("--probe", opt->probe,
                     "Name of the probe object (default: the scene's only sphere of a phong material)");
     cmd->add_option("--noise", opt->noise,
-                    "Camera noise of the training images, standard deviation in linear radiance (default 1e-4, "
+                    "Camera noise of the training images, standard deviation in linear radiance ("
                     "an HDR capture)")
         ->check(CLI::Range(0.0, 1e3));
     cmd->add_option("--test-noise", opt->test_noise,
-                    "Camera noise of the test photographs (default 3e-3, one 8-bit exposure: about 2 levels "
+                    "Camera noise of the test photographs (one 8-bit exposure: about 2 levels "
                     "where the card's white is 0.35; the truth has none)")
         ->check(CLI::Range(0.0, 1e3));
-    cmd->add_option("--seed", opt->seed, "Seed of the light pattern and the noise (default 1)");
+    cmd->add_option("--seed", opt->seed, "Seed of the light pattern and the noise");
     cmd->add_option("--resolution", opt->resolution, "Image size WxH (default: the scene's)");
     cmd->add_option("--samples-per-pixel", opt->samples, "Camera rays per pixel (default: the scene's)")
         ->check(CLI::Range(1, 4096));
@@ -419,7 +421,7 @@ void add_sweep(CLI::App& implicit) {
     cmd->add_option("--etas", opt->etas,
                     "Comma-separated etas (default: 0, then half decades from 1e-6 to 1e2 times the mean square of "
                     "the model's mean probe)");
-    cmd->add_option("--examples", opt->examples, "Comparison images for the first N test lights (default 3)")
+    cmd->add_option("--examples", opt->examples, "Comparison images for the first N test lights")
         ->check(CLI::Range(0, 1000));
     cmd->add_flag("--no-second-pass", opt->no_second_pass, "Skip the refit of negative probe pixels");
     cmd->add_option("--out", opt->out, "Folder for eta_psnr.{csv,gp,svg,png} and the comparison images")->required();
@@ -504,18 +506,17 @@ void add_sweep(CLI::App& implicit) {
                 std::fprintf(stderr, "rfd: warning: %s\n", e.what());
             }
         }
-        write_file_atomically(out / "eta_sweep.csv", [&](std::ostream& csv) {
-            csv.precision(8);
-            csv << "eta,psnr_db,probe_residual_rms,max_abs_coefficient";
-            for (std::size_t t = 0; t < truths.size(); ++t) csv << ",light_" << t << "_psnr_db";
-            csv << '\n';
-            for (const auto& point : study.points) {
-                csv << point.eta << ',' << point.psnr << ',' << point.probe_residual_rms << ','
-                    << point.max_abs_coefficient;
-                for (const double p : point.light_psnr) csv << ',' << p;
-                csv << '\n';
-            }
-        });
+        std::vector<std::string> columns{"eta", "psnr_db", "probe_residual_rms", "max_abs_coefficient"};
+        for (std::size_t t = 0; t < truths.size(); ++t) columns.push_back("light_" + std::to_string(t) + "_psnr_db");
+        CsvTable sweep(std::move(columns));
+        for (const auto& point : study.points) {
+            std::vector<std::string> row{format_number(point.eta, 8), format_number(point.psnr, 8),
+                                         format_number(point.probe_residual_rms, 8),
+                                         format_number(point.max_abs_coefficient, 8)};
+            for (const double p : point.light_psnr) row.push_back(format_number(p, 8));
+            sweep.add_row(std::move(row));
+        }
+        sweep.write(out / "eta_sweep.csv");
 
         // Comparison images: truth | pseudo-inverse | best eta | the largest eta, one exposure.
         const std::size_t largest = static_cast<std::size_t>(

@@ -12,10 +12,15 @@
 namespace {
 
 // What every command shares, added once all exist: --quiet anywhere on the command line,
-// and every number finite (CLI11's range checks let NaN through).
+// every number finite (CLI11's range checks let NaN through), no placeholder shown as a default.
 void add_shared_rules(CLI::App& command, bool& quiet) {
-    for (CLI::Option* option : command.get_options())
+    for (CLI::Option* option : command.get_options()) {
         if (option->get_type_name().starts_with("FLOAT")) option->check(rfd::cli::finite_number_check());
+        // An empty list is no default; a default the help describes ("default: the design's")
+        // is not the placeholder the option starts with.
+        if (option->get_default_str() == "[]" || option->get_description().find("(default:") != std::string::npos)
+            option->default_str("");
+    }
     for (CLI::App* sub : command.get_subcommands({})) {
         sub->add_flag("--quiet,-q", quiet, "No progress output on stderr");
         add_shared_rules(*sub, quiet);
@@ -29,6 +34,9 @@ int main(int argc, char** argv) {
     CLI::App app{"rfd: design, predict, print and build passive reflectance-field displays"};
     app.set_version_flag("--version", std::string("rfd ") + RFD_VERSION);
     app.require_subcommand(1);
+    // Every option shows its default in --help and docs/options.md from the value it starts
+    // with, so no help text repeats a default by hand.
+    app.option_defaults()->always_capture_default();
     bool quiet = false;  // every command's --quiet (add_shared_rules) sets it too
     app.add_flag("--quiet,-q", quiet, "No progress output on stderr");
     app.parse_complete_callback([&] { rfd::Progress::set_quiet(quiet); });
@@ -46,6 +54,7 @@ int main(int argc, char** argv) {
     rfd::cli::add_simulate_commands(app);
     rfd::cli::add_holder_commands(app);
     rfd::cli::add_make_command(app);
+    rfd::cli::add_options_doc_command(app);
     add_shared_rules(app, quiet);
     try {
         app.parse(argc, argv);

@@ -50,7 +50,7 @@ void add_make_command(CLI::App& app) {
     cmd->add_option("--out", opt->out, "Output folder")->required();
     cmd->add_flag("--force", opt->force, "Make every step again, whatever the manifest says");
     cmd->add_flag("--dry-run", opt->dry_run, "Print the steps' commands (run from the output folder) and make nothing");
-    cmd->add_option("--jobs,-j", opt->jobs, "Steps run side by side at most (the outputs are the same for any)")
+    cmd->add_option("--jobs,-j", opt->jobs, "Steps run side by side at most (default: the machine's cores; the outputs are the same for any)")
         ->capture_default_str()
         ->check(CLI::Range(1, 64));
     cmd->add_option("--only", opt->only, "Make only these steps (names as rfd make prints them) and the steps they read from")

@@ -96,7 +96,7 @@ void add_optics_commands(CLI::App& app) {
             std::string file;
             double angle_deg = 0.0;
             double pupil_mm = -1.0;
-            int rays = 1001;
+            int rays = 0;  // add_option sets the default
             bool json = false;
         };
         auto opt = std::make_shared<Options>();
@@ -106,8 +106,7 @@ void add_optics_commands(CLI::App& app) {
         cmd->add_option("--pupil", opt->pupil_mm,
                         "Entrance pupil semi-diameter in mm (default: first surface's)")
             ->check(positive_number());
-        cmd->add_option("--rays", opt->rays, "Rays across the pupil (a square grid clipped to a disc)")
-            ->check(CLI::Range(1, 10000000));
+        add_option(*cmd, optics::kPupilRaysOption, opt->rays);
         cmd->add_flag("--json", opt->json, "Machine-readable output");
         cmd->callback([opt] {
             const auto system = optics::load_lens_system(opt->file);

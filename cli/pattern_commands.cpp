@@ -66,7 +66,7 @@ void add_encode_command(CLI::App& pattern) {
         optics::ModelChoice model = optics::ModelChoice::Auto;
         relight::Interpolation interpolation = relight::Interpolation::Delaunay;
         patterns::ImageFit fit = patterns::ImageFit::Cover;
-        double tilt = 0.0, turn = 0.0, angle_scale = 1.0, margin = 0.0;
+        double tilt = 0, turn = 0, angle_scale = 0, margin = 0;  // add_option sets the defaults
         bool allow_partial = false, json = false, single_float = false;
         WindowOptions window;
     };
@@ -77,19 +77,17 @@ void add_encode_command(CLI::App& pattern) {
     add_model_option(*cmd, opt->model);
     add_choice(*cmd, "--interpolation", opt->interpolation, relight::kInterpolationNames,
                "Between light directions: delaunay, solid-angle or nearest");
-    cmd->add_option("--tilt", opt->tilt, "Rotate the display's axis this many degrees toward the field's up (the thesis used 45)")
-        ->check(CLI::Range(-90.0, 90.0));
-    cmd->add_option("--turn", opt->turn, "Then rotate about the field's axis, degrees")->check(CLI::Range(-360.0, 360.0));
-    cmd->add_option("--angle-scale", opt->angle_scale, "Field polar angle per display polar angle (re-parameterise the range)")
-        ->check(CLI::Range(0.05, 20.0));
+    add_option(*cmd, patterns::kTiltOption, opt->tilt);
+    add_option(*cmd, patterns::kTurnOption, opt->turn);
+    add_option(*cmd, patterns::kAngleScaleOption, opt->angle_scale);
     add_choice(*cmd, "--fit", opt->fit, patterns::kImageFitNames,
                "Field image on the array: cover (crop), contain (letterbox) or stretch");
     cmd->add_option("--printer", opt->printer,
                     "Printer profile to encode for (a file or a bundled name): its resolution, recorded in the "
                     "pattern so simulate and print sheet use it too");
     cmd->add_option("--dpi", opt->dpi, "Printer resolution XDPIxYDPI (default: --printer's, else the design's [printer])");
-    cmd->add_option("--margin", opt->margin, "Blank border around the array, mm")->check(CLI::Range(0.0, 100.0));
-    cmd->add_option("--compression", opt->compression, "EXR compression: rle (fast, default), zips (smaller), none")
+    add_option(*cmd, patterns::kMarginOption, opt->margin);
+    cmd->add_option("--compression", opt->compression, "EXR compression: rle (fast), zips (smaller), none")
         ->check(CLI::IsMember({"none", "rle", "zips", "zip", "piz"}));
     cmd->add_option("--preview", opt->preview, "Also write a screen preview (PNG, 1600 px), scaled to the white");
     cmd->add_flag("--single-float", opt->single_float, "EXR: 32-bit floats instead of half floats (for values above 65504)");

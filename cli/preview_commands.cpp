@@ -28,9 +28,9 @@ void add_simulate_preview_command(CLI::App& simulate) {
         std::string design, pattern, field, out, direct;
         PrintOptions print;
         optics::ModelChoice model = optics::ModelChoice::Auto;
-        std::size_t count = 96;
+        std::size_t count = 0;  // add_option sets the defaults
         std::optional<double> max_angle_deg;
-        int rays = 8;
+        int rays = 0;
         double pixels_per_lenslet = 8.0;
     };
     auto opt = std::make_shared<Options>();
@@ -38,13 +38,12 @@ void add_simulate_preview_command(CLI::App& simulate) {
     cmd->add_option("PATTERN", opt->pattern, "Pattern file from `rfd pattern encode`")->required();
     cmd->add_option("FIELD", opt->field, "The reflectance field the pattern was encoded from (folder or .lp)")->required();
     cmd->add_option("--out", opt->out, "Output folder: data.js, predicted.png, relit.png")->required();
-    cmd->add_option("--count", opt->count, "Light directions (default 96)")->check(CLI::Range(3, 1024));
+    add_option(*cmd, predict::kPreviewLightsOption, opt->count);
     cmd->add_option("--max-angle", opt->max_angle_deg,
                     "Largest angle to the display's axis, degrees (default: the field of view's edge)")
         ->check(CLI::Range(0.1, 89.0));
-    cmd->add_option("--rays", opt->rays, "Rays per side of each lenslet's grid (default 8, as simulate's)")
-        ->check(CLI::Range(1, 256));
-    cmd->add_option("--pixels-per-lenslet", opt->pixels_per_lenslet, "Diffuser pixels per lenslet pitch (default 8)")
+    add_option(*cmd, optics::kRaysPerSideOption, opt->rays);
+    cmd->add_option("--pixels-per-lenslet", opt->pixels_per_lenslet, "Diffuser pixels per lenslet pitch")
         ->check(CLI::Range(1.0, 64.0));
     cmd->add_option("--direct", opt->direct,
                     "The direct encoding PATTERN was optimised from (`rfd pattern optimize --from`): its pictures too, "
@@ -63,7 +62,7 @@ void add_simulate_preview_command(CLI::App& simulate) {
         options.rays_per_side = opt->rays;
         options.pixels_per_pitch = opt->pixels_per_lenslet;
         options.model = optics::resolve(opt->model, simulator.optics(),
-                                        {pattern.geometry().dot_x, pattern.geometry().dot_y}, 0.25)
+                                        {pattern.geometry().dot_x, pattern.geometry().dot_y})
                             .model;
         // The direct encoding an optimised pattern started from, for the page's switch.
         std::optional<print::PrintedTransparency> direct;

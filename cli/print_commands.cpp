@@ -38,13 +38,11 @@ void add_sheet_command(CLI::App& print_cmd) {
                     "the pattern's dpi");
     cmd->add_option("--out", opt->out, "Output sheet, .tif/.tiff or .pdf")->required();
     cmd->add_flag("--mirror", opt->sheet.mirror, "The back sheet: the whole page mirrored left-right");
-    cmd->add_option("--brightness", opt->sheet.brightness,
-                    "Scale of the pattern before clamping: transmittance = brightness * value / white");
-    cmd->add_option("--sheets", opt->sheet.sheets,
-                    "Sheets stacked back to back (1 or 2; 2 prints each at the square root); default: the profile's");
+    add_option(*cmd, print::kBrightnessOption, opt->sheet.brightness);
+    add_option(*cmd, print::kSheetsOption, opt->sheet.sheets);
     cmd->add_option("--bits", opt->sheet.bits, "TIFF bits per channel, 8 or 16");
     cmd->add_option("--copies", opt->sheet.copies,
-                    "Copies of the pattern on the page, each with its marks (default 1; 0: as many as fit)")
+                    "Copies of the pattern on the page, each with its marks (0: as many as fit)")
         ->check(CLI::Range(0, 10000));
     cmd->add_option("--preview", opt->sheet.preview, "Also a small PNG of the page (800 pixels along its longer side)");
     cmd->add_flag("--json", opt->json, "Machine-readable summary");
@@ -107,7 +105,8 @@ void add_moire_command(CLI::App& print_cmd) {
     cmd->add_option("--pitch-y", opt->pitch_y,
                     "Rectangular arrays: row-spacing hypotheses FROM:TO:STEPS (default: --pitch scaled by the "
                     "design's pitch_y / pitch_x)");
-    cmd->add_option("--printer", opt->printer, "Printer profile (paper size); default epson_stylus_pro_4800");
+    cmd->add_option("--printer", opt->printer,
+                    "Printer profile (paper size) (default: the thesis's Epson at the design's [printer] resolution)");
     cmd->add_option("--out", opt->out, "Output PDF")->required();
     cmd->add_option("--preview", opt->preview, "Also a PNG of the first page (800 pixels along its longer side)");
     cmd->add_flag("--json", opt->json, "Machine-readable list of bands");
@@ -152,8 +151,8 @@ void add_wedge_command(CLI::App& print_cmd) {
         bool json = false;
     };
     auto opt = std::make_shared<Options>();
-    cmd->add_option("--printer", opt->printer, "Printer profile: a TOML file or a bundled name (default epson_stylus_pro_4800)");
-    cmd->add_option("--steps", opt->steps, "Patches from code 255 (no ink) to 0 (full ink), default 21")
+    cmd->add_option("--printer", opt->printer, "Printer profile: a TOML file or a bundled name");
+    cmd->add_option("--steps", opt->steps, "Patches from code 255 (no ink) to 0 (full ink)")
         ->check(CLI::Range(2, 256));
     cmd->add_option("--out", opt->out, "Output PDF")->required();
     cmd->add_option("--preview", opt->preview, "Also a PNG of the first page (800 pixels along its longer side)");

@@ -16,6 +16,8 @@
 
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
+#include "core/text.hpp"
+#include "core/csv.hpp"
 #include "core/error.hpp"
 #include "core/files.hpp"
 #include "core/image_io.hpp"
@@ -55,7 +57,7 @@ void add_render(CLI::App& relight) {
                                    "centre column toward +x)");
     light->excludes(envmap);
     cmd->add_option("--out", opt->out, "Output image (.exr linear, .png sRGB, ...)")->required();
-    cmd->add_option("--interpolation", opt->interpolation, "delaunay (default), solid-angle (eq. 4.6 as written) or nearest");
+    cmd->add_option("--interpolation", opt->interpolation, "delaunay, solid-angle (eq. 4.6 as written) or nearest");
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
     cmd->callback([opt] {
         if (opt->lights.empty() && opt->envmap.empty())
@@ -148,12 +150,10 @@ void evaluate_under_lights(const EvalOptions& opt, const relight::ReflectanceFie
     if (!opt.out.empty()) {
         const std::filesystem::path out(opt.out);
         ensure_directory(out);
-        write_file_atomically(out / "errors.csv", [&](std::ostream& csv) {
-            csv.precision(10);
-            csv << "light,squared_error,psnr_db\n";
-            for (std::size_t j = 0; j < lights.size(); ++j)
-                csv << '"' << opt.lights[j] << "\"," << e.per_direction[j] << "," << e.entry_psnr(j) << "\n";
-        });
+        CsvTable errors({"light", "squared_error", "psnr_db"});
+        for (std::size_t j = 0; j < lights.size(); ++j)
+            errors.add_row({opt.lights[j], format_number(e.per_direction[j], 10), format_number(e.entry_psnr(j), 10)});
+        errors.write(out / "errors.csv");
         for (std::size_t j = 0; j < lights.size(); ++j)
             write_image((out / ("light_" + std::to_string(j) + ".png")).string(),
                         join_side_by_side({&evaluation.relit[j], &evaluation.reference_relit[j]}, 2, 0.0f));
@@ -186,7 +186,7 @@ void add_eval(CLI::App& relight) {
     cmd->add_option("FIELD", opt->field, "Sparse reflectance field (folder or .lp)")->required();
     cmd->add_option("--reference", opt->reference, "Reference field, same view and image size")->required();
     add_window_options(*cmd, opt->window);
-    cmd->add_option("--interpolation", opt->interpolation, "delaunay (default), solid-angle (eq. 4.6 as written) or nearest");
+    cmd->add_option("--interpolation", opt->interpolation, "delaunay, solid-angle (eq. 4.6 as written) or nearest");
     cmd->add_option("--light", opt->lights,
                     std::string("Score under this light ") + kLightSyntax +
                         " instead of at every reference direction: both fields relit and compared; with RADIUS a "
@@ -212,15 +212,14 @@ void add_eval(CLI::App& relight) {
         if (!opt->out.empty()) {
             const std::filesystem::path out(opt->out);
             ensure_directory(out);
-            write_file_atomically(out / "errors.csv", [&](std::ostream& csv) {
-                csv.precision(10);
-                csv << "index,theta_deg,phi_deg,squared_error,psnr_db\n";
-                for (std::size_t j = 0; j < reference.size(); ++j) {
-                    const SphericalAngles a = angles_of(reference.directions[j]);
-                    csv << j << "," << radians_to_degrees(a.theta) << "," << radians_to_degrees(a.phi) << ","
-                        << e.per_direction[j] << "," << e.entry_psnr(j) << "\n";
-                }
-            });
+            CsvTable errors({"index", "theta_deg", "phi_deg", "squared_error", "psnr_db"});
+            for (std::size_t j = 0; j < reference.size(); ++j) {
+                const SphericalAngles a = angles_of(reference.directions[j]);
+                errors.add_row({std::to_string(j), format_number(radians_to_degrees(a.theta), 10),
+                                format_number(radians_to_degrees(a.phi), 10), format_number(e.per_direction[j], 10),
+                                format_number(e.entry_psnr(j), 10)});
+            }
+            errors.write(out / "errors.csv");
             // A few directions (highlights, shadow edges) often dominate: a log scale shows
             // the rest too, when every error is positive.
             const bool all_positive = std::all_of(e.per_direction.begin(), e.per_direction.end(),

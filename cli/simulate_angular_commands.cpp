@@ -33,7 +33,7 @@ namespace rfd::cli {
 struct ObserverVariantOptions {
     std::vector<std::string> views, eyes, distributions;
     std::string macro_out, distribution_out;
-    int lens_rays = 128, distribution_pixels = 64, zoom = 1;
+    int lens_rays = 0, distribution_pixels = 64, zoom = 1;  // add_option sets lens_rays' default
     double kernel = 2.0;
 };
 
@@ -77,7 +77,7 @@ std::shared_ptr<ObserverVariantOptions> add_observer_variant_options(CLI::App& s
     const std::string group = "Designs III and IV";
     simulate.add_option("--view", opt->views,
                         "III/IV: a distant observer at THETA,PHI (degrees, field frame: the direction toward the "
-                        "observer); repeat for several (one image each, --out gets _view1, _view2, ...); default 0,0")
+                        "observer); repeat for several (one image each, --out gets _view1, _view2, ...); none: one from 0,0")
         ->group(group);
     simulate.add_option("--eye", opt->eyes,
                         "III/IV: an observer's eye at X,Y,Z mm (display frame; Z in front of the last lens surface); "
@@ -94,17 +94,15 @@ std::shared_ptr<ObserverVariantOptions> add_observer_variant_options(CLI::App& s
                         "III/IV: file for the distributions (.exr/.png), suffixed _U_V")
         ->group(group);
     simulate.add_option("--distribution-pixels", opt->distribution_pixels,
-                        "III/IV: pixels per side of a distribution image (default 64)")
+                        "III/IV: pixels per side of a distribution image")
         ->check(CLI::Range(2, 4096))
         ->group(group);
-    simulate.add_option("--lens-rays", opt->lens_rays, "III/IV: rays per side across the main lens (default 128)")
-        ->check(CLI::Range(2, 4096))
-        ->group(group);
+    add_option(simulate, optics::kLensRaysOption, opt->lens_rays)->group(group);
     simulate.add_option("--kernel", opt->kernel,
-                        "III/IV: radius of the kernel over output directions, in ray spacings (default 2)")
+                        "III/IV: radius of the kernel over output directions, in ray spacings")
         ->check(CLI::Range(0.5, 64.0))
         ->group(group);
-    simulate.add_option("--zoom", opt->zoom, "III/IV: enlarge the view images N times (nearest; default 1)")
+    simulate.add_option("--zoom", opt->zoom, "III/IV: enlarge the view images N times (nearest)")
         ->check(CLI::Range(1, 256))
         ->group(group);
     return opt;
@@ -118,7 +116,7 @@ void simulate_observer_variant(const CLI::App& simulate, const SimulateOptions& 
     const std::vector<std::string>& light_texts = common.lights;
     if (simulate.count("--rays") > 0 || simulate.count("--lenslets") > 0 || simulate.count("--pixels-per-lenslet") > 0)
         throw InputError(SourceLocation{design_file, 0, 0, "design.kind"},
-                         "--rays, --lenslets and --pixels-per-lenslet are for Designs I and II; Designs III and IV "
+                         "--rays-per-side, --lenslets and --pixels-per-lenslet are for Designs I and II; Designs III and IV "
                          "take --lens-rays, --view, --eye, --macro and --distribution");
     if (simulate.count("--frame") > 0 && common.frame != predict::LightFrame::Field)
         throw InputError(SourceLocation{design_file, 0, 0, "design.kind"},
@@ -158,7 +156,7 @@ void simulate_observer_variant(const CLI::App& simulate, const SimulateOptions& 
 
     // An environment map: one light per lit pixel, mapped as the lights above. Every
     // direction traces the whole main lens (--lens-rays squared rays), so the map is
-    // box-filtered to at most --max-rays / 16 lit directions (default 256), which still
+    // box-filtered to at most --max-rays / 16 lit directions, which still
     // puts many directions in each of the display's few incident bins.
     predict::EnvironmentSampling sampling;
     if (!envmap.empty()) {

@@ -64,8 +64,8 @@ CLI::App* add_simulate(CLI::App& app) {
     cmd->add_option("DESIGN", opt->design, "Design TOML file");
     cmd->add_option("PATTERN", opt->pattern, "Pattern file from `rfd pattern encode`");
     cmd->add_option("--light", opt->lights,
-                    std::string("A distant light behind the display, in the frame --frame names (default the "
-                                "display's: 0,0 is straight behind it) ") +
+                    std::string("A distant light behind the display, in the frame --frame names (in the display's, "
+                                "0,0 is straight behind it) ") +
                         kLightSyntax + "; repeat for several");
     add_frame_option(*cmd, opt->frame);
     cmd->add_option("--envmap", opt->envmap,
@@ -76,35 +76,33 @@ CLI::App* add_simulate(CLI::App& app) {
                     "Also the picture at the display's resolution: the mean over each lenslet (.exr or .png)");
     cmd->add_option("--exposure", opt->exposure,
                     "Pictures (--out, --lenslets) multiplied by 2^STOPS, as a camera's exposure compensation: "
-                    "-1 halves, so two lights that add up stay below white (default 0)")
+                    "-1 halves, so two lights that add up stay below white")
         ->check(CLI::Range(-20.0, 20.0));
     add_model_option(*cmd, opt->model);
-    cmd->add_option("--tolerance", opt->tolerance_dots,
-                    "auto: largest paraxial error on the pattern plane, in print dots (default 0.25)")
-        ->check(positive_number());
+    add_option(*cmd, optics::kModelToleranceOption, opt->tolerance_dots);
     add_print_options(*cmd, opt->print);
-    cmd->add_option("--rays", opt->rays, "Rays per side of each lenslet's grid (default 8)")->check(CLI::Range(1, 256));
-    cmd->add_option("--pixels-per-lenslet", opt->pixels_per_lenslet, "Output pixels per lenslet pitch (default 8)")
+    add_option(*cmd, optics::kRaysPerSideOption, opt->rays);
+    cmd->add_option("--pixels-per-lenslet", opt->pixels_per_lenslet, "Output pixels per lenslet pitch")
         ->check(CLI::Range(1.0, 64.0));
     cmd->add_option("--area-samples", opt->area_samples,
-                    "At most this many directions per side of the grid over an area light's disc (default 5; "
+                    "At most this many directions per side of the grid over an area light's disc ("
                     "fewer when the disc spans fewer print dots)")
         ->check(CLI::Range(1, 64));
     cmd->add_option("--max-rays", opt->max_rays,
-                    "Rays per lenslet over all directions together (default 4096): a full grid per direction "
+                    "Rays per lenslet over all directions together: a full grid per direction "
                     "while it fits, else an equal share each; also caps an environment map's directions")
         ->check(CLI::Range(1, 1 << 20));
     cmd->add_option("--front", opt->front,
                     "Contrast with light on the front too: front illuminance / back irradiance ratios "
-                    "(default 0,0.1,0.3,1; 0 is a dark room)")
+                    "(0 is a dark room)")
         ->delimiter(',')
         ->check(non_negative_number());
     cmd->add_option("--diffuser-transmittance", opt->diffuser.transmittance,
-                    "Fraction of the light from behind the diffuser passes to the observer (default 0.47, thesis "
+                    "Fraction of the light from behind the diffuser passes to the observer (thesis "
                     "figure 8.7)")
         ->check(CLI::Range(0.0, 1.0));
     cmd->add_option("--diffuser-reflectance", opt->diffuser.reflectance,
-                    "Fraction of the front light the diffuser scatters back to the observer (default 0.5, nominal)")
+                    "Fraction of the front light the diffuser scatters back to the observer (nominal)")
         ->check(CLI::Range(0.0, 1.0));
     cmd->add_flag("--json", opt->json, "Machine-readable summary");
     cmd->callback([cmd, opt, observer_variant] {
@@ -234,21 +232,21 @@ void add_rti_command(CLI::App& simulate) {
         std::size_t count = 64;
         std::optional<double> max_angle_deg;
         double exposure = 0.0;
-        int rays = 8;
+        int rays = 0;  // add_option sets the default
         bool full = false;
     };
     auto opt = std::make_shared<Options>();
     cmd->add_option("DESIGN", opt->design, "Design TOML file (Design I or II)")->required();
     cmd->add_option("PATTERN", opt->pattern, "Pattern file from `rfd pattern encode`")->required();
     cmd->add_option("--out", opt->out, "Output folder: display.lp and display_NNNN.jpg")->required();
-    cmd->add_option("--count", opt->count, "Light directions (default 64)")->check(CLI::Range(1, 4096));
+    cmd->add_option("--count", opt->count, "Light directions")->check(CLI::Range(1, 4096));
     cmd->add_option("--max-angle", opt->max_angle_deg,
                     "Largest angle to the display's axis, degrees (default: the field of view's edge, the smallest "
                     "wrap-over angle)")
         ->check(CLI::Range(0.1, 89.0));
-    cmd->add_option("--exposure", opt->exposure, "Pictures multiplied by 2^STOPS before they are coded (default 0)")
+    cmd->add_option("--exposure", opt->exposure, "Pictures multiplied by 2^STOPS before they are coded")
         ->check(CLI::Range(-20.0, 20.0));
-    cmd->add_option("--rays", opt->rays, "Rays per side of each lenslet's grid (default 8)")->check(CLI::Range(1, 256));
+    add_option(*cmd, optics::kRaysPerSideOption, opt->rays);
     cmd->add_flag("--full", opt->full, "The diffuser picture instead of one value per lenslet");
     add_model_option(*cmd, opt->model);
     add_print_options(*cmd, opt->print);
@@ -261,7 +259,7 @@ void add_rti_command(CLI::App& simulate) {
         optics::SimulationOptions options;
         options.rays_per_side = opt->rays;
         options.model = optics::resolve(opt->model, simulator.optics(),
-                                        {pattern.geometry().dot_x, pattern.geometry().dot_y}, 0.25)
+                                        {pattern.geometry().dot_x, pattern.geometry().dot_y})
                             .model;
         const std::vector<Eigen::Vector3d> directions =
             predict::cone_directions(opt->count, degrees_to_radians(max_angle_deg), 1);

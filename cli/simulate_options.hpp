@@ -20,9 +20,9 @@ struct SimulateOptions {
     optics::ModelChoice model = optics::ModelChoice::Auto;
     PrintOptions print;
     std::vector<std::string> lights;
-    predict::LightFrame frame = predict::LightFrame::Display;
-    double tolerance_dots = 0.25, pixels_per_lenslet = 8.0, exposure = 0.0;
-    int rays = 8, area_samples = 5;
+    predict::LightFrame frame = predict::kDefaultLightFrame;
+    double tolerance_dots = optics::kModelToleranceOption.fallback, pixels_per_lenslet = 8.0, exposure = 0.0;
+    int rays = static_cast<int>(optics::kRaysPerSideOption.fallback), area_samples = 5;
     std::size_t max_rays = 4096;
     std::vector<double> front{0.0, 0.1, 0.3, 1.0};
     optics::DiffuserScatter diffuser;

@@ -83,10 +83,10 @@ void add_simulate_tolerance_command(CLI::App& simulate) {
         std::string design, pattern, out, pitch_error;
         optics::ModelChoice model = optics::ModelChoice::Paraxial;
         std::vector<std::string> lights;
-        predict::LightFrame frame = predict::LightFrame::Display;
+        predict::LightFrame frame{};
         std::optional<double> shift_mm, rotation_deg, spacer_mm;
-        double threshold = 30.0, tolerance_dots = 0.25;
-        int steps = 6, refinements = 4, rays = 8;
+        double threshold = 30.0, tolerance_dots = 0;  // add_option and add_frame_option set the defaults
+        int steps = 6, refinements = 4, rays = 0;
         bool json = false;
     };
     auto opt = std::make_shared<Options>();
@@ -95,11 +95,11 @@ void add_simulate_tolerance_command(CLI::App& simulate) {
     cmd->add_option("--out", opt->out, "Output folder: a chart per error kind (CSV, .gp, SVG, PNG), summary.txt and summary.json")
         ->required();
     cmd->add_option("--light", opt->lights,
-                    std::string("A distant light, in the frame --frame names (default the display's) ") + kLightSyntax +
+                    std::string("A distant light, in the frame --frame names ") + kLightSyntax +
                         "; repeat for several; each is compared on its own. Default: the axis and two "
                         "directions at half the wrap-over angle (along x and y)");
     add_frame_option(*cmd, opt->frame);
-    cmd->add_option("--shift", opt->shift_mm, "Largest pattern shift along x, mm (default half a lenslet pitch; 0 skips)");
+    cmd->add_option("--shift", opt->shift_mm, "Largest pattern shift along x, mm (default: half a lenslet pitch; 0 skips)");
     cmd->add_option("--rotation", opt->rotation_deg,
                     "Largest pattern rotation about the array's axis, degrees (default: half a pitch at the "
                     "outermost lenslet; 0 skips)");
@@ -107,18 +107,16 @@ void add_simulate_tolerance_command(CLI::App& simulate) {
                     "Largest pitch error of the print, ppm ('500', '500ppm') or percent ('0.05%') (default: half "
                     "a pitch at the outermost lenslet; 0 skips)");
     cmd->add_option("--spacer", opt->spacer_mm,
-                    "Largest error of the pattern-to-diffuser distance, mm (default a quarter of it; 0 skips)");
-    cmd->add_option("--steps", opt->steps, "Sweep values after zero (default 6)");
-    cmd->add_option("--refinements", opt->refinements, "Bisection steps at the threshold crossing (default 4)");
-    cmd->add_option("--threshold", opt->threshold, "PSNR threshold, dB (default 30)");
+                    "Largest error of the pattern-to-diffuser distance, mm (default: a quarter of it; 0 skips)");
+    cmd->add_option("--steps", opt->steps, "Sweep values after zero");
+    cmd->add_option("--refinements", opt->refinements, "Bisection steps at the threshold crossing");
+    cmd->add_option("--threshold", opt->threshold, "PSNR threshold, dB");
     // Paraxial by default: a tolerance compares two predictions of one model, so the
     // model's own error (a few print dots for Design I) largely cancels, at a fifth of the time.
     add_model_option(*cmd, opt->model);
-    cmd->add_option("--tolerance", opt->tolerance_dots,
-                    "auto: largest paraxial error on the pattern plane, in print dots (default 0.25)")
-        ->check(positive_number());
+    add_option(*cmd, optics::kModelToleranceOption, opt->tolerance_dots);
     add_print_options(*cmd, opt->print);
-    cmd->add_option("--rays", opt->rays, "Rays per side of each lenslet's grid (default 8)")->check(CLI::Range(1, 256));
+    add_option(*cmd, optics::kRaysPerSideOption, opt->rays);
     cmd->add_flag("--json", opt->json, "Machine-readable summary");
     cmd->callback([opt] {
         const auto start = std::chrono::steady_clock::now();

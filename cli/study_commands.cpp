@@ -8,15 +8,18 @@
 #include <memory>
 #include <numeric>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
+#include "core/csv.hpp"
 #include "core/error.hpp"
 #include "core/files.hpp"
 #include "core/plot.hpp"
+#include "core/text.hpp"
 #include "core/units.hpp"
 #include "relight/sampling_study.hpp"
 #include "relight/scene.hpp"
@@ -34,18 +37,12 @@ struct StudyCommandOptions {
     relight::SamplingStudyOptions study;
 };
 
-std::string study_csv(const relight::SamplingStudy& study) {
-    std::string csv = "strategy,images,squared_error,psnr_db\n";
-    char line[128];
-    for (const auto& p : study.fixed) {
-        std::snprintf(line, sizeof line, "fixed,%zu,%.9g,%.4f\n", p.images, p.squared_error, p.psnr);
-        csv += line;
-    }
-    for (const auto& p : study.adaptive) {
-        std::snprintf(line, sizeof line, "adaptive,%zu,%.9g,%.4f\n", p.images, p.squared_error, p.psnr);
-        csv += line;
-    }
-    return csv;
+CsvTable study_csv(const relight::SamplingStudy& study) {
+    CsvTable table({"strategy", "images", "squared_error", "psnr_db"});
+    for (const auto& [strategy, points] : {std::pair{"fixed", &study.fixed}, std::pair{"adaptive", &study.adaptive}})
+        for (const auto& p : *points)
+            table.add_row({strategy, std::to_string(p.images), format_number(p.squared_error, 9), format_fixed(p.psnr, 4)});
+    return table;
 }
 
 // Figure 5.5's analogue: summed squared error against the number of images taken.
@@ -131,23 +128,23 @@ void add_study_command(CLI::App& capture) {
     cmd->add_option("--resolution", opt->resolution, "Image size WxH (default: the scene's)");
     cmd->add_option("--samples-per-pixel", opt->samples, "Camera rays per pixel (default: the scene's)")
         ->check(CLI::Range(1, 4096));
-    cmd->add_option("--reference", s.reference_count, "Directions of the dense narrow reference (default 4096)")
+    cmd->add_option("--reference", s.reference_count, "Directions of the dense narrow reference")
         ->check(CLI::Range(std::size_t{16}, std::size_t{100000}));
-    cmd->add_option("--fixed", s.fixed_counts, "Sizes of the fixed patterns (default 256,384,...,1025)")
+    cmd->add_option("--fixed", s.fixed_counts, "Sizes of the fixed patterns")
         ->delimiter(',')
         ->check(CLI::Range(std::size_t{3}, std::size_t{100000}));
-    cmd->add_option("--initial", s.initial, "Adaptive: initial directions (default 256)")
+    cmd->add_option("--initial", s.initial, "Adaptive: initial directions")
         ->check(CLI::Range(std::size_t{3}, std::size_t{100000}));
-    cmd->add_option("--per-iteration", s.adaptive.per_iteration, "Adaptive: directions per iteration (default 16)")
+    cmd->add_option("--per-iteration", s.adaptive.per_iteration, "Adaptive: directions per iteration")
         ->check(CLI::Range(std::size_t{1}, std::size_t{100000}));
-    cmd->add_option("--total", s.adaptive.total, "Adaptive: stop at this many images (default 1024)")
+    cmd->add_option("--total", s.adaptive.total, "Adaptive: stop at this many images")
         ->check(CLI::Range(std::size_t{3}, std::size_t{1000000}));
-    cmd->add_option("--kernel-count", s.kernel_count, "Images of the narrow/wide comparison (default 256)")
+    cmd->add_option("--kernel-count", s.kernel_count, "Images of the narrow/wide comparison")
         ->check(CLI::Range(std::size_t{3}, std::size_t{100000}));
     cmd->add_option("--wide-reference", s.prefiltered_reference_count,
-                    "Directions of the dense wide-kernel reference (default 1025)")
+                    "Directions of the dense wide-kernel reference")
         ->check(CLI::Range(std::size_t{16}, std::size_t{100000}));
-    cmd->add_option("--seed", s.seed, "Seed of every sampling pattern (default 1)");
+    cmd->add_option("--seed", s.seed, "Seed of every sampling pattern");
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
     cmd->callback([opt] {
         const auto& options = opt->study;
@@ -161,7 +158,7 @@ void add_study_command(CLI::App& capture) {
 
         const std::filesystem::path out(opt->out);
         ensure_directory(out);
-        write_text_file(out / "study.csv", study_csv(study));
+        study_csv(study).write(out / "study.csv");
         const nlohmann::json summary = summary_of(study, *opt);
         write_text_file(out / "study.json", summary.dump(2) + "\n");
         write_line_chart(error_chart(study, std::filesystem::path(opt->scene).stem().string()),

@@ -287,6 +287,14 @@ std::optional<double> ConfigTable::optional_number(const std::string& key, doubl
     return number(key, min, max);
 }
 
+double ConfigTable::value(const NumberOption& option) {
+    return optional_number(std::string(option.key), option.min, option.max).value_or(option.fallback);
+}
+
+long long ConfigTable::value(const IntegerOption& option) {
+    return optional_integer(std::string(option.key), option.min, option.max).value_or(option.fallback);
+}
+
 long long ConfigTable::integer(const std::string& key, long long min, long long max) {
     const toml::node& node = require(key);
     const auto value = node.value_exact<int64_t>();

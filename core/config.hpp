@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/options.hpp"
 
 namespace toml {
 inline namespace v3 {
@@ -61,6 +62,10 @@ public:
     long long integer(const std::string& key, long long min, long long max);
     std::optional<long long> optional_integer(const std::string& key, long long min,
                                               long long max);
+    /// An option declared once (core/options.hpp) under its key: its default when absent,
+    /// checked against its range otherwise.
+    double value(const NumberOption& option);
+    long long value(const IntegerOption& option);
     bool boolean(const std::string& key);
     std::optional<bool> optional_boolean(const std::string& key);
     std::string string(const std::string& key);

@@ -41,6 +41,7 @@
 
 #include <Eigen/Core>
 
+#include "core/options.hpp"
 #include "core/image.hpp"
 #include "optics/analysis.hpp"
 #include "optics/design.hpp"
@@ -81,9 +82,14 @@ struct DisplayLight {
     double angular_radius_rad = 0.0;
 };
 
+/// The rays of a Design I/II prediction: a grid per lenslet and light direction.
+inline constexpr IntegerOption kRaysPerSideOption{"--rays-per-side", "", "", 1, 256, 8,
+                                                  "Rays per side of each lenslet's grid, per light direction",
+                                                  "--rays"};
+
 struct SimulationOptions {
     Model model = Model::Paraxial;
-    int rays_per_side = 8;          ///< per lenslet, over the cell's bounding box
+    int rays_per_side = static_cast<int>(kRaysPerSideOption.fallback);  ///< per lenslet, over the cell's bounding box
     double pixels_per_pitch = 8.0;  ///< output pixels per lenslet pitch along x
     /// At most this many directions per side of the square grid over an area light's disc;
     /// fewer when the disc spans fewer print dots on the pattern plane (1 for points).

@@ -53,6 +53,7 @@
 
 #include <Eigen/Core>
 
+#include "core/options.hpp"
 #include "core/image.hpp"
 #include "optics/analysis.hpp"
 #include "optics/design.hpp"
@@ -77,9 +78,13 @@ struct Viewpoint {
     std::optional<Eigen::Vector3d> eye_mm;
 };
 
+/// The rays of a Design III/IV prediction: one grid over the main lens.
+inline constexpr IntegerOption kLensRaysOption{"--lens-rays", "", "", 2, 4096, 128,
+                                               "Designs III/IV: rays per side across the main lens"};
+
 struct AngularSimulationOptions {
     Model model = Model::Paraxial;
-    int rays_per_side = 128;        ///< across the main lens's clear diameter
+    int rays_per_side = static_cast<int>(kLensRaysOption.fallback);  ///< across the main lens's clear diameter
     /// Radius of the tent kernel over output slopes, in paraxial ray spacings |G| delta
     /// (a whole number keeps the paraxial density exact).
     double kernel_spacings = 2.0;

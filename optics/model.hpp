@@ -13,6 +13,7 @@
 
 #include <Eigen/Core>
 
+#include "core/options.hpp"
 #include "core/names.hpp"
 
 namespace rfd::optics {
@@ -45,7 +46,11 @@ struct ResolvedModel {
 /// macro-pixels, so the exact model costs little there). `dot_mm` is the print dot on
 /// the pattern plane (x, y); the error is measured at the cell's centre, on rings toward
 /// its boundary, on the boundary and at its corners (probe_offsets).
+/// --tolerance of --model auto, every command's.
+inline constexpr NumberOption kModelToleranceOption{
+    "--tolerance", "", "print dots", 0.0, 1000.0, 0.25,
+    "--model auto: the largest error of the paraxial model on the pattern plane before the exact one is used"};
 ResolvedModel resolve(ModelChoice choice, const DesignOptics& optics, const Eigen::Vector2d& dot_mm,
-                      double tolerance_dots = 0.25);
+                      double tolerance_dots = kModelToleranceOption.fallback);
 
 }  // namespace rfd::optics

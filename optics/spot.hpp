@@ -8,6 +8,7 @@
 #include <optional>
 #include <vector>
 
+#include "core/options.hpp"
 #include "optics/exact.hpp"
 #include "optics/system.hpp"
 
@@ -28,6 +29,10 @@ struct SpotReport {
     std::optional<double> centroid_y;  ///< mm
     std::array<std::size_t, kRayStatusCount> status_counts{};
 };
+
+/// The rays of `rfd optics trace`: about this many over the pupil.
+inline constexpr IntegerOption kPupilRaysOption{"--pupil-rays", "", "", 1, 10000000, 1001,
+                                                "Rays across the pupil (a square grid clipped to a disc)", "--rays"};
 
 /// Traces a square grid of about `rays` rays clipped to the pupil disc (grid points on the
 /// rim, within kApertureTolerance, included, so the grid keeps its symmetry), all at the

@@ -42,6 +42,7 @@
 
 #include <Eigen/Core>
 
+#include "core/options.hpp"
 #include "optics/analysis.hpp"
 #include "patterns/raster.hpp"
 #include "relight/field.hpp"
@@ -50,10 +51,20 @@
 namespace rfd::patterns {
 
 /// From display incident direction to field direction, see the header comment.
+/// How a pattern maps display directions to field directions (AngularMapping below).
+inline constexpr NumberOption kTiltOption{"--tilt", "tilt_deg", "deg", -90.0, 90.0, 0.0,
+                                          "Rotate the display's axis this many degrees toward the field's up (the "
+                                          "thesis used 45)"};
+inline constexpr NumberOption kTurnOption{"--turn", "turn_deg", "deg", -360.0, 360.0, 0.0,
+                                          "Then rotate about the field's axis"};
+inline constexpr NumberOption kAngleScaleOption{"--angle-scale", "angle_scale", "", 0.05, 20.0, 1.0,
+                                                "Field polar angle per display polar angle (re-parameterise the "
+                                                "range)"};
+
 struct AngularMapping {
-    double tilt_deg = 0.0;     ///< rotation of the display's axis toward the field's +y
-    double turn_deg = 0.0;     ///< then about the field's z axis, counter-clockwise
-    double angle_scale = 1.0;  ///< field polar angle = angle_scale * display polar angle
+    double tilt_deg = kTiltOption.fallback;            ///< rotation of the display's axis toward the field's +y
+    double turn_deg = kTurnOption.fallback;            ///< then about the field's z axis, counter-clockwise
+    double angle_scale = kAngleScaleOption.fallback;   ///< field polar angle = angle_scale * display polar angle
 
     /// Field direction (unit, toward the light) for a display incident direction (unit,
     /// direction of travel). May point below the field's horizon.

@@ -23,6 +23,7 @@
 
 #include <Eigen/Core>
 
+#include "core/options.hpp"
 #include "core/image.hpp"
 #include "core/image_file.hpp"
 #include "core/units.hpp"
@@ -58,8 +59,10 @@ struct PatternGeometry {
 /// border on every side: the extent of the pattern plane's lenslet array (Designs I-III) or
 /// of the macro-pixel grid (IV). Throws InputError when a resolution is not positive or the
 /// raster would exceed 2^31 - 1 dots along a side.
+inline constexpr NumberOption kMarginOption{"--margin", "margin_mm", "mm", 0.0, 100.0, 0.0,
+                                            "Blank border around the array"};
 PatternGeometry pattern_geometry(const optics::Design& design, Dpi dpi_x, Dpi dpi_y,
-                                 double margin_mm = 0.0);
+                                 double margin_mm = kMarginOption.fallback);
 
 /// Any pattern that can produce its rows on demand. Implementations must be thread-safe:
 /// render_row is called concurrently for different rows.

@@ -57,12 +57,18 @@
 
 #include <Eigen/Core>
 
+#include "core/options.hpp"
 #include "core/image.hpp"
 #include "optics/display.hpp"
 #include "patterns/encode.hpp"
 #include "print/printer.hpp"
 
 namespace rfd::predict {
+
+/// How many light directions `simulate compare` (and a project's compare step) sweeps.
+inline constexpr IntegerOption kSweepOption{"--sweep", "compare_sweep", "", 0, 1000, 9,
+                                            "Light directions spread over the display's range, the first on its "
+                                            "axis (0: only --light)"};
 
 /// The macro-pixel core of the header for a design: c = clamp(2 - |m|, 0.25, 1) and m (the
 /// corrective pair's magnification of A onto the diffuser) for Design II with |m| > 1;
@@ -147,7 +153,7 @@ public:
     /// from field direction v. InputError when v maps to no display direction (d.z <= 0).
     DirectionComparison compare(const Eigen::Vector3d& field_direction, const optics::SimulationOptions& options) const;
 
-    /// `count` field directions spread over the display's range: display directions on a
+    /// `count` field directions spread over the display's range (kSweepOption): display directions on a
     /// golden-angle spiral over the disc of angles up to the encoder's DisplayRange
     /// max_angle_rad (the cell's corners), the first on the axis; deterministic. Directions
     /// past the flat sides of the cell fall outside the field of view and are kept, so a

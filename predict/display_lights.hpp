@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "core/options.hpp"
 #include "core/image.hpp"
 #include "core/names.hpp"
 #include "optics/display.hpp"
@@ -45,6 +46,8 @@ using patterns::AngularMapping;
 /// The two agree for a pattern encoded without --tilt, --turn or --angle-scale.
 enum class LightFrame { Display, Field };
 inline constexpr std::array kLightFrameNames{Named{LightFrame::Display, "display"}, Named{LightFrame::Field, "field"}};
+/// The frame --light is named in unless --frame says otherwise, every command's.
+inline constexpr LightFrame kDefaultLightFrame = LightFrame::Display;
 
 /// The direction of travel of light from `toward` (display frame, toward the light), and
 /// back: x and y reversed, z kept.

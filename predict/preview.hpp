@@ -17,6 +17,7 @@
 
 #include <Eigen/Core>
 
+#include "core/options.hpp"
 #include "core/image.hpp"
 #include "optics/display.hpp"
 #include "patterns/encode.hpp"
@@ -30,6 +31,12 @@ struct PreviewRim {
     std::optional<double> wrap_over_deg;   ///< the field of view's edge
     std::optional<double> crosstalk_deg;   ///< the crosstalk onset
 };
+
+/// How many light directions the preview page precomputes (`simulate preview --count`, a
+/// project's preview_lights, where 0 turns the light control off).
+inline constexpr IntegerOption kPreviewLightsOption{"--count", "preview_lights", "", 3, 1024, 96,
+                                                    "Light directions of the preview page (a project's 0 leaves the page without a light "
+                                                    "control)"};
 
 struct PreviewSet {
     std::vector<Eigen::Vector3d> directions;  ///< display frame, toward the light, unit

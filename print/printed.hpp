@@ -13,6 +13,7 @@
 #include <optional>
 #include <string>
 
+#include "core/options.hpp"
 #include "optics/design.hpp"
 #include "optics/display.hpp"
 #include "patterns/raster.hpp"
@@ -44,6 +45,13 @@ std::optional<PrinterProfile> recorded_printer(const patterns::PatternFileInfo& 
 /// The requested profile is read before the pattern, so a bad --printer is reported first.
 PrinterProfile printer_for_pattern(const optics::Design& design, const std::filesystem::path& pattern_file,
                                    const std::string& requested);
+
+/// How a pattern is printed, every command's that prints or predicts one.
+inline constexpr NumberOption kBrightnessOption{"--brightness", "", "", 1e-6, 1e6, 1.0,
+                                                "Tone mapping: transmittance = brightness * value / white"};
+inline constexpr IntegerOption kSheetsOption{"--sheets", "", "", 0, 2, 0,
+                                             "Sheets stacked back to back (2 prints each at the square root); 0: the "
+                                             "printer profile's"};
 
 /// --brightness (positive, finite) and --sheets (1, 2, or 0 for the profile's): InputError
 /// naming the option otherwise.

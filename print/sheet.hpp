@@ -27,6 +27,7 @@
 
 #include "optics/design.hpp"
 #include "print/layout.hpp"
+#include "print/printed.hpp"
 #include "print/printer.hpp"
 
 namespace rfd::print {
@@ -42,8 +43,8 @@ inline int pdf_tile_overlap(double dpi) {
 }
 
 struct SheetOptions {
-    double brightness = 1.0;  ///< scales the pattern before clamping, > 0
-    int sheets = 0;           ///< 1 or 2; 0 takes the printer profile's default
+    double brightness = kBrightnessOption.fallback;  ///< scales the pattern before clamping, > 0
+    int sheets = static_cast<int>(kSheetsOption.fallback);  ///< 1 or 2; 0 takes the printer profile's default
     bool mirror = false;      ///< the mirrored back sheet
     int bits = 8;             ///< TIFF bits per channel, 8 or 16
     int rows_per_strip = 64;  ///< TIFF rows composed at once

@@ -10,6 +10,7 @@
 #include "optics/model.hpp"
 #include "patterns/encode.hpp"
 #include "print/printer.hpp"
+#include "relight/field.hpp"
 #include "relight/interpolation.hpp"
 
 namespace rfd::project {
@@ -89,16 +90,16 @@ Source read_source(ConfigTable& table, const fs::path& folder) {
         source.region = std::array<int, 4>{static_cast<int>(r[0]), static_cast<int>(r[1]), static_cast<int>(r[2]),
                                            static_cast<int>(r[3])};
     }
-    source.scale = table.optional_number("scale", 0.01, 1.0);
+    if (table.has("scale")) source.scale = table.value(relight::kFieldScaleOption);
     return source;
 }
 
 Encoding read_encoding(ConfigTable& table) {
     Encoding e;
-    e.tilt_deg = table.optional_number("tilt_deg", -90, 90).value_or(e.tilt_deg);
-    e.turn_deg = table.optional_number("turn_deg", -360, 360).value_or(e.turn_deg);
-    e.angle_scale = table.optional_number("angle_scale", 0.05, 20).value_or(e.angle_scale);
-    e.margin_mm = table.optional_number("margin_mm", 0, 100).value_or(e.margin_mm);
+    e.tilt_deg = table.value(patterns::kTiltOption);
+    e.turn_deg = table.value(patterns::kTurnOption);
+    e.angle_scale = table.value(patterns::kAngleScaleOption);
+    e.margin_mm = table.value(patterns::kMarginOption);
     e.model = choice(table, "model", e.model, optics::kModelChoiceNames);
     e.interpolation = choice(table, "interpolation", e.interpolation, relight::kInterpolationNames);
     e.fit = choice(table, "fit", e.fit, patterns::kImageFitNames);
@@ -122,14 +123,29 @@ Outputs read_outputs(ConfigTable& table) {
     o.moire = table.optional_boolean("moire").value_or(o.moire);
     o.wedge = table.optional_boolean("wedge").value_or(o.wedge);
     o.holder = table.optional_boolean("holder").value_or(o.holder);
-    o.compare_sweep = static_cast<int>(table.optional_integer("compare_sweep", 0, 1000).value_or(o.compare_sweep));
+    o.compare_sweep = static_cast<int>(table.value(predict::kSweepOption));
     o.tolerance = table.optional_boolean("tolerance").value_or(o.tolerance);
-    o.preview_lights = static_cast<int>(table.optional_integer("preview_lights", 0, 1024).value_or(o.preview_lights));
-    if (o.preview_lights > 0 && o.preview_lights < 3) table.fail("preview_lights", "expected 0 (none) or 3 to 1024");
+    // 0 turns the light control off; any other count is the preview's own (kPreviewLightsOption).
+    const auto& lights = predict::kPreviewLightsOption;
+    if (table.has("preview_lights") && table.integer("preview_lights", 0, lights.max) == 0)
+        o.preview_lights = 0;
+    else
+        o.preview_lights = static_cast<int>(table.value(lights));
     return o;
 }
 
 }  // namespace
+
+const std::vector<DeclaredKey>& declared_keys() {
+    static const std::vector<DeclaredKey> keys{
+        {"source", relight::kFieldScaleOption},     {"encode", patterns::kTiltOption},
+        {"encode", patterns::kTurnOption},          {"encode", patterns::kAngleScaleOption},
+        {"encode", patterns::kMarginOption},        {"make", predict::kSweepOption},
+        {"make", predict::kPreviewLightsOption},    {"optimize", predict::kIterationsOption},
+        {"optimize", predict::kNodeSpacingOption},  {"optimize", predict::kCoreWeightOption},
+    };
+    return keys;
+}
 
 fs::path bundled_design_folder() { return RFD_DESIGNS_DIR; }
 fs::path bundled_holder_profile_folder() { return RFD_HOLDER_PROFILES_DIR; }
@@ -179,9 +195,9 @@ Project load_project(const fs::path& file) {
     project.optimization = Optimization{};
     if (auto optimize = root.optional_table("optimize")) {
         Optimization& o = *project.optimization;
-        o.iterations = static_cast<int>(optimize->optional_integer("iterations", 0, 100000).value_or(o.iterations));
-        o.spacing_mm = optimize->optional_number("spacing_mm", 0.005, 2.0).value_or(o.spacing_mm);
-        o.core_weight = optimize->optional_number("core_weight", 0.0, 1e6).value_or(o.core_weight);
+        o.iterations = static_cast<int>(optimize->value(predict::kIterationsOption));
+        o.spacing_mm = optimize->value(predict::kNodeSpacingOption);
+        o.core_weight = optimize->value(predict::kCoreWeightOption);
         if (!optimize->optional_boolean("enabled").value_or(true)) project.optimization.reset();
         optimize->finish();
     }

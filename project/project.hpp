@@ -18,7 +18,14 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <variant>
 #include <vector>
+
+#include "patterns/encode.hpp"
+#include "patterns/raster.hpp"
+#include "predict/compare.hpp"
+#include "predict/optimize.hpp"
+#include "predict/preview.hpp"
 
 namespace rfd::project {
 
@@ -37,7 +44,8 @@ struct Source {
 
 /// The encoder's options, as `rfd pattern encode` names them.
 struct Encoding {
-    double tilt_deg = 0.0, turn_deg = 0.0, angle_scale = 1.0, margin_mm = 0.0;
+    double tilt_deg = patterns::kTiltOption.fallback, turn_deg = patterns::kTurnOption.fallback;
+    double angle_scale = patterns::kAngleScaleOption.fallback, margin_mm = patterns::kMarginOption.fallback;
     std::string model = "auto", interpolation = "delaunay", fit = "cover";
 };
 
@@ -48,16 +56,16 @@ struct Outputs {
     bool moire = true;        ///< the pitch calibration sheet
     bool wedge = true;        ///< the step wedge that measures the printer's tone curve
     bool holder = true;       ///< the holder's .scad and STLs with their checks
-    int compare_sweep = 9;    ///< predicted against relit at this many lights (0: none)
+    int compare_sweep = static_cast<int>(predict::kSweepOption.fallback);  ///< predicted against relit at this many lights (0: none)
     bool tolerance = true;    ///< assembly tolerances
-    int preview_lights = 96;  ///< directions precomputed for the preview page (0: no light control)
+    int preview_lights = static_cast<int>(predict::kPreviewLightsOption.fallback);  ///< directions precomputed for the preview page (0: no light control)
 };
 
 /// `rfd pattern optimize`'s settings, when the project asks for an optimised pattern.
 struct Optimization {
-    int iterations = 40;
-    double spacing_mm = 0.1;
-    double core_weight = 0.0;
+    int iterations = static_cast<int>(predict::kIterationsOption.fallback);
+    double spacing_mm = predict::kNodeSpacingOption.fallback;
+    double core_weight = predict::kCoreWeightOption.fallback;
 };
 
 struct Project {
@@ -71,6 +79,15 @@ struct Project {
     Outputs outputs;
     std::optional<Optimization> optimization;  ///< nullopt: [optimize] enabled = false, the direct encoding
 };
+
+/// A project-file key declared as an option (core/options.hpp) in the library that owns
+/// it: load_project reads it through that declaration, docs/options.md lists it from here,
+/// and test_project refuses each out of its range.
+struct DeclaredKey {
+    std::string_view table;  ///< "source", "encode", "make", "optimize"
+    std::variant<NumberOption, IntegerOption> option;
+};
+const std::vector<DeclaredKey>& declared_keys();
 
 /// Reads and checks a project file. Bundled names: designs ("design1": designs/design1.toml),
 /// film printers (printers/), 3D printers (holders/profiles/). InputError naming the file,

@@ -29,6 +29,7 @@
 
 #include <Eigen/Core>
 
+#include "core/options.hpp"
 #include "core/image.hpp"
 
 namespace rfd::relight {
@@ -48,10 +49,15 @@ struct ReflectanceField {
 /// The part of a capture's images a field is made of, applied as each image is read: a
 /// region of pixels (leaving out the calibration spheres and the frame a capture holds),
 /// then a scale (0.5 halves each side, averaging; sizes round to whole pixels).
+/// --scale of a command that reads a field, `scale` of a project's [source].
+inline constexpr NumberOption kFieldScaleOption{"--scale", "scale", "", 0.01, 16.0, 1.0,
+                                                "Scale every image of the field by this, after the region (0.5 "
+                                                "halves; OpenCV INTER_AREA)"};
+
 struct ImageWindow {
     int x = 0, y = 0;             ///< the region's top-left pixel
     int width = 0, height = 0;    ///< 0 x 0: the whole image
-    double scale = 1.0;           ///< > 0
+    double scale = kFieldScaleOption.fallback;  ///< > 0
 
     bool whole() const { return width == 0 && height == 0 && scale == 1.0; }
 };

@@ -3,11 +3,15 @@
 // stand-in runner whose outputs depend on exactly the files a step names.
 
 #include <algorithm>
+#include <cmath>
 #include <deque>
 #include <fstream>
 #include <iterator>
 #include <map>
 #include <set>
+#include <sstream>
+#include <type_traits>
+#include <variant>
 #include <string>
 
 #include <gmock/gmock.h>
@@ -178,6 +182,52 @@ field = "field"
     EXPECT_THAT(error_for("[project]\ndesign = \"design2\"\n[source]\nfield = \"field\"\nregion = [0, 0, 0, 3]\n"),
                 HasSubstr("source.region"));
     EXPECT_THAT(error_for("[project]\ndesign = \"design2\"\n"), HasSubstr("source"));
+}
+
+// Every key declared as an option (project::declared_keys) is read through that
+// declaration: its ends are accepted, a value past either end is refused naming the key.
+TEST(ProjectFile, DeclaredKeysTakeTheirOptionsRange) {
+    TempDir dir;
+    write_small_field(dir / "field", 0.5f);
+    const auto error_for = [&](std::string_view table, std::string_view key, const std::string& value) {
+        std::string text = "[project]\ndesign = \"design2\"\n[source]\nfield = \"field\"\n";
+        if (table != "source") text += "[" + std::string(table) + "]\n";
+        write(dir / "p.toml", text + std::string(key) + " = " + value + "\n");
+        return error_of([&] { load_project(dir / "p.toml"); });
+    };
+    int checked = 0;
+    for (const DeclaredKey& declared : declared_keys()) {
+        std::visit(
+            [&](const auto& option) {
+                const std::string name = std::string(declared.table) + "." + std::string(option.key);
+                const auto text = [](auto v) {
+                    std::ostringstream out;
+                    out.precision(17);
+                    out << v;
+                    return out.str();
+                };
+                const double step = std::max<double>(1e-3, std::abs(static_cast<double>(option.min)) * 0.5);
+                EXPECT_EQ(error_for(declared.table, option.key, text(option.min)), "") << name;
+                EXPECT_EQ(error_for(declared.table, option.key, text(option.max)), "") << name;
+                if constexpr (std::is_same_v<std::decay_t<decltype(option)>, IntegerOption>) {
+                    EXPECT_THAT(error_for(declared.table, option.key, text(option.min - 1)),
+                                AllOf(HasSubstr(name), HasSubstr("outside the allowed range")));
+                    EXPECT_THAT(error_for(declared.table, option.key, text(option.max + 1)),
+                                AllOf(HasSubstr(name), HasSubstr("outside the allowed range")));
+                } else {
+                    EXPECT_THAT(error_for(declared.table, option.key, text(option.min - step)),
+                                AllOf(HasSubstr(name), HasSubstr("outside the allowed range")));
+                    EXPECT_THAT(error_for(declared.table, option.key, text(option.max + std::max(1.0, option.max))),
+                                AllOf(HasSubstr(name), HasSubstr("outside the allowed range")));
+                }
+                ++checked;
+            },
+            declared.option);
+    }
+    EXPECT_GE(checked, 10);
+    // Below the preview's own range, 0 still turns its light control off.
+    EXPECT_EQ(error_for("make", "preview_lights", "0"), "");
+    EXPECT_EQ(load_project(dir / "p.toml").outputs.preview_lights, 0);
 }
 
 TEST(ProjectPlan, EveryStepReadsOnlyWhatEarlierStepsOrTheUserMade) {

@@ -46,7 +46,7 @@ run(2 ${optimize} --out ${OUT}/bad.exr --lights ${OUT}/outside.lp)
 expect("outside.lp.*no light of the file lies inside")
 
 run(2 ${base} --out ${OUT}/bad.exr --spacing 0.001)
-expect("nodes per side of a lenslet")
+expect("--spacing: expected a number from 0.005 to 2, got 0.001")
 run(2 ${base} --out ${OUT}/bad.exr --crop 4,4,9,9)
 expect("--crop: expected I,J,W,H")
 run(2 pattern optimize ${DESIGNS}/design1.toml ${OUT}/field --from ${OUT}/direct.exr --out ${OUT}/bad.exr)

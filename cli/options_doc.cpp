@@ -1,0 +1,106 @@
+// rfd options-doc (hidden): every command's options as Markdown, from the options as the
+// commands declare them. docs/options.md is this output (`make docs`); the ctest
+// `doc_options` fails when the two differ, so the page cannot drift from the program.
+
+#include <cstdio>
+#include <regex>
+#include <string>
+#include <type_traits>
+#include <variant>
+
+#include "cli/commands.hpp"
+#include "core/text.hpp"
+#include "project/project.hpp"
+
+namespace rfd::cli {
+namespace {
+
+// A table cell: no line breaks, and a '|' that would end the cell escaped.
+std::string cell(std::string text) {
+    std::string out;
+    for (char c : text) {
+        if (c == '|') out += "\\|";
+        else if (c == '\n') out += ' ';
+        else out += c;
+    }
+    return out;
+}
+
+// CLI11's type and checks ("FLOAT:FLOAT in [-20 - 20]", "TEXT:{auto,exact}") as a reader
+// writes them ("number, -20..20", "auto, exact").
+std::string value_text(const CLI::Option& option) {
+    const std::string type = option.get_type_name();
+    std::string base = type.substr(0, type.find(':'));
+    if (base == "FLOAT") base = "number";
+    else if (base == "INT" || base == "UINT") base = "integer";
+    else if (base == "TEXT") base = "text";
+    if (option.get_expected_max() > 1) base += " ...";
+    const std::regex range(R"(in \[([^ ]+) - ([^\]]+)\])"), choices(R"(\{([^}]*)\})");
+    std::smatch m;
+    if (std::regex_search(type, m, choices)) return std::regex_replace(m[1].str(), std::regex(","), ", ");
+    if (std::regex_search(type, m, range)) return base + ", " + m[1].str() + ".." + m[2].str();
+    if (type.find("NONNEGATIVE") != std::string::npos) return base + ", >= 0";
+    if (type.find("POSITIVE") != std::string::npos) return base + ", > 0";
+    return base;
+}
+
+void write_command(std::string& out, const CLI::App& command, const std::string& path) {
+    std::string rows;
+    for (const CLI::Option* option : command.get_options()) {
+        if (option->check_lname("help") || option->check_lname("quiet") || option->get_group().empty()) continue;
+        const bool flag = option->get_type_name().empty();
+        std::string names = option->get_positional() ? option->get_name(true) : option->get_name(false, true);
+        names = std::regex_replace(names, std::regex(","), "`, `");
+        std::string what = option->get_description();
+        if (option->get_required()) what = "Required. " + what;
+        rows += "| `" + names + "` | " + (flag ? "flag" : cell(value_text(*option))) + " | " +
+                cell(option->get_default_str()) + " | " + cell(what) + " |\n";
+    }
+    if (!rows.empty()) {
+        out += "## `" + path + "`\n\n" + cell(command.get_description()) + "\n\n";
+        out += "| option | value | default | what it sets |\n|---|---|---|---|\n" + rows + "\n";
+    }
+    for (const CLI::App* sub : command.get_subcommands([](const CLI::App* app) { return !app->get_group().empty(); }))
+        write_command(out, *sub, path + " " + sub->get_name());
+}
+
+// The project file's declared keys (project::declared_keys), in the same columns.
+std::string project_keys_table() {
+    std::string out = "## Project files (`rfd make`)\n\nThe keys of a project file that commands share "
+                      "(the whole file: [formats](formats.md#project-files-rfd-make-projecttoml---out-dir-examplestoml)).\n\n"
+                      "| key | value | default | what it sets |\n|---|---|---|---|\n";
+    for (const project::DeclaredKey& key : project::declared_keys())
+        std::visit(
+            [&](const auto& option) {
+                const bool integer = std::is_same_v<std::decay_t<decltype(option)>, IntegerOption>;
+                const std::string fallback =
+                    integer ? std::to_string(static_cast<long long>(option.fallback)) : format_number(option.fallback);
+                out += "| `[" + std::string(key.table) + "] " + std::string(option.key) + "` | " +
+                       (integer ? "integer, " : "number, ") + range_text(option) + " | " + fallback + " | " +
+                       cell(help_text(option)) + " (as `" + std::string(option.flag) + "`) |\n";
+            },
+            key.option);
+    return out + "\n";
+}
+
+}  // namespace
+
+void add_options_doc_command(CLI::App& app) {
+    auto* cmd = app.add_subcommand("options-doc", "Every command's options as Markdown (docs/options.md)");
+    cmd->group("");  // hidden: for `make docs` and the ctest doc_options
+    cmd->callback([&app] {
+        std::string out =
+            "# Every command's options\n\n"
+            "Generated from the program by `rfd options-doc` (`make docs`); the ctest `doc_options` checks\n"
+            "that this page matches it. Ranges include both ends. Every command also takes `--quiet`\n"
+            "(`-q`: no progress on stderr) and `--help`. Options that several commands share, or a command\n"
+            "and the project file, are declared once in the library that owns them (`core/options.hpp`);\n"
+            "the project-file keys among them are in the last table.\n\n";
+        for (const CLI::App* sub : app.get_subcommands([](const CLI::App* a) { return !a->get_group().empty(); }))
+            write_command(out, *sub, "rfd " + sub->get_name());
+        out += project_keys_table();
+        std::fputs(out.c_str(), stdout);
+    });
+}
+
+}  // namespace rfd::cli
