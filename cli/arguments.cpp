@@ -100,25 +100,6 @@ print::PrinterProfile printer_for(const optics::Design& design, const std::strin
     return print::default_printer(design.printer.dpi_x, design.printer.dpi_y);
 }
 
-nlohmann::json environment_json(const std::string& file, const predict::EnvironmentSampling& sampling) {
-    return {{"file", file},
-            {"size", {sampling.width, sampling.height}},
-            {"sampled_size", {sampling.sampled_width, sampling.sampled_height}},
-            {"box_filter", sampling.reduction},
-            {"reason", sampling.reason},
-            {"directions", sampling.directions},
-            {"directions_in_front", sampling.in_front}};
-}
-
-void print_environment_line(const std::string& file, const predict::EnvironmentSampling& sampling) {
-    std::printf("  envmap       %s: %d x %d", file.c_str(), sampling.width, sampling.height);
-    if (sampling.reduction > 1)
-        std::printf(", sampled at %d x %d (box filter %d: %s)", sampling.sampled_width, sampling.sampled_height,
-                    sampling.reduction, sampling.reason.c_str());
-    std::printf("; %zu direction(s) light the display from behind, %zu from the front (dropped)\n",
-                sampling.directions, sampling.in_front);
-}
-
 namespace {
 
 CLI::Validator lower_bound(const char* name, bool allow_zero) {

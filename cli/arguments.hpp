@@ -99,10 +99,6 @@ CLI::Option* add_model_option(CLI::App& command, optics::ModelChoice& target);
 /// tone values at the design's own [printer] resolution.
 print::PrinterProfile printer_for(const optics::Design& design, const std::string& option);
 
-/// How `rfd simulate` sampled an environment map: for the --json summary, and the
-/// "envmap" line of the text report (printed to stdout).
-nlohmann::json environment_json(const std::string& file, const predict::EnvironmentSampling& sampling);
-void print_environment_line(const std::string& file, const predict::EnvironmentSampling& sampling);
 
 /// How a pattern is printed, for `rfd simulate` and its subcommands: --printer,
 /// --brightness, --sheets (added to `command` by add_print_options).

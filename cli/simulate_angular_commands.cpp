@@ -26,6 +26,7 @@
 #include "optics/display_angular.hpp"
 #include "patterns/angular.hpp"
 #include "predict/display_lights.hpp"
+#include "predict/prediction_report.hpp"
 #include "print/printed.hpp"
 
 namespace rfd::cli {
@@ -228,58 +229,16 @@ void simulate_observer_variant(const CLI::App& simulate, const SimulateOptions& 
         write_image(path, result.distributions[q]);
         written.push_back(path.string());
     }
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-
-    const std::string model(optics::to_string(options.model));
-    const double rays = static_cast<double>(std::max<std::size_t>(result.rays, 1));
-    nlohmann::json losses = nlohmann::json::object();
-    for (const auto& [surface, fraction] : result.lost_fraction) losses[surface] = fraction;
-    const int lattice_x = simulator.meso().lattice().count_x(), lattice_y = simulator.meso().lattice().count_y();
-    nlohmann::json summary = {
-        {"out", written},
-        {"design_kind", std::string(optics::to_string(design.kind))},
-        {"model", model},
-        {"model_choice", std::string(name_of(optics::kModelChoiceNames, common.model))},
-        {"lights", light_texts.size()},
-        {"views", view_names},
-        {"directions", result.directions},
-        {"rays", result.rays},
-        {"rays_lost", result.lost},
-        {"rays_crossed", result.crossed},
-        {"optical_efficiency", result.optical_efficiency},
-        {"pattern_efficiency", result.pattern_efficiency},
-        {"crosstalk_fraction", result.crossed_fraction},
-        {"lost_fraction", losses},
-        {"meso_pixels", {simulator.macro_x() * lattice_x, simulator.macro_y() * lattice_y}},
-        {"macro_grid", {simulator.macro_x(), simulator.macro_y()}},
-        {"kernel_deg", radians_to_degrees(std::atan(result.kernel_half_tan))},
-        {"distribution_half_angle_deg", radians_to_degrees(std::atan(result.distribution_half_tan))},
-        {"reference_radiance_per_sr", result.reference_radiance_per_sr},
-        {"seconds", seconds}};
-    if (!envmap.empty())
-        summary["envmap"] = environment_json(envmap, sampling);
-    if (common.json) {
-        std::printf("%s\n", summary.dump(2).c_str());
-        return;
-    }
-    std::printf("%s: what '%s' sends toward %zu viewpoint(s), %d x %d meso-pixels (%d x %d macro-pixels)\n",
-                written.front().c_str(), design.name.c_str(), result.views.size(), simulator.macro_x() * lattice_x,
-                simulator.macro_y() * lattice_y, simulator.macro_x(), simulator.macro_y());
-    std::printf("  model        %s (%s)\n", model.c_str(), choice.reason.c_str());
-    std::printf("  light        %zu light(s)%s, %zu direction(s) sampled, %zu rays per macro-pixel\n", light_texts.size(),
-                envmap.empty() ? "" : " and an environment map", result.directions, result.rays);
-    if (!envmap.empty()) print_environment_line(envmap, sampling);
-    std::printf("  efficiency   %.1f %% of the light entering the main lens leaves the display; "
-                "%.1f / %.1f / %.1f %% through the pattern (R/G/B)\n",
-                100 * result.optical_efficiency, 100 * result.pattern_efficiency[0], 100 * result.pattern_efficiency[1],
-                100 * result.pattern_efficiency[2]);
-    std::printf("  crosstalk    %.2f %% of the light leaves through a neighbouring lenslet (%.2f %% of the rays)\n",
-                100 * result.crossed_fraction, 100.0 * static_cast<double>(result.crossed) / rays);
-    for (const auto& [surface, fraction] : result.lost_fraction)
-        std::printf("  lost         %5.1f %% at %s\n", 100 * fraction, surface.c_str());
-    std::printf("  kernel       %.2f deg over output directions; 1.0 = %.4g /sr per unit irradiance\n",
-                radians_to_degrees(std::atan(result.kernel_half_tan)), result.reference_radiance_per_sr);
-    std::printf("  time         %.2f s\n", seconds);
+    const predict::ObserverPredictionReport report{
+        written, design.name, std::string(optics::to_string(design.kind)),
+        std::string(name_of(optics::kModelChoiceNames, common.model)), choice, light_texts.size(), view_names, envmap,
+        sampling, &result, simulator.macro_x(), simulator.macro_y(), simulator.meso().lattice().count_x(),
+        simulator.meso().lattice().count_y(),
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()};
+    if (common.json)
+        std::printf("%s\n", predict::to_json(report).dump(2).c_str());
+    else
+        std::fputs(predict::report_text(report).c_str(), stdout);
 }
 
 }  // namespace rfd::cli

@@ -21,6 +21,7 @@
 #include "optics/display.hpp"
 #include "optics/analysis.hpp"
 #include "predict/display_lights.hpp"
+#include "predict/prediction_report.hpp"
 #include "predict/rti_export.hpp"
 #include "relight/field.hpp"
 #include "patterns/encode.hpp"
@@ -29,28 +30,6 @@
 
 namespace rfd::cli {
 namespace {
-
-nlohmann::json light_checks_json(const std::vector<predict::LightCheck>& checks) {
-    nlohmann::json out = nlohmann::json::array();
-    for (const predict::LightCheck& c : checks)
-        out.push_back({{"display_deg", {c.display_theta_deg, c.display_phi_deg}},
-                       {"field_deg", {c.field_theta_deg, c.field_phi_deg}},
-                       {"angle_to_axis_deg", c.display_theta_deg},
-                       {"wrap_over_deg", json_or_null(c.wrap_over_deg)},
-                       {"crosstalk_onset_deg", json_or_null(c.crosstalk_deg)},
-                       {"warning", c.warning()}});
-    return out;
-}
-
-void print_light_check(const std::string& text, const predict::LightCheck& c) {
-    std::printf("               %s: display %s, field %s; %s deg from the axis (field of view to %s, crosstalk from "
-                "%s deg along its azimuth)\n",
-                text.c_str(), (format_fixed(c.display_theta_deg, 1) + "," + format_fixed(c.display_phi_deg, 1)).c_str(),
-                (format_fixed(c.field_theta_deg, 1) + "," + format_fixed(c.field_phi_deg, 1)).c_str(),
-                format_fixed(c.display_theta_deg, 1).c_str(),
-                c.wrap_over_deg ? format_fixed(*c.wrap_over_deg, 1).c_str() : "89+",
-                c.crosstalk_deg ? format_fixed(*c.crosstalk_deg, 1).c_str() : "89+");
-}
 
 CLI::App* add_simulate(CLI::App& app) {
     auto* cmd = app.add_subcommand(
@@ -149,74 +128,15 @@ CLI::App* add_simulate(CLI::App& app) {
         write_image(opt->out, result.image.exposed(opt->exposure));
         const Image picture = simulator.per_lenslet(result);
         if (!opt->lenslets.empty()) write_image(opt->lenslets, picture.exposed(opt->exposure));
-        const optics::PictureContrast contrast = optics::picture_contrast(picture, opt->diffuser, opt->front);
-        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-
-        const std::string model(optics::to_string(options.model));
-        nlohmann::json summary = {
-            {"out", opt->out},
-            {"model", model},
-            {"model_choice", std::string(name_of(optics::kModelChoiceNames, opt->model))},
-            {"paraxial_error_dots", json_or_null(choice.paraxial_error_dots)},
-            {"lights", opt->lights.size()},
-            {"frame", std::string(name_of(predict::kLightFrameNames, opt->frame))},
-            {"light_checks", light_checks_json(checks)},
-            {"directions", result.directions},
-            {"rays_per_direction", result.rays_per_direction},
-            {"rays", result.rays},
-            {"rays_lost", result.lost},
-            {"rays_crossed", result.crossed},
-            {"optical_efficiency", result.optical_efficiency},
-            {"pattern_efficiency", result.pattern_efficiency},
-            {"pixels", {result.image.width(), result.image.height()}},
-            {"pixel_mm", result.pixel_mm},
-            {"exposure_stops", opt->exposure},
-            {"seconds", seconds}};
-        nlohmann::json front = nlohmann::json::array();
-        for (const optics::FrontLightContrast& c : contrast.with_front)  // JSON has no infinity: null
-            front.push_back({{"front_ratio", c.front_ratio},
-                             {"contrast", std::isfinite(c.contrast) ? nlohmann::json(c.contrast) : nlohmann::json()}});
-        summary["contrast"] = {{"white", contrast.white},
-                               {"black", contrast.black},
-                               {"transmissivity", contrast.transmissivity},
-                               {"diffuser_transmittance", opt->diffuser.transmittance},
-                               {"diffuser_reflectance", opt->diffuser.reflectance},
-                               {"with_front_light", front}};
-        if (!opt->envmap.empty())
-            summary["envmap"] = environment_json(opt->envmap, sampling);
-        if (opt->json) {
-            std::printf("%s\n", summary.dump(2).c_str());
-            return;
-        }
-        std::printf("%s: %d x %d pixels of %.4f mm, what '%s' shows\n", opt->out.c_str(), result.image.width(),
-                    result.image.height(), result.pixel_mm, design.name.c_str());
-        std::printf("  model        %s (%s; paraxial error up to %.2f dots, tolerance %.2f)\n", model.c_str(),
-                    opt->model == optics::ModelChoice::Auto ? "chosen automatically" : "as asked",
-                    choice.paraxial_error_dots.value_or(0.0), opt->tolerance_dots);
-        std::printf("  light        %zu light(s)%s, %zu direction(s) sampled, %zu ray(s) per direction and lenslet, "
-                    "%zu rays\n",
-                    opt->lights.size(), opt->envmap.empty() ? "" : " and an environment map", result.directions,
-                    result.rays_per_direction, result.rays);
-        for (std::size_t k = 0; k < checks.size(); ++k) print_light_check(opt->lights[k], checks[k]);
-        if (!opt->envmap.empty()) print_environment_line(opt->envmap, sampling);
-        std::printf("  efficiency   %.1f %% of the light entering the lenslets reaches the diffuser; "
-                    "%.1f / %.1f / %.1f %% through the pattern (R/G/B)\n",
-                    100 * result.optical_efficiency, 100 * result.pattern_efficiency[0],
-                    100 * result.pattern_efficiency[1], 100 * result.pattern_efficiency[2]);
-        std::printf("  crosstalk    %.2f %% of the rays reach the diffuser through a neighbouring lenslet\n",
-                    result.rays ? 100.0 * static_cast<double>(result.crossed) / static_cast<double>(result.rays) : 0.0);
-        std::printf("  contrast     white %.4f, black %.4f (99th / 1st percentile over the lenslets); %.1f %% as bright "
-                    "as the back light through the diffuser\n",
-                    contrast.white, contrast.black, 100 * contrast.transmissivity);
-        for (const optics::FrontLightContrast& c : contrast.with_front) {
-            if (std::isfinite(c.contrast))
-                std::printf("               %.1f : 1 with front / back light %g%s\n", c.contrast, c.front_ratio,
-                            c.front_ratio == 0.0 ? " (dark room)" : "");
-            else
-                std::printf("               unbounded with front / back light %g%s (the blacks are black)\n",
-                            c.front_ratio, c.front_ratio == 0.0 ? " (dark room)" : "");
-        }
-        std::printf("  time         %.2f s\n", seconds);
+        const predict::DiffuserPredictionReport report{
+            opt->out, design.name, std::string(name_of(optics::kModelChoiceNames, opt->model)), choice,
+            opt->tolerance_dots, opt->lights, opt->frame, checks, opt->envmap, sampling, &result,
+            optics::picture_contrast(picture, opt->diffuser, opt->front), opt->diffuser, opt->exposure,
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()};
+        if (opt->json)
+            std::printf("%s\n", predict::to_json(report).dump(2).c_str());
+        else
+            std::fputs(predict::report_text(report).c_str(), stdout);
     });
     return cmd;
 }

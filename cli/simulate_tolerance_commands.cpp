@@ -5,24 +5,20 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <memory>
 #include <numbers>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "core/error.hpp"
-#include "core/text.hpp"
 #include "core/number.hpp"
-#include "core/files.hpp"
-#include "core/plot.hpp"
 #include "optics/display.hpp"
 #include "optics/tolerance.hpp"
 #include "predict/summaries.hpp"
+#include "predict/tolerance_report.hpp"
 #include "patterns/encode.hpp"
 #include "print/printed.hpp"
 
@@ -48,28 +44,6 @@ double parse_pitch_error(const std::string& text) {
                          "expected a number >= 0 in ppm ('500', '500ppm') or percent ('0.05%'), got '" + text + "'");
     return value * unit;
 }
-
-// How a kind's errors are shown: unit name and factor from the library's value.
-struct Display {
-    const char* label;
-    const char* unit;
-    double factor;
-    const char* phrase;  // "keep the shift under"
-};
-
-Display display_of(optics::MountingError kind) {
-    switch (kind) {
-        case optics::MountingError::Shift: return {"pattern shift along x", "mm", 1.0, "keep the shift under"};
-        case optics::MountingError::Rotation:
-            return {"pattern rotation", "deg", 180.0 / std::numbers::pi, "the rotation under"};
-        case optics::MountingError::PitchError: return {"pattern pitch error", "ppm", 1e6, "the pitch error under"};
-        case optics::MountingError::Spacer: return {"spacer thickness error", "mm", 1.0, "the spacer within"};
-    }
-    return {"?", "", 1.0, ""};
-}
-
-// Four significant digits, but never an exponent: 1.2e+04 ppm reads worse than 12000.
-std::string format(double value) { return std::abs(value) >= 1e4 ? format_fixed(value, 0) : format_number(value, 4); }
 
 }  // namespace
 
@@ -141,81 +115,16 @@ void add_simulate_tolerance_command(CLI::App& simulate) {
                                 : to_display_lights(opt->lights, read_pattern_mapping(opt->pattern), opt->frame);
 
         const optics::ToleranceReport report = optics::sweep_tolerances(design, pattern, lights, options);
-
-        ensure_directory(opt->out);
-        const std::filesystem::path out(opt->out);
-        predict::ToleranceSummary record;
-        std::ostringstream table;
-        std::vector<std::string> phrases;
-        for (const optics::ToleranceCurve& curve : report.curves) {
-            const Display shown = display_of(curve.kind);
-            const std::string name(optics::to_string(curve.kind));
-            LineChart chart;
-            chart.title = std::string("Tolerance: ") + shown.label + " (" + design.name + ")";
-            chart.x_label = std::string(shown.label) + " (" + shown.unit + ", worse of +/-)";
-            chart.y_label = "PSNR of the per-lenslet picture (dB)";
-            chart.y2_label = "picture shift on the diffuser (lenslets)";
-            chart.key_position = "top right";
-            PlotSeries psnr{"PSNR vs error-free", {}, {}, false};
-            PlotSeries threshold{"threshold " + format(opt->threshold) + " dB", {}, {}, false};
-            PlotSeries shift{"picture shift (right axis)", {}, {}, true};
-            predict::ToleranceCurveRecord curve_record{name, shown.unit, 0.0, std::nullopt, {}, {}, name + ".svg"};
-            for (const optics::TolerancePoint& p : curve.sweep) {
-                const double x = p.error * shown.factor;
-                psnr.x.push_back(x);
-                psnr.y.push_back(p.psnr_db);
-                threshold.x.push_back(x);
-                threshold.y.push_back(opt->threshold);
-                shift.x.push_back(x);
-                shift.y.push_back(p.shift_lenslets);
-                curve_record.sweep.push_back({x, p.psnr_db, p.shift_lenslets});
-            }
-            for (const optics::TolerancePoint& p : curve.refinement)
-                curve_record.refinement.push_back({p.error * shown.factor, p.psnr_db, std::nullopt});
-            chart.series = {psnr, threshold, shift};
-            const double largest = curve.sweep.back().error * shown.factor;
-            std::string verdict;
-            if (curve.tolerance) {
-                const double t = *curve.tolerance * shown.factor;
-                chart.vertical_markers.push_back({t, "tolerance " + format(t) + " " + shown.unit});
-                verdict = format(t) + " " + shown.unit;
-            } else {
-                verdict = format(largest) + " " + shown.unit + " (the whole sweep stayed above the threshold)";
-            }
-            write_line_chart(chart, out / name);
-            phrases.push_back(std::string(shown.phrase) + " " +
-                              (curve.tolerance ? format(*curve.tolerance * shown.factor) + " " + shown.unit
-                                               : format(largest) + " " + shown.unit + " (or more)"));
-            char row[256];
-            std::snprintf(row, sizeof row, "  %-24s %s\n", shown.label, verdict.c_str());
-            table << row;
-            curve_record.max = largest;
-            if (curve.tolerance) curve_record.tolerance = *curve.tolerance * shown.factor;
-            record.curves.push_back(std::move(curve_record));
-        }
-        std::string sentence;
-        for (std::size_t k = 0; k < phrases.size(); ++k)
-            sentence += (k == 0 ? "" : k + 1 == phrases.size() ? " and " : ", ") + phrases[k];
-        if (!sentence.empty()) sentence[0] = static_cast<char>(std::toupper(sentence[0]));
-        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        std::ostringstream summary;
-        summary << "Assembly tolerances of '" << design.name << "' for " << opt->pattern << " (PSNR >= "
-                << format(opt->threshold) << " dB against the error-free prediction, " << lights.size()
-                << " light(s), " << optics::to_string(options.simulation.model) << " model):\n"
-                << table.str() << sentence << ".\n";
-        write_text_file(out / "summary.txt", summary.str());
-        record.design = design.name;
-        record.threshold_db = opt->threshold;
-        record.model = std::string(optics::to_string(options.simulation.model));
-        record.lights = lights.size();
-        record.nominal_peak = report.nominal_peak;
-        record.summary = sentence;
-        predict::write_summary(out / "summary.json", record);
+        const predict::ToleranceReportText written = predict::write_tolerance_report(
+            opt->out, report,
+            {design.name, opt->pattern, opt->threshold, std::string(optics::to_string(options.simulation.model)),
+             lights.size()});
         if (opt->json) {
-            std::printf("%s", predict::summary_text(record).c_str());
+            std::printf("%s", predict::summary_text(written.summary).c_str());
             return;
         }
-        std::printf("%s  time %.1f s; charts in %s\n", summary.str().c_str(), seconds, opt->out.c_str());
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        std::printf("%s  time %.1f s; charts in %s\n", written.text.c_str(), seconds, opt->out.c_str());
     });
 }
 
