@@ -52,25 +52,6 @@ relight::ProbeBox parse_probe_box(const std::string& text) {
     return {values[0], values[1], values[2], values[3]};
 }
 
-// Every training image, checked to share the first one's size and channels.
-std::vector<Image> read_training_images(const std::vector<fs::path>& files) {
-    std::vector<Image> images;
-    Progress progress("reading training images", files.size());
-    for (const auto& file : files) {
-        Image image = read_image(file);
-        if (!images.empty() && !image.same_shape(images.front()))
-            throw InputError(SourceLocation{file.string()},
-                             "is " + std::to_string(image.width()) + " x " + std::to_string(image.height()) + " with " +
-                                 std::to_string(image.channels()) + " channel(s); the first training image is " +
-                                 std::to_string(images.front().width()) + " x " +
-                                 std::to_string(images.front().height()) + " with " +
-                                 std::to_string(images.front().channels()));
-        images.push_back(std::move(image));
-        progress.advance();
-    }
-    progress.finish();
-    return images;
-}
 
 // probe.json beside a set of photographs (rfd capture implicit writes one), if there is one.
 std::optional<relight::ProbeDescription> probe_beside(const fs::path& photos) {
@@ -107,7 +88,7 @@ void add_train(CLI::App& implicit) {
                              opt->training + ")");
         if (info) files.probe_material = info->material;
         files.images = relight::training_image_files(opt->training);
-        const std::vector<Image> images = read_training_images(files.images);
+        const std::vector<Image> images = relight::read_training_images(files.images);
         std::vector<Image> probes;
         for (std::size_t i = 0; i < images.size(); ++i) {
             try {
@@ -229,7 +210,7 @@ void add_predict(CLI::App& implicit) {
         const relight::ImplicitFit fit =
             relight::implicit_fit(model, probe, {.eta = eta, .second_pass = !opt->no_second_pass});
         const auto t2 = std::chrono::steady_clock::now();
-        const std::vector<Image> images = read_training_images(files.images);
+        const std::vector<Image> images = relight::read_training_images(files.images);
         const auto t3 = std::chrono::steady_clock::now();
         const Image scene = relight::relight(images, fit.coefficients());
         const auto t4 = std::chrono::steady_clock::now();
@@ -389,21 +370,6 @@ namespace {
 
 // ---- rfd relight implicit sweep ----------------------------------------------------------
 
-// The sample below which `fraction` of the image's samples lie: an exposure for viewing that
-// a few highlight pixels do not decide.
-float percentile(const Image& image, double fraction) {
-    std::vector<float> samples(image.samples().begin(), image.samples().end());
-    const auto k = static_cast<std::size_t>(fraction * static_cast<double>(samples.size() - 1));
-    std::nth_element(samples.begin(), samples.begin() + static_cast<std::ptrdiff_t>(k), samples.end());
-    return samples[k];
-}
-
-Image scaled(const Image& image, float factor) {
-    Image out = image;
-    for (float& s : out.samples()) s *= factor;
-    return out;
-}
-
 void add_sweep(CLI::App& implicit) {
     auto* cmd = implicit.add_subcommand(
         "sweep", "PSNR against eta on held-out lights with known truth: noise against detail (figure 7.3)");
@@ -443,145 +409,23 @@ void add_sweep(CLI::App& implicit) {
             }
             if (etas.empty()) throw InputError("--etas: expected at least one eta");
         }
-        const fs::path test(opt->test);
-        const std::vector<fs::path> photo_files = relight::field_image_files(test / "photos");
-        const std::vector<fs::path> truth_files = relight::field_image_files(test / "truth");
-        if (photo_files.size() != truth_files.size())
-            throw InputError(SourceLocation{opt->test}, "photos/ lists " + std::to_string(photo_files.size()) +
-                                                             " images and truth/ " +
-                                                             std::to_string(truth_files.size()));
-        const std::vector<Image> training = read_training_images(files.images);
-        std::vector<Image> probes, truths, photos;
-        for (std::size_t t = 0; t < photo_files.size(); ++t) {
-            Image photo = read_image(photo_files[t]);
-            Image truth = read_image(truth_files[t]);
-            for (const auto& [file, image] : {std::pair{photo_files[t], &photo}, std::pair{truth_files[t], &truth}})
-                if (!image->same_shape(training.front()))
-                    throw InputError(SourceLocation{file.string()},
-                                     "does not have the training images' size and channels");
-            try {
-                probes.push_back(relight::crop_probe(photo, files.box, model.size));
-            } catch (const InputError& e) {
-                throw InputError(SourceLocation{photo_files[t].string()}, e.what());
-            }
-            truths.push_back(std::move(truth));
-            if (t < opt->examples) photos.push_back(std::move(photo));
-        }
+        const std::vector<Image> training = relight::read_training_images(files.images);
+        const relight::HeldOutSet held_out =
+            relight::read_held_out_set(opt->test, files, training.front(), opt->examples);
         const bool second_pass = !opt->no_second_pass;
-        const relight::EtaStudy study = relight::study_eta(model, training, probes, truths, etas, second_pass);
-
-        const fs::path out(opt->out);
-        ensure_directory(out);
-        LineChart chart;
-        chart.title = "Implicit relighting: PSNR against the regularisation eta (" +
-                      std::to_string(truths.size()) + " held-out lights)";
-        chart.x_label = "eta (squared linear pixel units)";
-        chart.y_label = "PSNR (dB)";
-        chart.log_x = true;
-        chart.key_position = "bottom left";
-        PlotSeries curve{"MAP estimate", {}, {}};
-        std::optional<std::size_t> pseudo_inverse;
-        for (std::size_t i = 0; i < study.points.size(); ++i) {
-            if (study.points[i].eta > 0.0) {
-                curve.x.push_back(study.points[i].eta);
-                curve.y.push_back(study.points[i].psnr);
-            } else {
-                pseudo_inverse = i;
-            }
-        }
-        chart.series.push_back(curve);
-        if (pseudo_inverse && !curve.x.empty()) {
-            const double psnr = study.points[*pseudo_inverse].psnr;
-            chart.series.push_back({"pseudo-inverse (eta = 0)", {curve.x.front(), curve.x.back()}, {psnr, psnr}});
-        }
-        const relight::EtaStudyPoint& best = study.points[study.best];
-        chart.vertical_markers.push_back({best.eta, "best"});
-        if (model.noise_variance > 0.0) chart.vertical_markers.push_back({model.noise_variance, "noise estimate"});
-        bool charted = false;
-        if (!curve.x.empty()) {
-            try {
-                write_line_chart(chart, out / "eta_psnr");
-                charted = true;
-            } catch (const ToolError& e) {
-                std::fprintf(stderr, "rfd: warning: %s\n", e.what());
-            }
-        }
-        std::vector<std::string> columns{"eta", "psnr_db", "probe_residual_rms", "max_abs_coefficient"};
-        for (std::size_t t = 0; t < truths.size(); ++t) columns.push_back("light_" + std::to_string(t) + "_psnr_db");
-        CsvTable sweep(std::move(columns));
-        for (const auto& point : study.points) {
-            std::vector<std::string> row{format_number(point.eta, 8), format_number(point.psnr, 8),
-                                         format_number(point.probe_residual_rms, 8),
-                                         format_number(point.max_abs_coefficient, 8)};
-            for (const double p : point.light_psnr) row.push_back(format_number(p, 8));
-            sweep.add_row(std::move(row));
-        }
-        sweep.write(out / "eta_sweep.csv");
-
-        // Comparison images: truth | pseudo-inverse | best eta | the largest eta, one exposure.
-        const std::size_t largest = static_cast<std::size_t>(
-            std::max_element(study.points.begin(), study.points.end(),
-                             [](const auto& a, const auto& b) { return a.eta < b.eta; }) -
-            study.points.begin());
-        std::vector<std::size_t> shown;
-        for (const std::optional<std::size_t> i : {pseudo_inverse, std::optional{study.best}, std::optional{largest}})
-            if (i && std::find(shown.begin(), shown.end(), *i) == shown.end()) shown.push_back(*i);
-        for (std::size_t t = 0; t < photos.size(); ++t) {
-            const float exposure = 0.9f / std::max(percentile(truths[t], 0.995), 1e-12f);
-            std::vector<Image> panels{scaled(truths[t], exposure)};
-            std::vector<Image> probe_panels{scaled(probes[t], exposure)};
-            for (const std::size_t i : shown) {
-                const relight::ImplicitFit fit =
-                    relight::implicit_fit(model, probes[t], {.eta = study.points[i].eta, .second_pass = second_pass});
-                panels.push_back(scaled(relight::relight(training, fit.coefficients()), exposure));
-                probe_panels.push_back(scaled(fit.probe, exposure));
-            }
-            std::vector<const Image*> row, probe_row;
-            for (const auto& panel : panels) row.push_back(&panel);
-            for (const auto& panel : probe_panels) probe_row.push_back(&panel);
-            char name[64];
-            std::snprintf(name, sizeof name, "light_%02zu.png", t);
-            write_image(out / name, join_side_by_side(row, 4, 0.5f));
-            std::snprintf(name, sizeof name, "light_%02zu_probe.png", t);
-            write_image(out / name, join_side_by_side(probe_row, 4, 0.5f));
-        }
-
-        const double gain = pseudo_inverse ? best.psnr - study.points[*pseudo_inverse].psnr : 0.0;
-        if (opt->json) {
-            nlohmann::json points = nlohmann::json::array();
-            for (const auto& point : study.points)
-                points.push_back({{"eta", point.eta},
-                                  {"psnr_db", point.psnr},
-                                  {"probe_residual_rms", point.probe_residual_rms},
-                                  {"max_abs_coefficient", point.max_abs_coefficient}});
-            nlohmann::json summary = {{"model", opt->model},
-                                      {"test_lights", truths.size()},
-                                      {"second_pass", second_pass},
-                                      {"noise_estimate", model.noise_variance},
-                                      {"best_eta", best.eta},
-                                      {"best_psnr_db", best.psnr},
-                                      {"points", points},
-                                      {"chart", charted}};
-            if (pseudo_inverse) {
-                summary["pseudo_inverse_psnr_db"] = study.points[*pseudo_inverse].psnr;
-                summary["gain_over_pseudo_inverse_db"] = gain;
-            }
-            std::printf("%s\n", summary.dump(2).c_str());
-        } else {
-            std::printf("eta sweep of %s on %zu held-out light(s) -> %s\n", opt->model.c_str(), truths.size(),
-                        opt->out.c_str());
-            std::printf("  %-12s %10s %14s %12s\n", "eta", "PSNR (dB)", "probe residual", "max |l_i|");
-            for (std::size_t i = 0; i < study.points.size(); ++i) {
-                const auto& point = study.points[i];
-                std::printf("  %-12.3g %10.2f %14.3g %12.3g%s\n", point.eta, point.psnr, point.probe_residual_rms,
-                            point.max_abs_coefficient, i == study.best ? "  <- best" : "");
-            }
-            if (pseudo_inverse)
-                std::printf("  best eta %.3g gains %.2f dB over the pseudo-inverse (eta = 0)\n", best.eta, gain);
-            if (!photos.empty())
-                std::printf("  comparisons        light_NN.png: truth | %s (same exposure)\n",
-                            pseudo_inverse ? "eta = 0 | best eta | largest eta" : "best eta | largest eta");
-        }
+        const relight::EtaStudy study =
+            relight::study_eta(model, training, held_out.probes, held_out.truths, etas, second_pass);
+        const bool charted = relight::write_eta_sweep_report(opt->out, study, model, training, held_out, second_pass);
+        if (opt->json)
+            std::printf("%s\n", relight::eta_sweep_json(study, model, opt->model, held_out.truths.size(), second_pass,
+                                                        charted)
+                                    .dump(2)
+                                    .c_str());
+        else
+            std::fputs(relight::eta_sweep_text(study, opt->model, opt->out, held_out.truths.size(),
+                                               held_out.photos.size())
+                           .c_str(),
+                       stdout);
     });
 }
 

@@ -1,13 +1,21 @@
 #include "relight/implicit_study.hpp"
 
 #include <algorithm>
+#include <cstdio>
+#include <utility>
 #include <cmath>
 #include <limits>
 #include <numbers>
 #include <random>
 #include <string>
 
+#include "core/csv.hpp"
 #include "core/error.hpp"
+#include "core/files.hpp"
+#include "core/image_io.hpp"
+#include "core/plot.hpp"
+#include "core/progress.hpp"
+#include "core/text.hpp"
 #include "core/units.hpp"
 #include "relight/render.hpp"
 #include "relight/sampling.hpp"
@@ -125,6 +133,207 @@ std::vector<double> default_eta_grid(const ImplicitModel& model) {
     std::vector<double> etas{0.0};
     for (int k = -12; k <= 4; ++k) etas.push_back(scale * std::pow(10.0, 0.5 * k));
     return etas;
+}
+
+
+namespace {
+
+// The sample below which `fraction` of the image's samples lie: an exposure for viewing that
+// a few highlight pixels do not decide.
+float percentile(const Image& image, double fraction) {
+    std::vector<float> samples(image.samples().begin(), image.samples().end());
+    const auto k = static_cast<std::size_t>(fraction * static_cast<double>(samples.size() - 1));
+    std::nth_element(samples.begin(), samples.begin() + static_cast<std::ptrdiff_t>(k), samples.end());
+    return samples[k];
+}
+
+Image scaled(const Image& image, float factor) {
+    Image out = image;
+    for (float& s : out.samples()) s *= factor;
+    return out;
+}
+
+// The pseudo-inverse's point (eta 0; the last if given twice), if there.
+std::optional<std::size_t> pseudo_inverse_of(const EtaStudy& study) {
+    std::optional<std::size_t> found;
+    for (std::size_t i = 0; i < study.points.size(); ++i)
+        if (!(study.points[i].eta > 0.0)) found = i;
+    return found;
+}
+
+}  // namespace
+
+std::vector<Image> read_training_images(const std::vector<std::filesystem::path>& files) {
+    std::vector<Image> images;
+    Progress progress("reading training images", files.size());
+    for (const auto& file : files) {
+        Image image = read_image(file);
+        if (!images.empty() && !image.same_shape(images.front()))
+            throw InputError(SourceLocation{file.string()},
+                             "is " + std::to_string(image.width()) + " x " + std::to_string(image.height()) + " with " +
+                                 std::to_string(image.channels()) + " channel(s); the first training image is " +
+                                 std::to_string(images.front().width()) + " x " +
+                                 std::to_string(images.front().height()) + " with " +
+                                 std::to_string(images.front().channels()));
+        images.push_back(std::move(image));
+        progress.advance();
+    }
+    progress.finish();
+    return images;
+}
+
+HeldOutSet read_held_out_set(const std::filesystem::path& folder, const ImplicitModelFiles& files,
+                             const Image& training_shape, std::size_t examples) {
+    const std::vector<std::filesystem::path> photo_files = field_image_files(folder / "photos");
+    const std::vector<std::filesystem::path> truth_files = field_image_files(folder / "truth");
+    if (photo_files.size() != truth_files.size())
+        throw InputError(SourceLocation{folder.string()}, "photos/ lists " + std::to_string(photo_files.size()) +
+                                                              " images and truth/ " + std::to_string(truth_files.size()));
+    HeldOutSet set;
+    for (std::size_t t = 0; t < photo_files.size(); ++t) {
+        Image photo = read_image(photo_files[t]);
+        Image truth = read_image(truth_files[t]);
+        for (const auto& [file, image] : {std::pair{photo_files[t], &photo}, std::pair{truth_files[t], &truth}})
+            if (!image->same_shape(training_shape))
+                throw InputError(SourceLocation{file.string()}, "does not have the training images' size and channels");
+        try {
+            set.probes.push_back(crop_probe(photo, files.box, files.model.size));
+        } catch (const InputError& e) {
+            throw InputError(SourceLocation{photo_files[t].string()}, e.what());
+        }
+        set.truths.push_back(std::move(truth));
+        if (t < examples) set.photos.push_back(std::move(photo));
+    }
+    return set;
+}
+
+bool write_eta_sweep_report(const std::filesystem::path& folder, const EtaStudy& study, const ImplicitModel& model,
+                            const std::vector<Image>& training, const HeldOutSet& held_out, bool second_pass) {
+    ensure_directory(folder);
+    LineChart chart;
+    chart.title = "Implicit relighting: PSNR against the regularisation eta (" +
+                  std::to_string(held_out.truths.size()) + " held-out lights)";
+    chart.x_label = "eta (squared linear pixel units)";
+    chart.y_label = "PSNR (dB)";
+    chart.log_x = true;
+    chart.key_position = "bottom left";
+    PlotSeries curve{"MAP estimate", {}, {}};
+    const std::optional<std::size_t> pseudo_inverse = pseudo_inverse_of(study);
+    for (const EtaStudyPoint& point : study.points)
+        if (point.eta > 0.0) curve.x.push_back(point.eta), curve.y.push_back(point.psnr);
+    chart.series.push_back(curve);
+    if (pseudo_inverse && !curve.x.empty()) {
+        const double psnr = study.points[*pseudo_inverse].psnr;
+        chart.series.push_back({"pseudo-inverse (eta = 0)", {curve.x.front(), curve.x.back()}, {psnr, psnr}});
+    }
+    const EtaStudyPoint& best = study.points[study.best];
+    chart.vertical_markers.push_back({best.eta, "best"});
+    if (model.noise_variance > 0.0) chart.vertical_markers.push_back({model.noise_variance, "noise estimate"});
+    bool charted = false;
+    if (!curve.x.empty()) {
+        try {
+            write_line_chart(chart, folder / "eta_psnr");
+            charted = true;
+        } catch (const ToolError& e) {
+            std::fprintf(stderr, "rfd: warning: %s\n", e.what());
+        }
+    }
+    std::vector<std::string> columns{"eta", "psnr_db", "probe_residual_rms", "max_abs_coefficient"};
+    for (std::size_t t = 0; t < held_out.truths.size(); ++t)
+        columns.push_back("light_" + std::to_string(t) + "_psnr_db");
+    CsvTable sweep(std::move(columns));
+    for (const auto& point : study.points) {
+        std::vector<std::string> row{format_number(point.eta, 8), format_number(point.psnr, 8),
+                                     format_number(point.probe_residual_rms, 8),
+                                     format_number(point.max_abs_coefficient, 8)};
+        for (const double p : point.light_psnr) row.push_back(format_number(p, 8));
+        sweep.add_row(std::move(row));
+    }
+    sweep.write(folder / "eta_sweep.csv");
+
+    // Comparison images: truth | pseudo-inverse | best eta | the largest eta, one exposure.
+    const std::size_t largest = static_cast<std::size_t>(
+        std::max_element(study.points.begin(), study.points.end(),
+                         [](const auto& a, const auto& b) { return a.eta < b.eta; }) -
+        study.points.begin());
+    std::vector<std::size_t> shown;
+    for (const std::optional<std::size_t> i : {pseudo_inverse, std::optional{study.best}, std::optional{largest}})
+        if (i && std::find(shown.begin(), shown.end(), *i) == shown.end()) shown.push_back(*i);
+    for (std::size_t t = 0; t < held_out.photos.size(); ++t) {
+        const float exposure = 0.9f / std::max(percentile(held_out.truths[t], 0.995), 1e-12f);
+        std::vector<Image> panels{scaled(held_out.truths[t], exposure)};
+        std::vector<Image> probe_panels{scaled(held_out.probes[t], exposure)};
+        for (const std::size_t i : shown) {
+            const ImplicitFit fit =
+                implicit_fit(model, held_out.probes[t], {.eta = study.points[i].eta, .second_pass = second_pass});
+            panels.push_back(scaled(relight(training, fit.coefficients()), exposure));
+            probe_panels.push_back(scaled(fit.probe, exposure));
+        }
+        std::vector<const Image*> row, probe_row;
+        for (const auto& panel : panels) row.push_back(&panel);
+        for (const auto& panel : probe_panels) probe_row.push_back(&panel);
+        char name[64];
+        std::snprintf(name, sizeof name, "light_%02zu.png", t);
+        write_image(folder / name, join_side_by_side(row, 4, 0.5f));
+        std::snprintf(name, sizeof name, "light_%02zu_probe.png", t);
+        write_image(folder / name, join_side_by_side(probe_row, 4, 0.5f));
+    }
+    return charted;
+}
+
+nlohmann::json eta_sweep_json(const EtaStudy& study, const ImplicitModel& model, const std::string& model_name,
+                              std::size_t test_lights, bool second_pass, bool charted) {
+    const EtaStudyPoint& best = study.points[study.best];
+    const std::optional<std::size_t> pseudo_inverse = pseudo_inverse_of(study);
+    nlohmann::json points = nlohmann::json::array();
+    for (const auto& point : study.points)
+        points.push_back({{"eta", point.eta},
+                          {"psnr_db", point.psnr},
+                          {"probe_residual_rms", point.probe_residual_rms},
+                          {"max_abs_coefficient", point.max_abs_coefficient}});
+    nlohmann::json summary = {{"model", model_name},
+                              {"test_lights", test_lights},
+                              {"second_pass", second_pass},
+                              {"noise_estimate", model.noise_variance},
+                              {"best_eta", best.eta},
+                              {"best_psnr_db", best.psnr},
+                              {"points", points},
+                              {"chart", charted}};
+    if (pseudo_inverse) {
+        summary["pseudo_inverse_psnr_db"] = study.points[*pseudo_inverse].psnr;
+        summary["gain_over_pseudo_inverse_db"] = best.psnr - study.points[*pseudo_inverse].psnr;
+    }
+    return summary;
+}
+
+std::string eta_sweep_text(const EtaStudy& study, const std::string& model_name, const std::string& folder,
+                           std::size_t test_lights, std::size_t examples) {
+    const EtaStudyPoint& best = study.points[study.best];
+    const std::optional<std::size_t> pseudo_inverse = pseudo_inverse_of(study);
+    std::string text;
+    char line[512];
+    std::snprintf(line, sizeof line, "eta sweep of %s on %zu held-out light(s) -> %s\n", model_name.c_str(),
+                  test_lights, folder.c_str());
+    text += line;
+    std::snprintf(line, sizeof line, "  %-12s %10s %14s %12s\n", "eta", "PSNR (dB)", "probe residual", "max |l_i|");
+    text += line;
+    for (std::size_t i = 0; i < study.points.size(); ++i) {
+        const auto& point = study.points[i];
+        std::snprintf(line, sizeof line, "  %-12.3g %10.2f %14.3g %12.3g%s\n", point.eta, point.psnr,
+                      point.probe_residual_rms, point.max_abs_coefficient, i == study.best ? "  <- best" : "");
+        text += line;
+    }
+    if (pseudo_inverse) {
+        std::snprintf(line, sizeof line, "  best eta %.3g gains %.2f dB over the pseudo-inverse (eta = 0)\n", best.eta,
+                      best.psnr - study.points[*pseudo_inverse].psnr);
+        text += line;
+    }
+    if (examples > 0) {
+        std::snprintf(line, sizeof line, "  comparisons        light_NN.png: truth | %s (same exposure)\n",
+                      pseudo_inverse ? "eta = 0 | best eta | largest eta" : "best eta | largest eta");
+        text += line;
+    }
+    return text;
 }
 
 }  // namespace rfd::relight

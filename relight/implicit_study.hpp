@@ -20,9 +20,13 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
+#include <nlohmann/json.hpp>
 
 #include "core/image.hpp"
 #include "relight/implicit.hpp"
@@ -83,5 +87,33 @@ EtaStudy study_eta(const ImplicitModel& model, const std::vector<Image>& trainin
 /// times the mean square of the model's mean probe (eta is in squared pixel units, so the
 /// grid follows the probe's brightness).
 std::vector<double> default_eta_grid(const ImplicitModel& model);
+
+// ---- `rfd relight implicit sweep`: the study from files to a report ----------------------
+
+/// Every training image of a model, checked to share the first one's size and channels
+/// (InputError naming the file and both sizes otherwise).
+std::vector<Image> read_training_images(const std::vector<std::filesystem::path>& files);
+
+/// A held-out set as `rfd capture implicit` writes test/: photos/ (fields of photographs
+/// showing the probe) and truth/ (the scene under the same lights, clean). Each image must
+/// have the training images' shape; the probes are cropped with the model's box.
+struct HeldOutSet {
+    std::vector<Image> probes, truths;
+    std::vector<Image> photos;  ///< the first `examples` photographs, for the comparison images
+};
+HeldOutSet read_held_out_set(const std::filesystem::path& folder, const ImplicitModelFiles& files,
+                             const Image& training_shape, std::size_t examples);
+
+/// FOLDER/eta_psnr.{csv,gp,svg,png} (a warning on stderr when gnuplot is missing),
+/// eta_sweep.csv, and per example light_NN.png (truth | eta 0 | best eta | largest eta, one
+/// exposure) and light_NN_probe.png. Returns whether the chart was drawn.
+bool write_eta_sweep_report(const std::filesystem::path& folder, const EtaStudy& study, const ImplicitModel& model,
+                            const std::vector<Image>& training, const HeldOutSet& held_out, bool second_pass);
+
+/// The study for --json and as text; `model_name` is the model's folder as given.
+nlohmann::json eta_sweep_json(const EtaStudy& study, const ImplicitModel& model, const std::string& model_name,
+                              std::size_t test_lights, bool second_pass, bool charted);
+std::string eta_sweep_text(const EtaStudy& study, const std::string& model_name, const std::string& folder,
+                           std::size_t test_lights, std::size_t examples);
 
 }  // namespace rfd::relight
