@@ -23,6 +23,7 @@
 #include "relight/sampling.hpp"
 #include "relight/scene.hpp"
 #include "relight/stage.hpp"
+#include "relight/stage_render.hpp"
 #include "relight/view_set.hpp"
 
 namespace rfd::cli {
@@ -56,6 +57,21 @@ struct Lights {
     std::vector<double> radii;  // per light from a light file, 0 = the command's kernel
     std::string source;
 };
+
+// Each light's kernel: the command's, or a light file's own radius with the same profile.
+std::vector<relight::LightKernel> kernels_of(const Lights& lights, const relight::LightKernel& kernel) {
+    std::vector<relight::LightKernel> kernels;
+    for (const double radius : lights.radii) {
+        relight::LightKernel k = kernel;
+        if (radius > 0.0) {
+            k.radius = radius;
+            if (k.profile == relight::KernelProfile::Gaussian) k.sigma = radius / 3.0;
+            if (kernel.is_directional()) k.profile = relight::KernelProfile::Constant;
+        }
+        kernels.push_back(k);
+    }
+    return kernels;
+}
 
 Lights read_lights(const std::string& text, std::uint64_t seed) {
     Lights lights;
@@ -168,7 +184,6 @@ void add_capture_commands(CLI::App& capture) {
         ->check(CLI::Range(1, 4096));
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
     cmd->callback([opt, seed] {
-        using Clock = std::chrono::steady_clock;
         relight::Scene scene = relight::load_scene(opt->scene);
         if (seed->count() > 0) scene.seed = opt->seed;
         apply_scene_overrides(scene, opt->resolution, opt->samples);
@@ -178,90 +193,14 @@ void add_capture_commands(CLI::App& capture) {
             scene.shadow_samples = std::max(scene.shadow_samples, relight::default_shadow_samples(kernel));
         const Lights lights = read_lights(opt->lights, scene.seed);
 
-        std::vector<relight::LightKernel> kernels;
-        for (const double radius : lights.radii) {
-            relight::LightKernel k = kernel;
-            if (radius > 0.0) {  // a light file's own kernel radius, with the same profile
-                k.radius = radius;
-                if (k.profile == relight::KernelProfile::Gaussian) k.sigma = radius / 3.0;
-                if (kernel.is_directional()) k.profile = relight::KernelProfile::Constant;
-            }
-            kernels.push_back(k);
-        }
-
-        const std::filesystem::path out(opt->out);
-        ensure_directory(out);
-        const std::size_t views = scene.cameras.size();
-        double camera_seconds = 0.0, light_seconds = 0.0;
-        std::size_t shading_points = 0, escaped = 0;
-        std::vector<relight::ViewEntry> view_entries;
-        // A views file from an earlier run would list views being replaced: written last.
-        std::error_code stale;
-        std::filesystem::remove(out / "views.txt", stale);
-        for (std::size_t v = 0; v < views; ++v) {
-            char name[32];
-            std::snprintf(name, sizeof name, "view_%02zu", v);
-            const std::filesystem::path folder = views == 1 ? out : out / name;
-            relight::FieldWriter field(folder);
-
-            const auto t0 = Clock::now();
-            const relight::LightStage stage(scene, v);
-            const auto t1 = Clock::now();
-            camera_seconds += std::chrono::duration<double>(t1 - t0).count();
-            shading_points += stage.shading_point_count();
-            escaped += stage.escaped_path_count();
-
-            Progress progress(views == 1 ? "lights" : std::string("lights, ") + name, lights.directions.size());
-            for (std::size_t i = 0; i < lights.directions.size(); ++i) {
-                field.add(stage.render(lights.directions[i], kernels[i]),
-                          (stage.to_view_frame() * lights.directions[i]).normalized(), kernels[i].radius);
-                progress.advance();
-            }
-            progress.finish();
-            light_seconds += std::chrono::duration<double>(Clock::now() - t1).count();
-            field.finish();
-            // The view in the display frame (the first camera's field frame): the direction
-            // toward this camera from what it looks at, and the rotation back from its
-            // light frame.
-            const relight::Camera& cam = scene.cameras[v];
-            const Eigen::Vector3d toward = scene.cameras.front().field_frame().transpose() *
-                                           (cam.position - cam.look_at).normalized();
-            view_entries.push_back({name, toward, stage.to_view_frame().transpose(), 0});
-        }
-        if (views > 1) relight::write_view_file(out / "views.txt", view_entries);
-
-        const double per_light = light_seconds / static_cast<double>(views * lights.directions.size());
-        const auto& camera = scene.cameras.front();
-        if (opt->json) {
-            const nlohmann::json summary = {
-                {"scene", opt->scene},
-                {"out", opt->out},
-                {"views", views},
-                {"lights", lights.directions.size()},
-                {"light_source", lights.source},
-                {"resolution", {camera.width, camera.height}},
-                {"samples_per_pixel", scene.samples_per_pixel},
-                {"shadow_samples", scene.shadow_samples},
-                {"seed", scene.seed},
-                {"kernel", {{"profile", relight::to_string(kernel.profile)},
-                            {"radius_deg", radians_to_degrees(kernel.radius)},
-                            {"directional", kernel.is_directional()}}},
-                {"shading_points", shading_points},
-                {"escaped_paths", escaped},
-                {"camera_paths_seconds", camera_seconds},
-                {"seconds_per_light", per_light}};
-            std::printf("%s\n", summary.dump(2).c_str());
-        } else {
-            std::printf("rendered %zu light(s) x %zu view(s) of %s into %s\n", lights.directions.size(),
-                        views, opt->scene.c_str(), opt->out.c_str());
-            std::printf("  image              %d x %d, %d camera ray(s) per pixel\n", camera.width,
-                        camera.height, scene.samples_per_pixel);
-            std::printf("  kernel             %s, radius %.3g deg, %d shadow sample(s) per ray\n",
-                        kernel.is_directional() ? "directional" : relight::to_string(kernel.profile).c_str(),
-                        radians_to_degrees(kernel.radius), scene.shadow_samples);
-            std::printf("  cache              %zu shading points, %zu escaped paths\n", shading_points, escaped);
-            std::printf("  time               %.3f s camera paths, %.4f s per light\n", camera_seconds, per_light);
-        }
+        relight::StageRender run =
+            relight::render_field(scene, lights.directions, kernels_of(lights, kernel), opt->out);
+        run.kernel = kernel;
+        run.light_source = lights.source;
+        if (opt->json)
+            std::printf("%s\n", relight::stage_render_json(run, scene, opt->scene, opt->out).dump(2).c_str());
+        else
+            std::fputs(relight::stage_render_text(run, scene, opt->scene, opt->out).c_str(), stdout);
     });
 }
 
