@@ -132,16 +132,59 @@ void add_train(CLI::App& implicit) {
     });
 }
 
+struct PredictOptions {
+    std::string model, probe, box, envmap, out, probe_out, coefficients;
+    std::vector<std::string> lights;
+    double eta = -1.0;
+    bool no_second_pass = false, json = false;
+};
+
+// The probe to fit, in the model's channels: cropped from --probe (with --probe-box, or the
+// training box when the photograph has the training images' size), or rendered from the
+// model's probe material under --light/--envmap.
+Image probe_of(const PredictOptions& opt, const relight::ImplicitModelFiles& files) {
+    const relight::ImplicitModel& model = files.model;
+    Image probe;
+    if (!opt.probe.empty()) {
+        const Image photo = read_image(opt.probe);
+        relight::ProbeBox box{0.0, 0.0, double(photo.width()), double(photo.height())};
+        if (!opt.box.empty()) box = parse_probe_box(opt.box);
+        else if (fs::exists(files.images.front())) {
+            const ImageSize training = read_image_size(files.images.front());
+            if (training.width == photo.width() && training.height == photo.height()) box = files.box;
+        }
+        try {
+            probe = relight::crop_probe(photo, box, model.size);
+        } catch (const InputError& e) {
+            throw InputError(SourceLocation{opt.probe}, e.what());
+        }
+    } else if (!opt.lights.empty() || !opt.envmap.empty()) {
+        if (!files.probe_material)
+            throw InputError("relight implicit predict: the model does not know its probe's material (it was not "
+                             "trained on a virtual light stage set); photograph the probe and pass --probe");
+        std::vector<relight::Light> lights;
+        for (const auto& text : opt.lights) lights.push_back(parse_light(text));
+        if (!opt.envmap.empty()) lights.push_back(relight::EnvironmentMap{read_image(opt.envmap)});
+        const Image synthetic = relight::render_probe(lights, *files.probe_material, model.size);
+        probe = relight::crop_probe(synthetic, {0.0, 0.0, double(model.size), double(model.size)}, model.size);
+    } else {
+        throw InputError("relight implicit predict: give --probe IMAGE, or --light/--envmap for designed lighting");
+    }
+    if (probe.channels() == model.channels) return probe;
+    if (probe.channels() == 3 && model.channels == 1) {
+        Image grey(probe.width(), probe.height(), 1);
+        for (std::size_t i = 0; i < grey.pixel_count(); ++i)
+            grey.plane(0)[i] = (probe.plane(0)[i] + probe.plane(1)[i] + probe.plane(2)[i]) / 3.0f;
+        return grey;
+    }
+    throw InputError("the probe image has " + std::to_string(probe.channels()) + " channel(s); the model was trained on " +
+                     std::to_string(model.channels));
+}
+
 void add_predict(CLI::App& implicit) {
     auto* cmd = implicit.add_subcommand(
         "predict", "Relight the scene under the light a probe image shows (MAP estimate, thesis 7.3)");
-    struct Options {
-        std::string model, probe, box, envmap, out, probe_out, coefficients;
-        std::vector<std::string> lights;
-        double eta = -1.0;
-        bool no_second_pass = false, json = false;
-    };
-    auto opt = std::make_shared<Options>();
+    auto opt = std::make_shared<PredictOptions>();
     cmd->add_option("MODEL", opt->model, "Model folder from `rfd relight implicit train`")->required();
     auto* probe_option = cmd->add_option("--probe", opt->probe,
                                   "Image showing the probe in the new light (a photograph with the probe at "
@@ -168,43 +211,7 @@ void add_predict(CLI::App& implicit) {
         const auto t0 = std::chrono::steady_clock::now();
         const relight::ImplicitModelFiles files = relight::read_implicit_model(opt->model);
         const relight::ImplicitModel& model = files.model;
-        Image probe;
-        if (!opt->probe.empty()) {
-            const Image photo = read_image(opt->probe);
-            relight::ProbeBox box{0.0, 0.0, double(photo.width()), double(photo.height())};
-            if (!opt->box.empty()) box = parse_probe_box(opt->box);
-            else if (fs::exists(files.images.front())) {
-                const ImageSize training = read_image_size(files.images.front());
-                if (training.width == photo.width() && training.height == photo.height()) box = files.box;
-            }
-            try {
-                probe = relight::crop_probe(photo, box, model.size);
-            } catch (const InputError& e) {
-                throw InputError(SourceLocation{opt->probe}, e.what());
-            }
-        } else if (!opt->lights.empty() || !opt->envmap.empty()) {
-            if (!files.probe_material)
-                throw InputError("relight implicit predict: the model does not know its probe's material (it was not "
-                                 "trained on a virtual light stage set); photograph the probe and pass --probe");
-            std::vector<relight::Light> lights;
-            for (const auto& text : opt->lights) lights.push_back(parse_light(text));
-            if (!opt->envmap.empty()) lights.push_back(relight::EnvironmentMap{read_image(opt->envmap)});
-            const Image synthetic = relight::render_probe(lights, *files.probe_material, model.size);
-            probe = relight::crop_probe(synthetic, {0.0, 0.0, double(model.size), double(model.size)}, model.size);
-        } else {
-            throw InputError("relight implicit predict: give --probe IMAGE, or --light/--envmap for designed lighting");
-        }
-        if (probe.channels() != model.channels) {
-            if (probe.channels() == 3 && model.channels == 1) {
-                Image grey(probe.width(), probe.height(), 1);
-                for (std::size_t i = 0; i < grey.pixel_count(); ++i)
-                    grey.plane(0)[i] = (probe.plane(0)[i] + probe.plane(1)[i] + probe.plane(2)[i]) / 3.0f;
-                probe = std::move(grey);
-            } else {
-                throw InputError("the probe image has " + std::to_string(probe.channels()) +
-                                 " channel(s); the model was trained on " + std::to_string(model.channels));
-            }
-        }
+        const Image probe = probe_of(*opt, files);
         const double eta = opt->eta >= 0.0 ? opt->eta : model.noise_variance;
         const auto t1 = std::chrono::steady_clock::now();
         const relight::ImplicitFit fit =
@@ -220,15 +227,7 @@ void add_predict(CLI::App& implicit) {
         if (!opt->probe_out.empty())
             write_image(opt->probe_out, join_side_by_side({&probe, &fit.probe}, 0, 0.0f));
         if (!opt->coefficients.empty()) {
-            write_file_atomically(opt->coefficients, [&](std::ostream& csv) {
-                csv.precision(10);
-                csv << "image" << (model.channels == 1 ? ",l\n" : ",l_r,l_g,l_b\n");
-                for (Eigen::Index i = 0; i < fit.l.rows(); ++i) {
-                    csv << files.images[static_cast<std::size_t>(i)].filename().string();
-                    for (Eigen::Index c = 0; c < fit.l.cols(); ++c) csv << ',' << fit.l(i, c);
-                    csv << '\n';
-                }
-            });
+            relight::coefficient_table(fit, files.images).write(opt->coefficients);
         }
         const auto seconds = [](auto a, auto b) { return std::chrono::duration<double>(b - a).count(); };
         if (opt->json) {

@@ -281,6 +281,17 @@ bool write_eta_sweep_report(const std::filesystem::path& folder, const EtaStudy&
     return charted;
 }
 
+CsvTable coefficient_table(const ImplicitFit& fit, const std::vector<std::filesystem::path>& images) {
+    CsvTable table(fit.l.cols() == 1 ? std::vector<std::string>{"image", "l"}
+                                     : std::vector<std::string>{"image", "l_r", "l_g", "l_b"});
+    for (Eigen::Index i = 0; i < fit.l.rows(); ++i) {
+        std::vector<std::string> row{images[static_cast<std::size_t>(i)].filename().string()};
+        for (Eigen::Index c = 0; c < fit.l.cols(); ++c) row.push_back(format_number(fit.l(i, c), 10));
+        table.add_row(std::move(row));
+    }
+    return table;
+}
+
 nlohmann::json eta_sweep_json(const EtaStudy& study, const ImplicitModel& model, const std::string& model_name,
                               std::size_t test_lights, bool second_pass, bool charted) {
     const EtaStudyPoint& best = study.points[study.best];

@@ -28,6 +28,7 @@
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
+#include "core/csv.hpp"
 #include "core/image.hpp"
 #include "relight/implicit.hpp"
 #include "relight/light_kernel.hpp"
@@ -109,6 +110,10 @@ HeldOutSet read_held_out_set(const std::filesystem::path& folder, const Implicit
 /// exposure) and light_NN_probe.png. Returns whether the chart was drawn.
 bool write_eta_sweep_report(const std::filesystem::path& folder, const EtaStudy& study, const ImplicitModel& model,
                             const std::vector<Image>& training, const HeldOutSet& held_out, bool second_pass);
+
+/// The coefficients l_i of a fit, one row per training image (its file name), one column per
+/// channel.
+CsvTable coefficient_table(const ImplicitFit& fit, const std::vector<std::filesystem::path>& images);
 
 /// The study for --json and as text; `model_name` is the model's folder as given.
 nlohmann::json eta_sweep_json(const EtaStudy& study, const ImplicitModel& model, const std::string& model_name,
