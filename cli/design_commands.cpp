@@ -14,6 +14,7 @@
 #include "core/files.hpp"
 #include "core/plot.hpp"
 #include "core/units.hpp"
+#include "optics/accuracy_chart.hpp"
 #include "optics/analysis.hpp"
 #include "optics/design.hpp"
 
@@ -160,10 +161,7 @@ void add_design_commands(CLI::App& app) {
         if (opt->json) {
             std::printf("%s\n", to_json(summary).dump(2).c_str());
         } else {
-            std::fputs(summary_text(summary, design.kind == optics::DesignKind::III ||
-                                                 design.kind == optics::DesignKind::IV)
-                           .c_str(),
-                       stdout);
+            std::fputs(summary_text(summary, optics::is_observer_variant(design.kind)).c_str(), stdout);
         }
     });
 }
@@ -195,87 +193,16 @@ void add_chart_command(CLI::App& optics_cmd) {
     cmd->callback([opt] {
         const auto design = optics::load_design(opt->file);
         const optics::DesignOptics optics(design);
-        ensure_directory(opt->out);
-        const std::vector<optics::SweepDirection> sweeps = optics::sweep_directions(optics.lattice());
-        // The chart reaches a quarter past the first wrap-over; where no direction wraps
-        // over, to 75 deg and the rays/s are measured at 48 deg.
-        constexpr double kNoWrapOverDeg = 60.0;
-        double wrap = kNoWrapOverDeg;
-        bool wraps = false;
-        for (const auto& sweep : sweeps)
-            if (const auto angle = optics::wrap_over_angle(optics, sweep.phi, optics::Model::Exact)) {
-                wrap = wraps ? std::min(wrap, *angle) : *angle;
-                wraps = true;
-            }
-        const double max_angle = opt->max_angle > 0 ? opt->max_angle : std::min(optics::kWrapOverSearchLimitDeg, 1.25 * wrap);
-
-        // Rays per second are a measurement of this machine, the only part of the output
-        // that changes from run to run; --no-timing leaves them out.
-        const double paraxial_rate = opt->no_timing ? std::nan("") : optics::measure_rays_per_second(
-            optics, optics::Model::Paraxial, opt->timing_rays, 0.8 * wrap);
-        const double exact_rate = opt->no_timing ? std::nan("") : optics::measure_rays_per_second(
-            optics, optics::Model::Exact, opt->timing_rays, 0.8 * wrap);
-        auto rate_json = [](double rate) { return std::isfinite(rate) ? nlohmann::json(rate) : nlohmann::json(); };
-
-        nlohmann::json summary = {{"design", design.name},
-                                  {"paraxial_rays_per_second", rate_json(paraxial_rate)},
-                                  {"exact_rays_per_second", rate_json(exact_rate)},
-                                  {"exact_over_paraxial_time", rate_json(paraxial_rate / exact_rate)},
-                                  {"sweeps", nlohmann::json::array()}};
-        const std::filesystem::path dir(opt->out);
-        for (const auto& sweep : sweeps) {
-            const auto chart = optics::accuracy_chart(optics, sweep.phi, sweep.name, max_angle, opt->steps);
-            LineChart plot;
-            char title[400];
-            if (opt->no_timing)
-                std::snprintf(title, sizeof title, "%s\nparaxial against exact along the %s direction",
-                              design.name.c_str(), sweep.name.c_str());
-            else
-                std::snprintf(title, sizeof title,
-                              "%s\nparaxial against exact along the %s direction; paraxial %.3g rays/s, exact %.3g rays/s",
-                              design.name.c_str(), sweep.name.c_str(), paraxial_rate, exact_rate);
-            plot.title = title;
-            plot.x_label = "incident angle (degrees)";
-            plot.y_label = "paraxial error on the encoding plane (print pixels)";
-            plot.y2_label = "error (micrometres)";
-            PlotSeries pixels{"error in print pixels", {}, {}, false};
-            PlotSeries microns{"error in micrometres", {}, {}, true};
-            for (const auto& row : chart.rows) {
-                pixels.x.push_back(row.angle_deg);
-                pixels.y.push_back(row.error_pixels);
-                microns.x.push_back(row.angle_deg);
-                microns.y.push_back(row.error_um);
-            }
-            plot.series = {pixels, microns};
-            if (chart.half_pixel_angle_deg)
-                plot.vertical_markers.emplace_back(*chart.half_pixel_angle_deg, "error > 1/2 pixel");
-            if (const auto angle = optics::wrap_over_angle(optics, sweep.phi, optics::Model::Exact))
-                plot.vertical_markers.emplace_back(*angle, "wrap-over");
-            write_line_chart(plot, dir / ("paraxial_error_" + sweep.file));
-            summary["sweeps"].push_back(
-                {{"direction", sweep.name},
-                 {"half_pixel_error_angle_deg", json_or_null(chart.half_pixel_angle_deg)},
-                 {"files", "paraxial_error_" + sweep.file + ".{csv,gp,svg,png}"}});
-        }
-        write_text_file(dir / "chart.json", summary.dump(2) + "\n");
-        if (opt->json) {
+        optics::ModelAccuracySettings settings;
+        settings.steps = opt->steps;
+        settings.max_angle_deg = opt->max_angle;
+        settings.timing_rays = opt->no_timing ? std::nullopt : std::optional(opt->timing_rays);
+        const optics::ModelAccuracy run = optics::chart_model_accuracy(optics, settings);
+        const nlohmann::json summary = optics::write_model_accuracy(opt->out, run);
+        if (opt->json)
             std::printf("%s\n", summary.dump(2).c_str());
-            return;
-        }
-        std::printf("%s\n", design.name.c_str());
-        if (!opt->no_timing)
-            std::printf("  paraxial: %.3g rays/s, exact: %.3g rays/s (exact takes %.1fx as long)\n",
-                        paraxial_rate, exact_rate, paraxial_rate / exact_rate);
-        for (const auto& sweep : summary["sweeps"]) {
-            const auto& angle = sweep["half_pixel_error_angle_deg"];
-            if (angle.is_null())
-                std::printf("  %s: paraxial error stays below half a print pixel up to %.1f deg\n",
-                            sweep["direction"].get<std::string>().c_str(), max_angle);
-            else
-                std::printf("  %s: paraxial error exceeds half a print pixel from %.2f deg\n",
-                            sweep["direction"].get<std::string>().c_str(), angle.get<double>());
-        }
-        std::printf("  written to %s\n", opt->out.c_str());
+        else
+            std::fputs(optics::model_accuracy_text(run, opt->out).c_str(), stdout);
     });
 }
 

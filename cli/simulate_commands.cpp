@@ -92,7 +92,7 @@ CLI::App* add_simulate(CLI::App& app) {
         if (opt->out.empty()) throw CLI::RequiredError("--out");
         const auto start = std::chrono::steady_clock::now();
         const optics::Design design = optics::load_design(opt->design);
-        if (design.kind == optics::DesignKind::III || design.kind == optics::DesignKind::IV)
+        if (optics::is_observer_variant(design.kind))
             return simulate_observer_variant(*cmd, *opt, *observer_variant);
         const optics::DisplaySimulator simulator(design);
         const print::PrintedTransparency pattern = printed_pattern(design, opt->pattern, opt->print);

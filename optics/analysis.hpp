@@ -5,6 +5,7 @@
 //  - wrap-over: the incident angle where light entering one lenslet starts to land under
 //    its neighbour, along the flat and the corner directions of the cell;
 //  - field of view, spot size, vignetting and the fraction of rays lost at each surface.
+// The paraxial model's error against the exact one, charted, is optics/accuracy_chart.hpp.
 
 #include <array>
 #include <limits>
@@ -99,27 +100,5 @@ struct DesignSummary {
     std::vector<std::string> warnings;
 };
 DesignSummary summarise(const DesignOptics& optics);
-
-/// One line of the speed-versus-accuracy chart: paraxial against exact landing position.
-struct ChartRow {
-    double angle_deg = 0;
-    double paraxial_mm = 0, exact_mm = 0;  ///< landing offset along the sweep direction
-    double error_um = 0;
-    double error_pixels = 0;               ///< in print dots along the sweep direction
-    RayStatus exact_status = RayStatus::Ok;
-};
-struct Chart {
-    std::string direction;  ///< "x" or "y" (the flat or corner direction for hex cells)
-    std::vector<ChartRow> rows;
-    std::optional<double> half_pixel_angle_deg;  ///< where |error| first exceeds 0.5 px
-};
-Chart accuracy_chart(const DesignOptics& optics, double phi_rad, const std::string& name,
-                     double max_angle_deg, int steps);
-
-/// Rays per second each model traces from the entrance to the encoding plane, measured
-/// on `rays` rays spread over the array within +-`max_angle_deg`, with the batch tracers
-/// (all cores). A wall-clock measurement: it varies from machine to machine and run to run.
-double measure_rays_per_second(const DesignOptics& optics, Model model, std::size_t rays,
-                               double max_angle_deg);
 
 }  // namespace rfd::optics

@@ -26,6 +26,8 @@ namespace rfd::optics {
 
 enum class DesignKind { I, II, III, IV };
 std::string_view to_string(DesignKind kind);
+/// Designs III and IV show their picture to an observer, not on a diffuser.
+inline bool is_observer_variant(DesignKind kind) { return kind == DesignKind::III || kind == DesignKind::IV; }
 
 /// A plano-convex (or conic-convex) lens: one curved surface and one flat.
 struct PlanoConvex {

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "core/units.hpp"
+#include "optics/accuracy_chart.hpp"
 #include "optics/analysis.hpp"
 
 namespace rfd::optics {
