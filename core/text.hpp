@@ -6,6 +6,7 @@
 //          format_number(1.0 / 3.0, 9)         // "0.333333333"
 //          format_fixed(0.25, 3)               // "0.250"
 //          format_direction(Eigen::Vector3d::UnitZ())  // "theta 0.00 deg, phi 0.00 deg"
+//          report += format_text("  time %.2f s\n", seconds);
 
 #include <string>
 
@@ -20,6 +21,9 @@ std::string format_number(double value, int significant = 6);
 /// `value` with exactly `decimals` digits after the point, as printf's %.Nf writes it
 /// ("0.250", "12").
 std::string format_fixed(double value, int decimals);
+
+/// printf into a string, whatever its length: the lines of the reports commands print.
+[[gnu::format(printf, 1, 2)]] std::string format_text(const char* format, ...);
 
 /// A unit direction (core/sphere.hpp's frame) as its polar and azimuth angles in degrees,
 /// two decimals: "theta 41.57 deg, phi -142.59 deg".

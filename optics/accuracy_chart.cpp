@@ -9,6 +9,7 @@
 #include "core/error.hpp"
 #include "core/files.hpp"
 #include "core/plot.hpp"
+#include "core/text.hpp"
 #include "core/units.hpp"
 
 namespace rfd::optics {
@@ -167,22 +168,19 @@ nlohmann::json write_model_accuracy(const std::filesystem::path& folder, const M
 
 std::string model_accuracy_text(const ModelAccuracy& run, const std::string& folder) {
     std::string text = run.design + "\n";
-    char line[512];
     if (run.paraxial_rays_per_second && run.exact_rays_per_second) {
-        std::snprintf(line, sizeof line, "  paraxial: %.3g rays/s, exact: %.3g rays/s (exact takes %.1fx as long)\n",
+        text += format_text("  paraxial: %.3g rays/s, exact: %.3g rays/s (exact takes %.1fx as long)\n",
                       *run.paraxial_rays_per_second, *run.exact_rays_per_second,
                       *run.paraxial_rays_per_second / *run.exact_rays_per_second);
-        text += line;
     }
     for (std::size_t k = 0; k < run.sweeps.size(); ++k) {
         const std::optional<double>& angle = run.charts[k].half_pixel_angle_deg;
         if (!angle)
-            std::snprintf(line, sizeof line, "  %s: paraxial error stays below half a print pixel up to %.1f deg\n",
+            text += format_text("  %s: paraxial error stays below half a print pixel up to %.1f deg\n",
                           run.sweeps[k].name.c_str(), run.max_angle_deg);
         else
-            std::snprintf(line, sizeof line, "  %s: paraxial error exceeds half a print pixel from %.2f deg\n",
-                          run.sweeps[k].name.c_str(), *angle);
-        text += line;
+            text += format_text("  %s: paraxial error exceeds half a print pixel from %.2f deg\n",
+                                run.sweeps[k].name.c_str(), *angle);
     }
     return text + "  written to " + folder + "\n";
 }

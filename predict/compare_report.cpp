@@ -191,48 +191,43 @@ std::string comparison_text(const std::string& out, const ComparisonRun& run, in
     const CompareSummary& s = run.summary;
     const std::vector<AccuracyPoint>& points = run.accuracy;
     std::string text;
-    const auto printf = [&](const char* format, auto... values) {
-        char buffer[512];
-        std::snprintf(buffer, sizeof buffer, format, values...);
-        text += buffer;
-    };
     const auto db = [](const std::optional<double>& v) { return v ? format_fixed(*v, 2) : std::string("-"); };
-    printf("%s: '%s' predicted against the relit field at %d x %d lenslets (model %s, %d rays per side)\n",
+    text += format_text("%s: '%s' predicted against the relit field at %d x %d lenslets (model %s, %d rays per side)\n",
                 out.c_str(), s.design.c_str(), s.lenslets[0], s.lenslets[1], s.model.c_str(), s.rays_per_side);
     if (s.core_fraction < 1.0)
-        printf("  macro-pixels %.3fx their cells: PSNR over each cell's core (%.0f %% of its width), "
+        text += format_text("  macro-pixels %.3fx their cells: PSNR over each cell's core (%.0f %% of its width), "
                     "\"cell\" over whole cells\n",
                     s.core_magnification, 100.0 * s.core_fraction);
-    printf("  PSNR against the field's brightest value, %s\n", format_number(s.field_peak).c_str());
-    printf("  %-5s %8s %8s %8s %9s %8s %9s %9s %9s %9s\n", "light", "theta", "phi", "angle", "fov", "eta",
+    text += format_text("  PSNR against the field's brightest value, %s\n", format_number(s.field_peak).c_str());
+    text += format_text("  %-5s %8s %8s %8s %9s %8s %9s %9s %9s %9s\n", "light", "theta", "phi", "angle", "fov", "eta",
                 "PSNR dB", "own peak", "fitted dB", "cell dB");
     for (std::size_t k = 0; k < s.directions.size(); ++k) {
         const CompareDirection& d = s.directions[k];
-        printf("  %-5zu %8.2f %8.2f %8.2f %9s %8.4f %9s %9s %9s %9s\n", k, d.field_theta_deg, d.field_phi_deg,
+        text += format_text("  %-5zu %8.2f %8.2f %8.2f %9s %8.4f %9s %9s %9s %9s\n", k, d.field_theta_deg, d.field_phi_deg,
                     d.display_angle_deg, d.crosstalk_free ? "in" : d.inside_fov ? "crosstalk" : "out", d.efficiency,
                     db(d.psnr_db).c_str(), db(d.psnr_own_peak_db).c_str(), db(d.psnr_fitted_db).c_str(),
                     db(d.psnr_cell_db).c_str());
     }
     const std::size_t count = s.directions.size();
     if (s.crosstalk_free.count)
-        printf("  crosstalk-free (%d of %zu): PSNR min %s dB, mean %s dB (cells: min %s dB)\n",
+        text += format_text("  crosstalk-free (%d of %zu): PSNR min %s dB, mean %s dB (cells: min %s dB)\n",
                     s.crosstalk_free.count, count, db(s.crosstalk_free.min_psnr_db).c_str(),
                     db(s.crosstalk_free.mean_psnr_db).c_str(), db(s.crosstalk_free.min_psnr_cell_db).c_str());
     if (s.in_fov.count)
-        printf("  inside the field of view (%d of %zu): PSNR min %s dB, mean %s dB (fitted gain: min %s, "
+        text += format_text("  inside the field of view (%d of %zu): PSNR min %s dB, mean %s dB (fitted gain: min %s, "
                     "mean %s; cells: min %s dB)\n",
                     s.in_fov.count, count, db(s.in_fov.min_psnr_db).c_str(), db(s.in_fov.mean_psnr_db).c_str(),
                     db(s.in_fov.min_psnr_fitted_db).c_str(), db(s.in_fov.mean_psnr_fitted_db).c_str(),
                     db(s.in_fov.min_psnr_cell_db).c_str());
     else
-        printf("  no direction inside the field of view\n");
+        text += format_text("  no direction inside the field of view\n");
     if (!points.empty()) {
-        printf("  speed against accuracy over %zu directions (reference: exact, %d rays per side):\n",
+        text += format_text("  speed against accuracy over %zu directions (reference: exact, %d rays per side):\n",
                     s.accuracy_directions, reference_rays);
-        printf("  %-16s %6s %10s %10s %9s %9s %10s\n", "model", "rays", "traced", "seconds", "PSNR dB", "worst dB",
+        text += format_text("  %-16s %6s %10s %10s %9s %9s %10s\n", "model", "rays", "traced", "seconds", "PSNR dB", "worst dB",
                     "fitted dB");
         for (const auto& p : points)
-            printf("  %-16s %6d %10zu %10.4f %9.2f %9.2f %10.2f\n", p.label.c_str(), p.rays_per_side, p.rays,
+            text += format_text("  %-16s %6d %10zu %10.4f %9.2f %9.2f %10.2f\n", p.label.c_str(), p.rays_per_side, p.rays,
                         p.seconds, p.psnr_db, p.worst_psnr_db, p.fitted_psnr_db);
     }
     return text;

@@ -305,25 +305,20 @@ std::string optimization_text(const PatternOptimization& run, const PatternOptim
     const PatternOptimization::Point& first = run.points.front();
     const PatternOptimization::Point& last = run.points.back();
     std::string text;
-    const auto line = [&](const char* format, auto... values) {
-        char buffer[512];
-        std::snprintf(buffer, sizeof buffer, format, values...);
-        text += buffer;
-    };
-    line("pattern %s: optimised from %s (%s)\n", out.c_str(), settings.from.c_str(),
+    text += format_text("pattern %s: optimised from %s (%s)\n", out.c_str(), settings.from.c_str(),
          settings.unbounded ? "unbounded: the ceiling, clamped to print" : "within the printer's range");
-    line("  unknowns          %d x %d nodes per lenslet, %.3g mm apart: %zu values\n", run.nodes.nodes_x(),
+    text += format_text("  unknowns          %d x %d nodes per lenslet, %.3g mm apart: %zu values\n", run.nodes.nodes_x(),
          run.nodes.nodes_y(), settings.spacing_mm, run.nodes.size());
-    line("  directions        %zu optimised, %zu held out (in between), %d rays per side, %s model\n", run.directions,
+    text += format_text("  directions        %zu optimised, %zu held out (in between), %d rays per side, %s model\n", run.directions,
          run.held_out_directions, settings.rays_per_side, std::string(optics::to_string(run.model)).c_str());
-    line("  objective         %.6g -> %.6g in %d iterations%s\n", first.objective, last.objective, run.iterations,
+    text += format_text("  objective         %.6g -> %.6g in %d iterations%s\n", first.objective, last.objective, run.iterations,
          run.converged ? " (converged)" : "");
-    line("  mean PSNR         optimised directions %.2f -> %.2f dB, held out %.2f -> %.2f dB\n", first.fitted_psnr,
+    text += format_text("  mean PSNR         optimised directions %.2f -> %.2f dB, held out %.2f -> %.2f dB\n", first.fitted_psnr,
          last.fitted_psnr, first.held_psnr, last.held_psnr);
-    line("  time              %.1f s to prepare, %.1f s to solve\n", run.prepare_seconds, run.solve_seconds);
+    text += format_text("  time              %.1f s to prepare, %.1f s to solve\n", run.prepare_seconds, run.solve_seconds);
     if (!judged.empty()) {
         const JudgedMeans m = judged_means(judged);
-        line("  judged            mean PSNR inside the field of view %.2f dB direct, %.2f dB optimised "
+        text += format_text("  judged            mean PSNR inside the field of view %.2f dB direct, %.2f dB optimised "
              "(%d of %zu directions); whole cells in the crosstalk-free cone %.2f -> %.2f dB\n",
              m.in_fov_direct_db, m.in_fov_optimized_db, m.in_fov_count, judged.size(), m.clean_cells_direct_db,
              m.clean_cells_optimized_db);

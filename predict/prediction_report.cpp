@@ -10,22 +10,6 @@
 namespace rfd::predict {
 namespace {
 
-// printf into a string: the reports are text a command prints as it is.
-class Text {
-public:
-    template <class... Values>
-    void operator()(const char* format, Values... values) {
-        char buffer[1024];
-        std::snprintf(buffer, sizeof buffer, format, values...);
-        text_ += buffer;
-    }
-    void add(const std::string& text) { text_ += text; }
-    std::string str() const { return text_; }
-
-private:
-    std::string text_;
-};
-
 nlohmann::json json_or_null(const std::optional<double>& value) {
     return value ? nlohmann::json(*value) : nlohmann::json();
 }
@@ -42,8 +26,8 @@ nlohmann::json light_checks_json(const std::vector<LightCheck>& checks) {
     return out;
 }
 
-void light_check_line(Text& text, const std::string& light, const LightCheck& c) {
-    text("               %s: display %s, field %s; %s deg from the axis (field of view to %s, crosstalk from "
+void light_check_line(std::string& text, const std::string& light, const LightCheck& c) {
+    text += format_text("               %s: display %s, field %s; %s deg from the axis (field of view to %s, crosstalk from "
          "%s deg along its azimuth)\n",
          light.c_str(), (format_fixed(c.display_theta_deg, 1) + "," + format_fixed(c.display_phi_deg, 1)).c_str(),
          (format_fixed(c.field_theta_deg, 1) + "," + format_fixed(c.field_phi_deg, 1)).c_str(),
@@ -64,14 +48,14 @@ nlohmann::json environment_json(const std::string& file, const EnvironmentSampli
 }
 
 std::string environment_line(const std::string& file, const EnvironmentSampling& sampling) {
-    Text text;
-    text("  envmap       %s: %d x %d", file.c_str(), sampling.width, sampling.height);
+    std::string text;
+    text += format_text("  envmap       %s: %d x %d", file.c_str(), sampling.width, sampling.height);
     if (sampling.reduction > 1)
-        text(", sampled at %d x %d (box filter %d: %s)", sampling.sampled_width, sampling.sampled_height,
+        text += format_text(", sampled at %d x %d (box filter %d: %s)", sampling.sampled_width, sampling.sampled_height,
              sampling.reduction, sampling.reason.c_str());
-    text("; %zu direction(s) light the display from behind, %zu from the front (dropped)\n", sampling.directions,
+    text += format_text("; %zu direction(s) light the display from behind, %zu from the front (dropped)\n", sampling.directions,
          sampling.in_front);
-    return text.str();
+    return text;
 }
 
 nlohmann::json to_json(const DiffuserPredictionReport& report) {
@@ -112,37 +96,37 @@ nlohmann::json to_json(const DiffuserPredictionReport& report) {
 std::string report_text(const DiffuserPredictionReport& report) {
     const optics::DiffuserImage& result = *report.result;
     const optics::PictureContrast& contrast = report.contrast;
-    Text text;
-    text("%s: %d x %d pixels of %.4f mm, what '%s' shows\n", report.out.c_str(), result.image.width(),
+    std::string text;
+    text += format_text("%s: %d x %d pixels of %.4f mm, what '%s' shows\n", report.out.c_str(), result.image.width(),
          result.image.height(), result.pixel_mm, report.design.c_str());
-    text("  model        %s (%s; paraxial error up to %.2f dots, tolerance %.2f)\n",
+    text += format_text("  model        %s (%s; paraxial error up to %.2f dots, tolerance %.2f)\n",
          std::string(optics::to_string(report.choice.model)).c_str(),
          report.model_choice == "auto" ? "chosen automatically" : "as asked",
          report.choice.paraxial_error_dots.value_or(0.0), report.tolerance_dots);
-    text("  light        %zu light(s)%s, %zu direction(s) sampled, %zu ray(s) per direction and lenslet, %zu rays\n",
+    text += format_text("  light        %zu light(s)%s, %zu direction(s) sampled, %zu ray(s) per direction and lenslet, %zu rays\n",
          report.lights.size(), report.envmap.empty() ? "" : " and an environment map", result.directions,
          result.rays_per_direction, result.rays);
     for (std::size_t k = 0; k < report.checks.size(); ++k) light_check_line(text, report.lights[k], report.checks[k]);
-    if (!report.envmap.empty()) text.add(environment_line(report.envmap, report.sampling));
-    text("  efficiency   %.1f %% of the light entering the lenslets reaches the diffuser; "
+    if (!report.envmap.empty()) text += (environment_line(report.envmap, report.sampling));
+    text += format_text("  efficiency   %.1f %% of the light entering the lenslets reaches the diffuser; "
          "%.1f / %.1f / %.1f %% through the pattern (R/G/B)\n",
          100 * result.optical_efficiency, 100 * result.pattern_efficiency[0], 100 * result.pattern_efficiency[1],
          100 * result.pattern_efficiency[2]);
-    text("  crosstalk    %.2f %% of the rays reach the diffuser through a neighbouring lenslet\n",
+    text += format_text("  crosstalk    %.2f %% of the rays reach the diffuser through a neighbouring lenslet\n",
          result.rays ? 100.0 * static_cast<double>(result.crossed) / static_cast<double>(result.rays) : 0.0);
-    text("  contrast     white %.4f, black %.4f (99th / 1st percentile over the lenslets); %.1f %% as bright "
+    text += format_text("  contrast     white %.4f, black %.4f (99th / 1st percentile over the lenslets); %.1f %% as bright "
          "as the back light through the diffuser\n",
          contrast.white, contrast.black, 100 * contrast.transmissivity);
     for (const optics::FrontLightContrast& c : contrast.with_front) {
         if (std::isfinite(c.contrast))
-            text("               %.1f : 1 with front / back light %g%s\n", c.contrast, c.front_ratio,
+            text += format_text("               %.1f : 1 with front / back light %g%s\n", c.contrast, c.front_ratio,
                  c.front_ratio == 0.0 ? " (dark room)" : "");
         else
-            text("               unbounded with front / back light %g%s (the blacks are black)\n", c.front_ratio,
+            text += format_text("               unbounded with front / back light %g%s (the blacks are black)\n", c.front_ratio,
                  c.front_ratio == 0.0 ? " (dark room)" : "");
     }
-    text("  time         %.2f s\n", report.seconds);
-    return text.str();
+    text += format_text("  time         %.2f s\n", report.seconds);
+    return text;
 }
 
 nlohmann::json to_json(const ObserverPredictionReport& report) {
@@ -177,27 +161,27 @@ nlohmann::json to_json(const ObserverPredictionReport& report) {
 std::string report_text(const ObserverPredictionReport& report) {
     const optics::AngularDisplayOutput& result = *report.result;
     const double rays = static_cast<double>(std::max<std::size_t>(result.rays, 1));
-    Text text;
-    text("%s: what '%s' sends toward %zu viewpoint(s), %d x %d meso-pixels (%d x %d macro-pixels)\n",
+    std::string text;
+    text += format_text("%s: what '%s' sends toward %zu viewpoint(s), %d x %d meso-pixels (%d x %d macro-pixels)\n",
          report.written.front().c_str(), report.design.c_str(), result.views.size(), report.macro_x * report.lattice_x,
          report.macro_y * report.lattice_y, report.macro_x, report.macro_y);
-    text("  model        %s (%s)\n", std::string(optics::to_string(report.choice.model)).c_str(),
+    text += format_text("  model        %s (%s)\n", std::string(optics::to_string(report.choice.model)).c_str(),
          report.choice.reason.c_str());
-    text("  light        %zu light(s)%s, %zu direction(s) sampled, %zu rays per macro-pixel\n", report.lights,
+    text += format_text("  light        %zu light(s)%s, %zu direction(s) sampled, %zu rays per macro-pixel\n", report.lights,
          report.envmap.empty() ? "" : " and an environment map", result.directions, result.rays);
-    if (!report.envmap.empty()) text.add(environment_line(report.envmap, report.sampling));
-    text("  efficiency   %.1f %% of the light entering the main lens leaves the display; "
+    if (!report.envmap.empty()) text += (environment_line(report.envmap, report.sampling));
+    text += format_text("  efficiency   %.1f %% of the light entering the main lens leaves the display; "
          "%.1f / %.1f / %.1f %% through the pattern (R/G/B)\n",
          100 * result.optical_efficiency, 100 * result.pattern_efficiency[0], 100 * result.pattern_efficiency[1],
          100 * result.pattern_efficiency[2]);
-    text("  crosstalk    %.2f %% of the light leaves through a neighbouring lenslet (%.2f %% of the rays)\n",
+    text += format_text("  crosstalk    %.2f %% of the light leaves through a neighbouring lenslet (%.2f %% of the rays)\n",
          100 * result.crossed_fraction, 100.0 * static_cast<double>(result.crossed) / rays);
     for (const auto& [surface, fraction] : result.lost_fraction)
-        text("  lost         %5.1f %% at %s\n", 100 * fraction, surface.c_str());
-    text("  kernel       %.2f deg over output directions; 1.0 = %.4g /sr per unit irradiance\n",
+        text += format_text("  lost         %5.1f %% at %s\n", 100 * fraction, surface.c_str());
+    text += format_text("  kernel       %.2f deg over output directions; 1.0 = %.4g /sr per unit irradiance\n",
          radians_to_degrees(std::atan(result.kernel_half_tan)), result.reference_radiance_per_sr);
-    text("  time         %.2f s\n", report.seconds);
-    return text.str();
+    text += format_text("  time         %.2f s\n", report.seconds);
+    return text;
 }
 
 }  // namespace rfd::predict

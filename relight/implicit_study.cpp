@@ -322,27 +322,21 @@ std::string eta_sweep_text(const EtaStudy& study, const std::string& model_name,
     const EtaStudyPoint& best = study.points[study.best];
     const std::optional<std::size_t> pseudo_inverse = pseudo_inverse_of(study);
     std::string text;
-    char line[512];
-    std::snprintf(line, sizeof line, "eta sweep of %s on %zu held-out light(s) -> %s\n", model_name.c_str(),
+    text += format_text("eta sweep of %s on %zu held-out light(s) -> %s\n", model_name.c_str(),
                   test_lights, folder.c_str());
-    text += line;
-    std::snprintf(line, sizeof line, "  %-12s %10s %14s %12s\n", "eta", "PSNR (dB)", "probe residual", "max |l_i|");
-    text += line;
+    text += format_text("  %-12s %10s %14s %12s\n", "eta", "PSNR (dB)", "probe residual", "max |l_i|");
     for (std::size_t i = 0; i < study.points.size(); ++i) {
         const auto& point = study.points[i];
-        std::snprintf(line, sizeof line, "  %-12.3g %10.2f %14.3g %12.3g%s\n", point.eta, point.psnr,
+        text += format_text("  %-12.3g %10.2f %14.3g %12.3g%s\n", point.eta, point.psnr,
                       point.probe_residual_rms, point.max_abs_coefficient, i == study.best ? "  <- best" : "");
-        text += line;
     }
     if (pseudo_inverse) {
-        std::snprintf(line, sizeof line, "  best eta %.3g gains %.2f dB over the pseudo-inverse (eta = 0)\n", best.eta,
+        text += format_text("  best eta %.3g gains %.2f dB over the pseudo-inverse (eta = 0)\n", best.eta,
                       best.psnr - study.points[*pseudo_inverse].psnr);
-        text += line;
     }
     if (examples > 0) {
-        std::snprintf(line, sizeof line, "  comparisons        light_NN.png: truth | %s (same exposure)\n",
+        text += format_text("  comparisons        light_NN.png: truth | %s (same exposure)\n",
                       pseudo_inverse ? "eta = 0 | best eta | largest eta" : "best eta | largest eta");
-        text += line;
     }
     return text;
 }

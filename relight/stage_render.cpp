@@ -7,6 +7,7 @@
 #include "core/error.hpp"
 #include "core/files.hpp"
 #include "core/progress.hpp"
+#include "core/text.hpp"
 #include "core/units.hpp"
 #include "relight/field.hpp"
 #include "relight/stage.hpp"
@@ -86,23 +87,17 @@ std::string stage_render_text(const StageRender& run, const Scene& scene, const 
                               const std::string& folder) {
     const Camera& camera = scene.cameras.front();
     std::string text;
-    char line[512];
-    std::snprintf(line, sizeof line, "rendered %zu light(s) x %zu view(s) of %s into %s\n", run.lights, run.views,
+    text += format_text("rendered %zu light(s) x %zu view(s) of %s into %s\n", run.lights, run.views,
                   scene_file.c_str(), folder.c_str());
-    text += line;
-    std::snprintf(line, sizeof line, "  image              %d x %d, %d camera ray(s) per pixel\n", camera.width,
+    text += format_text("  image              %d x %d, %d camera ray(s) per pixel\n", camera.width,
                   camera.height, scene.samples_per_pixel);
-    text += line;
-    std::snprintf(line, sizeof line, "  kernel             %s, radius %.3g deg, %d shadow sample(s) per ray\n",
+    text += format_text("  kernel             %s, radius %.3g deg, %d shadow sample(s) per ray\n",
                   run.kernel.is_directional() ? "directional" : to_string(run.kernel.profile).c_str(),
                   radians_to_degrees(run.kernel.radius), scene.shadow_samples);
-    text += line;
-    std::snprintf(line, sizeof line, "  cache              %zu shading points, %zu escaped paths\n", run.shading_points,
+    text += format_text("  cache              %zu shading points, %zu escaped paths\n", run.shading_points,
                   run.escaped_paths);
-    text += line;
-    std::snprintf(line, sizeof line, "  time               %.3f s camera paths, %.4f s per light\n",
+    text += format_text("  time               %.3f s camera paths, %.4f s per light\n",
                   run.camera_seconds, run.seconds_per_light);
-    text += line;
     return text;
 }
 

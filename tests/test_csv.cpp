@@ -1,5 +1,5 @@
 // The one CSV writer of rfd's reports: what it writes reads back, cell for cell, through an
-// independent RFC 4180 reader, whatever the cells hold.
+// independent RFC 4180 reader, whatever the cells hold; and format_text, their lines' printf.
 
 #include <string>
 #include <vector>
@@ -65,6 +65,15 @@ TEST(CsvTable, QuotesOnlyWhatNeedsIt) {
     // Plain cells stay as written: tables that never needed quotes read the same as before.
     EXPECT_EQ(table.text(), "index,value\n0,1.5000\n");
     EXPECT_EQ(csv_flag(true) + csv_flag(false), "10");
+}
+
+// format_text, the reports' printf into a string: any length, and the same digits as
+// format_fixed and format_number write.
+TEST(FormatText, AnyLengthAndTheSameDigitsAsTheNumberFormatters) {
+    const std::string long_word(3000, 'x');
+    const std::string text = format_text("%s|%.4f|%g", long_word.c_str(), 31.25, 1e-7);
+    EXPECT_EQ(text, long_word + "|" + format_fixed(31.25, 4) + "|" + format_number(1e-7));
+    EXPECT_EQ(format_text("%s", ""), "");
 }
 
 }  // namespace
