@@ -71,6 +71,85 @@ Image zoomed(const Image& image, int zoom) {
     return out;
 }
 
+// --light in the field's frame to display lights: the mirror of patterns/angular.hpp's
+// field_light_of.
+std::vector<optics::DisplayLight> observer_lights(const std::vector<std::string>& texts) {
+    std::vector<optics::DisplayLight> lights;
+    for (const std::string& text : texts) {
+        const relight::Light light = parse_light(text);
+        optics::DisplayLight d;
+        Eigen::Vector3d toward, colour;
+        if (const auto* point = std::get_if<relight::DirectionalLight>(&light)) {
+            toward = point->direction;
+            colour = point->irradiance;
+        } else {
+            const auto& disc = std::get<relight::DiskLight>(light);
+            toward = disc.direction;
+            d.angular_radius_rad = disc.radius;
+            colour = disc.irradiance;
+        }
+        d.direction = patterns::field_light_of(toward);  // its own inverse
+        d.colour = {colour.x(), colour.y(), colour.z()};
+        lights.push_back(d);
+    }
+    return lights;
+}
+
+// --view and --eye into `options` (one distant view from 0,0 when neither is given); their
+// names for the report.
+std::vector<std::string> add_viewpoints(const ObserverVariantOptions& opt, optics::AngularSimulationOptions& options) {
+    std::vector<std::string> view_names;
+    for (const std::string& text : opt.views) {
+        const auto v = numbers(text, "--view", 2);
+        optics::Viewpoint view;
+        view.direction = direction_from_angles(degrees_to_radians(v[0]), degrees_to_radians(v[1]));
+        options.views.push_back(view);
+        view_names.push_back("view " + text);
+    }
+    for (const std::string& text : opt.eyes) {
+        const auto v = numbers(text, "--eye", 3);
+        optics::Viewpoint view;
+        view.eye_mm = Eigen::Vector3d(v[0], v[1], v[2]);
+        options.views.push_back(view);
+        view_names.push_back("eye " + text);
+    }
+    if (options.views.empty()) {
+        options.views.push_back(optics::Viewpoint{});
+        view_names.push_back("view 0,0");
+    }
+    return view_names;
+}
+
+// --distribution U,V into `options`; the suffixes of their files ("U_V").
+std::vector<std::string> add_distributions(const ObserverVariantOptions& opt, optics::AngularSimulationOptions& options) {
+    std::vector<std::string> suffixes;
+    for (const std::string& text : opt.distributions) {
+        const auto v = numbers(text, "--distribution", 2);
+        if (v[0] != std::floor(v[0]) || v[1] != std::floor(v[1]))
+            throw InputError("--distribution '" + text + "': expected whole macro-pixel indices U,V");
+        options.distributions.push_back({static_cast<int>(v[0]), static_cast<int>(v[1])});
+        suffixes.push_back(std::to_string(static_cast<int>(v[0])) + "_" + std::to_string(static_cast<int>(v[1])));
+    }
+    return suffixes;
+}
+
+// The options of Designs I and II's diffuser picture, refused here by name.
+void refuse_diffuser_options(const CLI::App& simulate, const SimulateOptions& common) {
+    const std::string& design_file = common.design;
+    if (simulate.count("--rays") > 0 || simulate.count("--lenslets") > 0 || simulate.count("--pixels-per-lenslet") > 0)
+        throw InputError(SourceLocation{design_file, 0, 0, "design.kind"},
+                         "--rays-per-side, --lenslets and --pixels-per-lenslet are for Designs I and II; Designs III and IV "
+                         "take --lens-rays, --view, --eye, --macro and --distribution");
+    if (simulate.count("--frame") > 0 && common.frame != predict::LightFrame::Field)
+        throw InputError(SourceLocation{design_file, 0, 0, "design.kind"},
+                         "Designs III and IV take --light in the field's frame (--frame field): their patterns "
+                         "have no tilt, and the field's directions are the cells' incident bins");
+    for (const char* name : {"--front", "--diffuser-transmittance", "--diffuser-reflectance"})
+        if (simulate.count(name) > 0)
+            throw InputError(SourceLocation{design_file, 0, 0, "design.kind"},
+                             std::string(name) + " is for Designs I and II (a diffuser shows the picture)");
+}
+
 }  // namespace
 
 std::shared_ptr<ObserverVariantOptions> add_observer_variant_options(CLI::App& simulate) {
@@ -115,18 +194,7 @@ void simulate_observer_variant(const CLI::App& simulate, const SimulateOptions& 
     const std::string& pattern_file = common.pattern;
     const std::string& out = common.out;
     const std::vector<std::string>& light_texts = common.lights;
-    if (simulate.count("--rays") > 0 || simulate.count("--lenslets") > 0 || simulate.count("--pixels-per-lenslet") > 0)
-        throw InputError(SourceLocation{design_file, 0, 0, "design.kind"},
-                         "--rays-per-side, --lenslets and --pixels-per-lenslet are for Designs I and II; Designs III and IV "
-                         "take --lens-rays, --view, --eye, --macro and --distribution");
-    if (simulate.count("--frame") > 0 && common.frame != predict::LightFrame::Field)
-        throw InputError(SourceLocation{design_file, 0, 0, "design.kind"},
-                         "Designs III and IV take --light in the field's frame (--frame field): their patterns "
-                         "have no tilt, and the field's directions are the cells' incident bins");
-    for (const char* name : {"--front", "--diffuser-transmittance", "--diffuser-reflectance"})
-        if (simulate.count(name) > 0)
-            throw InputError(SourceLocation{design_file, 0, 0, "design.kind"},
-                             std::string(name) + " is for Designs I and II (a diffuser shows the picture)");
+    refuse_diffuser_options(simulate, common);
     const std::string& envmap = common.envmap;
     if (!opt.distributions.empty() && opt.distribution_out.empty())
         throw InputError("--distribution needs --distribution-out FILE");
@@ -135,25 +203,7 @@ void simulate_observer_variant(const CLI::App& simulate, const SimulateOptions& 
     const optics::AngularDisplaySimulator simulator(design);
     const print::PrintedTransparency pattern = printed_pattern(design, pattern_file, common.print);
 
-    // Field-frame lights to display lights: the mirror of patterns/angular.hpp's field_light_of.
-    std::vector<optics::DisplayLight> lights;
-    for (const std::string& text : light_texts) {
-        const relight::Light light = parse_light(text);
-        optics::DisplayLight d;
-        Eigen::Vector3d toward, colour;
-        if (const auto* point = std::get_if<relight::DirectionalLight>(&light)) {
-            toward = point->direction;
-            colour = point->irradiance;
-        } else {
-            const auto& disc = std::get<relight::DiskLight>(light);
-            toward = disc.direction;
-            d.angular_radius_rad = disc.radius;
-            colour = disc.irradiance;
-        }
-        d.direction = patterns::field_light_of(toward);  // its own inverse
-        d.colour = {colour.x(), colour.y(), colour.z()};
-        lights.push_back(d);
-    }
+    std::vector<optics::DisplayLight> lights = observer_lights(light_texts);
 
     // An environment map: one light per lit pixel, mapped as the lights above. Every
     // direction traces the whole main lens (--lens-rays squared rays), so the map is
@@ -182,33 +232,8 @@ void simulate_observer_variant(const CLI::App& simulate, const SimulateOptions& 
     options.kernel_spacings = opt.kernel;
     options.area_samples_per_side = common.area_samples;
     options.distribution_pixels = opt.distribution_pixels;
-    std::vector<std::string> view_names;
-    for (const std::string& text : opt.views) {
-        const auto v = numbers(text, "--view", 2);
-        optics::Viewpoint view;
-        view.direction = direction_from_angles(degrees_to_radians(v[0]), degrees_to_radians(v[1]));
-        options.views.push_back(view);
-        view_names.push_back("view " + text);
-    }
-    for (const std::string& text : opt.eyes) {
-        const auto v = numbers(text, "--eye", 3);
-        optics::Viewpoint view;
-        view.eye_mm = Eigen::Vector3d(v[0], v[1], v[2]);
-        options.views.push_back(view);
-        view_names.push_back("eye " + text);
-    }
-    if (options.views.empty()) {
-        options.views.push_back(optics::Viewpoint{});
-        view_names.push_back("view 0,0");
-    }
-    std::vector<std::string> distribution_texts;
-    for (const std::string& text : opt.distributions) {
-        const auto v = numbers(text, "--distribution", 2);
-        if (v[0] != std::floor(v[0]) || v[1] != std::floor(v[1]))
-            throw InputError("--distribution '" + text + "': expected whole macro-pixel indices U,V");
-        options.distributions.push_back({static_cast<int>(v[0]), static_cast<int>(v[1])});
-        distribution_texts.push_back(std::to_string(static_cast<int>(v[0])) + "_" + std::to_string(static_cast<int>(v[1])));
-    }
+    const std::vector<std::string> view_names = add_viewpoints(opt, options);
+    const std::vector<std::string> distribution_texts = add_distributions(opt, options);
 
     const optics::AngularDisplayOutput result = simulator.simulate(pattern, lights, options);
     const bool several = result.views.size() > 1;

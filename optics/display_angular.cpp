@@ -80,33 +80,10 @@ struct Outgoing {
     std::size_t cell = 0; // linear index of the lenslet it left through
 };
 
-}  // namespace
-
-AngularDisplaySimulator::AngularDisplaySimulator(const Design& design) : optics_(design), meso_(optics_) {
-    if (design.macro) {
-        macro_x_ = design.macro->count_x;
-        macro_y_ = design.macro->count_y;
-        macro_pitch_x_ = design.macro->pitch_x;
-        macro_pitch_y_ = design.macro->pitch_y;
-    }
-    RFD_CHECK_MSG(std::holds_alternative<CircularAperture>(optics_.system().surfaces.front().aperture),
-                  "Designs III/IV begin with the main lens");
-    slope_gain_ = vertex_matrix(optics_.system(), 0, meso_.last_surface()).c;
-    RFD_CHECK_MSG(std::abs(slope_gain_) > 1e-12, "the display must turn main-lens position into output slope");
-}
-
-Eigen::Vector2d AngularDisplaySimulator::macro_centre(MacroPixel m) const {
-    if (macro_x_ == 1 && macro_y_ == 1 && macro_pitch_x_ == 0.0) return Eigen::Vector2d::Zero();
-    return {(m.u + 0.5) * macro_pitch_x_ - 0.5 * macro_x_ * macro_pitch_x_,
-            (m.v + 0.5) * macro_pitch_y_ - 0.5 * macro_y_ * macro_pitch_y_};
-}
-
-AngularDisplayOutput AngularDisplaySimulator::simulate(const Transparency& pattern,
-                                                       const std::vector<DisplayLight>& lights,
-                                                       const AngularSimulationOptions& options) const {
-    const SequentialSystem& system = optics_.system();
-    const Lattice& lattice = meso_.lattice();
-    const std::string& file = optics_.design().file;
+// The lights, viewpoints, distributions and ray counts of a simulation; InputError naming
+// `file` and which of them otherwise.
+void check_angular_inputs(const std::string& file, const std::vector<DisplayLight>& lights,
+                          const AngularSimulationOptions& options, int macro_x, int macro_y) {
     auto refuse = [&](const std::string& key, const std::string& what) {
         throw InputError(SourceLocation{file, 0, 0, key}, what);
     };
@@ -133,10 +110,10 @@ AngularDisplayOutput AngularDisplaySimulator::simulate(const Transparency& patte
     }
     for (std::size_t i = 0; i < options.distributions.size(); ++i) {
         const MacroPixel m = options.distributions[i];
-        if (m.u < 0 || m.v < 0 || m.u >= macro_x_ || m.v >= macro_y_)
+        if (m.u < 0 || m.v < 0 || m.u >= macro_x || m.v >= macro_y)
             refuse("distribution " + std::to_string(i + 1),
                    "macro-pixel " + std::to_string(m.u) + "," + std::to_string(m.v) + " is off the " +
-                       std::to_string(macro_x_) + " x " + std::to_string(macro_y_) + " grid");
+                       std::to_string(macro_x) + " x " + std::to_string(macro_y) + " grid");
     }
     if (options.rays_per_side < 2 || options.rays_per_side > 4096)
         refuse("rays", "rays per side must lie in [2, 4096], got " + std::to_string(options.rays_per_side));
@@ -146,6 +123,100 @@ AngularDisplayOutput AngularDisplaySimulator::simulate(const Transparency& patte
         refuse("area samples", "area samples per side must lie in [1, 64]");
     if (options.distribution_pixels < 2 || options.distribution_pixels > 4096)
         refuse("distribution pixels", "distribution images must be 2 to 4096 pixels wide");
+}
+
+// The ray grid over the main lens's clear aperture (semi-diameter `aperture`), on its
+// vertex plane: the centres of an n x n grid of squares `spacing` wide, inside the disc.
+std::vector<Eigen::Vector2d> entry_grid(double aperture, int n, double spacing) {
+    std::vector<Eigen::Vector2d> entries;
+    for (int iy = 0; iy < n; ++iy)
+        for (int ix = 0; ix < n; ++ix) {
+            const Eigen::Vector2d p(-aperture + (ix + 0.5) * spacing, -aperture + (iy + 0.5) * spacing);
+            if (p.norm() <= aperture) entries.push_back(p);
+        }
+    return entries;
+}
+
+// Where each meso-pixel sees a viewpoint: the slopes toward it, and 1 / cos^4 of the view
+// angle. One per view, macro-pixel and lenslet, in that order (lenslets fastest).
+struct ViewSlope {
+    double tan_x = 0.0, tan_y = 0.0, inverse_cos4 = 1.0;
+};
+std::vector<ViewSlope> slopes_toward_views(const AngularDisplaySimulator& simulator,
+                                           const std::vector<Viewpoint>& views_asked) {
+    const Lattice& lattice = simulator.meso().lattice();
+    const int macro_x = simulator.macro_x();
+    const std::size_t cells = static_cast<std::size_t>(lattice.count_x()) * static_cast<std::size_t>(lattice.count_y());
+    const std::size_t macros = static_cast<std::size_t>(macro_x) * static_cast<std::size_t>(simulator.macro_y());
+    const std::size_t views = views_asked.size();
+    std::vector<ViewSlope> view_slopes(views * macros * cells);
+    for (std::size_t w = 0; w < views; ++w)
+        for (std::size_t m = 0; m < macros; ++m)
+            for (std::size_t k = 0; k < cells; ++k) {
+                const Viewpoint& view = views_asked[w];
+                Eigen::Vector3d d = view.direction;
+                if (view.eye_mm) {
+                    const MacroPixel macro{static_cast<int>(m % static_cast<std::size_t>(macro_x)),
+                                           static_cast<int>(m / static_cast<std::size_t>(macro_x))};
+                    const CellIndex cell{static_cast<int>(k % static_cast<std::size_t>(lattice.count_x())),
+                                         static_cast<int>(k / static_cast<std::size_t>(lattice.count_x()))};
+                    const Eigen::Vector2d centre = simulator.macro_centre(macro) + lattice.center(cell);
+                    d = *view.eye_mm - Eigen::Vector3d(centre.x(), centre.y(), 0.0);
+                }
+                d.normalize();
+                view_slopes[(w * macros + m) * cells + k] = {d.x() / d.z(), d.y() / d.z(), 1.0 / std::pow(d.z(), 4)};
+            }
+
+    return view_slopes;
+}
+
+// One macro-pixel's distribution sums (grid x grid x 3, rays' powers splatted with a tent of
+// radius `spread` over slopes, centres from -half_tan) to relative radiance: times G^2
+// (`gain2`), over the kernel's area, cos^4 of each direction and the `cells` lenslets.
+Image distribution_image(const std::vector<double>& sums, int grid, double half_tan, double spread, double gain2,
+                         std::size_t cells) {
+    Image image(grid, grid, 3);
+    const double step = 2.0 * half_tan / grid;
+    for (int y = 0; y < grid; ++y)
+        for (int x = 0; x < grid; ++x) {
+            const double tx = -half_tan + (x + 0.5) * step, ty = half_tan - (y + 0.5) * step;
+            const double cos2 = 1.0 / (1.0 + tx * tx + ty * ty);
+            const double scale = gain2 / (spread * spread) / (cos2 * cos2) / static_cast<double>(cells);
+            for (int c = 0; c < 3; ++c)
+                image.at(x, y, c) = static_cast<float>(
+                    scale * sums[(static_cast<std::size_t>(y) * grid + static_cast<std::size_t>(x)) * 3 +
+                                 static_cast<std::size_t>(c)]);
+        }
+    return image;
+}
+
+}  // namespace
+
+AngularDisplaySimulator::AngularDisplaySimulator(const Design& design) : optics_(design), meso_(optics_) {
+    if (design.macro) {
+        macro_x_ = design.macro->count_x;
+        macro_y_ = design.macro->count_y;
+        macro_pitch_x_ = design.macro->pitch_x;
+        macro_pitch_y_ = design.macro->pitch_y;
+    }
+    RFD_CHECK_MSG(std::holds_alternative<CircularAperture>(optics_.system().surfaces.front().aperture),
+                  "Designs III/IV begin with the main lens");
+    slope_gain_ = vertex_matrix(optics_.system(), 0, meso_.last_surface()).c;
+    RFD_CHECK_MSG(std::abs(slope_gain_) > 1e-12, "the display must turn main-lens position into output slope");
+}
+
+Eigen::Vector2d AngularDisplaySimulator::macro_centre(MacroPixel m) const {
+    if (macro_x_ == 1 && macro_y_ == 1 && macro_pitch_x_ == 0.0) return Eigen::Vector2d::Zero();
+    return {(m.u + 0.5) * macro_pitch_x_ - 0.5 * macro_x_ * macro_pitch_x_,
+            (m.v + 0.5) * macro_pitch_y_ - 0.5 * macro_y_ * macro_pitch_y_};
+}
+
+AngularDisplayOutput AngularDisplaySimulator::simulate(const Transparency& pattern,
+                                                       const std::vector<DisplayLight>& lights,
+                                                       const AngularSimulationOptions& options) const {
+    const SequentialSystem& system = optics_.system();
+    const Lattice& lattice = meso_.lattice();
+    check_angular_inputs(optics_.design().file, lights, options, macro_x_, macro_y_);
     const int channels = pattern.channels();
     RFD_CHECK(channels == 1 || channels == 3);
 
@@ -153,12 +224,7 @@ AngularDisplayOutput AngularDisplaySimulator::simulate(const Transparency& patte
     const double aperture = std::get<CircularAperture>(system.surfaces.front().aperture).semi_diameter;
     const int n = options.rays_per_side;
     const double spacing = 2.0 * aperture / n;
-    std::vector<Eigen::Vector2d> entries;
-    for (int iy = 0; iy < n; ++iy)
-        for (int ix = 0; ix < n; ++ix) {
-            const Eigen::Vector2d p(-aperture + (ix + 0.5) * spacing, -aperture + (iy + 0.5) * spacing);
-            if (p.norm() <= aperture) entries.push_back(p);
-        }
+    const std::vector<Eigen::Vector2d> entries = entry_grid(aperture, n, spacing);
     const std::size_t ray_count = entries.size();
     const std::size_t pattern_surface = meso_.pattern_surface(), last = meso_.last_surface();
     const double z_entry = system.surfaces.front().z, z_pattern = system.surfaces[pattern_surface].z;
@@ -179,28 +245,7 @@ AngularDisplayOutput AngularDisplaySimulator::simulate(const Transparency& patte
     const double step = 2.0 * result.distribution_half_tan / grid;
     const double spread = std::max(kernel, step);  // a distribution pixel never falls between rays
 
-    // Where each meso-pixel sees each viewpoint: slopes, and 1 / cos^4 of the view angle.
-    struct ViewSlope {
-        double tan_x = 0.0, tan_y = 0.0, inverse_cos4 = 1.0;
-    };
-    std::vector<ViewSlope> view_slopes(views * macros * cells);
-    for (std::size_t w = 0; w < views; ++w)
-        for (std::size_t m = 0; m < macros; ++m)
-            for (std::size_t k = 0; k < cells; ++k) {
-                const Viewpoint& view = options.views[w];
-                Eigen::Vector3d d = view.direction;
-                if (view.eye_mm) {
-                    const MacroPixel macro{static_cast<int>(m % static_cast<std::size_t>(macro_x_)),
-                                           static_cast<int>(m / static_cast<std::size_t>(macro_x_))};
-                    const CellIndex cell{static_cast<int>(k % static_cast<std::size_t>(lattice.count_x())),
-                                         static_cast<int>(k / static_cast<std::size_t>(lattice.count_x()))};
-                    const Eigen::Vector2d centre = macro_centre(macro) + lattice.center(cell);
-                    d = *view.eye_mm - Eigen::Vector3d(centre.x(), centre.y(), 0.0);
-                }
-                d.normalize();
-                view_slopes[(w * macros + m) * cells + k] = {d.x() / d.z(), d.y() / d.z(), 1.0 / std::pow(d.z(), 4)};
-            }
-
+    const std::vector<ViewSlope> view_slopes = slopes_toward_views(*this, options.views);
     // Accumulators per macro-pixel (each written by one task only).
     std::vector<std::vector<double>> view_sums(macros, std::vector<double>(views * cells * 3, 0.0));
     std::vector<std::vector<double>> distribution_sums(options.distributions.size(),
@@ -361,21 +406,9 @@ AngularDisplayOutput AngularDisplaySimulator::simulate(const Transparency& patte
             }
         result.views.push_back(std::move(image));
     }
-    for (std::size_t q = 0; q < distribution_sums.size(); ++q) {
-        Image image(grid, grid, 3);
-        const double T = result.distribution_half_tan;
-        for (int y = 0; y < grid; ++y)
-            for (int x = 0; x < grid; ++x) {
-                const double tx = -T + (x + 0.5) * step, ty = T - (y + 0.5) * step;
-                const double cos2 = 1.0 / (1.0 + tx * tx + ty * ty);
-                const double scale = gain2 / (spread * spread) / (cos2 * cos2) / static_cast<double>(cells);
-                for (int c = 0; c < 3; ++c)
-                    image.at(x, y, c) = static_cast<float>(
-                        scale * distribution_sums[q][(static_cast<std::size_t>(y) * grid + static_cast<std::size_t>(x)) * 3 +
-                                                     static_cast<std::size_t>(c)]);
-            }
-        result.distributions.push_back(std::move(image));
-    }
+    for (const std::vector<double>& sums : distribution_sums)
+        result.distributions.push_back(
+            distribution_image(sums, grid, result.distribution_half_tan, spread, gain2, cells));
     result.optical_efficiency = entering > 0.0 ? leaving / entering : 0.0;
     result.crossed_fraction = entering > 0.0 ? crossed_power / entering : 0.0;
     for (std::size_t c = 0; c < 3; ++c) {

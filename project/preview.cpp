@@ -23,8 +23,6 @@ std::string read_bytes(const fs::path& file) {
     return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-nlohmann::json vector_json(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
-
 nlohmann::json optional_json(const std::optional<double>& value) {
     return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
 }
@@ -56,43 +54,94 @@ std::string base64(const std::string& bytes) {
     return out;
 }
 
-void write_preview_data(const predict::PreviewSet& set, const std::string& design_name, const fs::path& folder) {
-    ensure_directory(folder);
-    const int columns = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(set.directions.size()))));
-    write_image(folder / "predicted.png", tiled(set.predicted, columns));
-    write_image(folder / "relit.png", tiled(set.relit, columns));
-    if (!set.predicted_direct.empty()) write_image(folder / "direct.png", tiled(set.predicted_direct, columns));
-
-    nlohmann::json directions = nlohmann::json::array(), triangles = nlohmann::json::array(),
-                   planes = nlohmann::json::array(), rims = nlohmann::json::array();
-    for (const Eigen::Vector3d& d : set.directions) directions.push_back(vector_json(d));
-    for (std::size_t t = 0; t < set.triangles.size(); ++t) {
-        triangles.push_back(set.triangles[t]);
-        planes.push_back({vector_json(set.edge_planes[t][0]), vector_json(set.edge_planes[t][1]),
-                          vector_json(set.edge_planes[t][2])});
-    }
-    for (const predict::PreviewRim& rim : set.rims)
+void to_json(nlohmann::json& json, const PreviewData& data) {
+    nlohmann::json rims = nlohmann::json::array();
+    for (const PreviewData::Rim& rim : data.rims)
         rims.push_back({{"phi_deg", rim.phi_deg},
                         {"wrap_over_deg", optional_json(rim.wrap_over_deg)},
                         {"crosstalk_deg", optional_json(rim.crosstalk_deg)}});
-    nlohmann::json data = {
-        {"design", design_name},
-        {"frame", "display: z the display's axis, toward the light"},
-        {"max_angle_deg", set.max_angle_deg},
-        {"scale", set.scale},
-        {"tile", {set.predicted.front().width(), set.predicted.front().height()}},
-        {"columns", columns},
-        {"directions", directions},
-        {"triangles", triangles},
-        {"edge_planes", planes},
-        {"rims", rims},
-        {"predicted", "data:image/png;base64," + base64(read_bytes(folder / "predicted.png"))},
-        {"relit", "data:image/png;base64," + base64(read_bytes(folder / "relit.png"))}};
-    if (!set.predicted_direct.empty())
-        data["predicted_direct"] = "data:image/png;base64," + base64(read_bytes(folder / "direct.png"));
-    write_text_file(folder / "data.js",
-                    "// Written by rfd simulate preview: what index.html's light control blends.\n"
-                    "window.RFD_PREVIEW = " + data.dump() + ";\n");
+    json = {{"design", data.design},
+            {"frame", data.frame},
+            {"max_angle_deg", data.max_angle_deg},
+            {"scale", data.scale},
+            {"tile", data.tile},
+            {"columns", data.columns},
+            {"directions", data.directions},
+            {"triangles", data.triangles},
+            {"edge_planes", data.edge_planes},
+            {"rims", rims},
+            {"predicted", data.predicted},
+            {"relit", data.relit}};
+    if (data.predicted_direct) json["predicted_direct"] = *data.predicted_direct;
+}
+
+void from_json(const nlohmann::json& json, PreviewData& data) {
+    json.at("design").get_to(data.design);
+    json.at("frame").get_to(data.frame);
+    json.at("max_angle_deg").get_to(data.max_angle_deg);
+    json.at("scale").get_to(data.scale);
+    json.at("tile").get_to(data.tile);
+    json.at("columns").get_to(data.columns);
+    json.at("directions").get_to(data.directions);
+    json.at("triangles").get_to(data.triangles);
+    json.at("edge_planes").get_to(data.edge_planes);
+    data.rims.clear();
+    for (const nlohmann::json& rim : json.at("rims")) {
+        const auto optional = [&](const char* key) {
+            return rim.at(key).is_null() ? std::nullopt : std::optional<double>(rim.at(key).get<double>());
+        };
+        data.rims.push_back({rim.at("phi_deg").get<double>(), optional("wrap_over_deg"), optional("crosstalk_deg")});
+    }
+    json.at("predicted").get_to(data.predicted);
+    json.at("relit").get_to(data.relit);
+    data.predicted_direct.reset();
+    if (json.contains("predicted_direct")) data.predicted_direct = json.at("predicted_direct").get<std::string>();
+}
+
+namespace {
+
+constexpr const char* kDataPrefix =
+    "// Written by rfd simulate preview: what index.html's light control blends.\nwindow.RFD_PREVIEW = ";
+
+std::array<double, 3> array_of(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+
+std::string png_uri(const fs::path& file) { return "data:image/png;base64," + base64(read_bytes(file)); }
+
+}  // namespace
+
+PreviewData write_preview_data(const predict::PreviewSet& set, const std::string& design_name, const fs::path& folder) {
+    ensure_directory(folder);
+    PreviewData data;
+    data.design = design_name;
+    data.max_angle_deg = set.max_angle_deg;
+    data.scale = set.scale;
+    data.tile = {set.predicted.front().width(), set.predicted.front().height()};
+    data.columns = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(set.directions.size()))));
+    write_image(folder / "predicted.png", tiled(set.predicted, data.columns));
+    write_image(folder / "relit.png", tiled(set.relit, data.columns));
+    if (!set.predicted_direct.empty()) write_image(folder / "direct.png", tiled(set.predicted_direct, data.columns));
+    for (const Eigen::Vector3d& d : set.directions) data.directions.push_back(array_of(d));
+    data.triangles = set.triangles;
+    for (const auto& planes : set.edge_planes)
+        data.edge_planes.push_back({array_of(planes[0]), array_of(planes[1]), array_of(planes[2])});
+    for (const predict::PreviewRim& rim : set.rims) data.rims.push_back({rim.phi_deg, rim.wrap_over_deg, rim.crosstalk_deg});
+    data.predicted = png_uri(folder / "predicted.png");
+    data.relit = png_uri(folder / "relit.png");
+    if (!set.predicted_direct.empty()) data.predicted_direct = png_uri(folder / "direct.png");
+    write_text_file(folder / "data.js", kDataPrefix + nlohmann::json(data).dump() + ";\n");
+    return data;
+}
+
+PreviewData read_preview_data(const fs::path& file) {
+    const std::string text = read_bytes(file);
+    const std::string prefix = kDataPrefix;
+    if (text.size() < prefix.size() + 2 || text.compare(0, prefix.size(), prefix) != 0 || !text.ends_with(";\n"))
+        throw InputError(SourceLocation{file.string()}, "not a preview's data.js (window.RFD_PREVIEW = {...};)");
+    try {
+        return nlohmann::json::parse(text.substr(prefix.size(), text.size() - prefix.size() - 2)).get<PreviewData>();
+    } catch (const nlohmann::json::exception& e) {
+        throw InputError(SourceLocation{file.string()}, std::string("not a preview's data.js: ") + e.what());
+    }
 }
 
 bool write_preview_assets(const fs::path& folder, const std::vector<fs::path>& stls) {

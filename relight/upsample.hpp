@@ -82,6 +82,11 @@
 // What each rule gains, with the commands that reproduce it: docs/results.md, "Feature-guided
 // upsampling" (the rules one by one, overlapping lights, time).
 //
+// The stages have their own headers, which include none above them: upsample_types.hpp
+// (the options and what the stages pass on), upsample_features.hpp (P, the shadow maps and
+// what carries a direction's features), upsample_highlights.hpp (masks, removal, half-way
+// layers, one-sided weights, glossy lobes), upsample_synthesis.hpp (the new images).
+//
 // Example: UpsampledField up = upsample_field(read_field("in"), 1, UpsampleOptions{});
 
 #include <cstddef>
@@ -93,102 +98,9 @@
 
 #include "core/image.hpp"
 #include "relight/field.hpp"
-#include "relight/image_priors.hpp"
+#include "relight/upsample_types.hpp"
 
 namespace rfd::relight {
-
-struct UpsampleOptions {
-    double f_highlight = 2.0;            ///< highlight where L >= f_highlight * P (thesis: 2 or 4)
-    double f_lit = 0.7;                  ///< region growing factor (thesis: 0.66..0.9; see above)
-    double percentile = 230.0 / 256.0;   ///< P's quantile (thesis: P_230 of 256)
-    int highlight_dilation = 5;          ///< box size growing M_i (1: none; odd)
-    int blur_neighbours = 1;             ///< directions averaged into S-bar (thesis: 10; see above)
-    int fit_neighbours = 16;             ///< inputs offered to the SH extrapolation
-    double blob_reach = 12.0;            ///< pixels a compact highlight may move and be matched (0: flow only)
-    int lobe_samples = 8;                ///< inputs a pixel's highlight must show in to be fitted as a lobe (0: off)
-    double lobe_spread_deg = 30.0;       ///< ... all of them within this angle of the lobe's axis
-    PriorOptions priors;                 ///< regularisation of uncertain pixels (iterations 0: off)
-};
-
-/// A binary map per pixel, row-major, 1 = lit.
-using ShadowMap = std::vector<std::uint8_t>;
-
-/// P: per pixel, the sample at index floor(quantile * n) (clamped to n - 1) of the n
-/// luminances sorted ascending. InputError for an empty list or quantile outside [0, 1].
-Image percentile_image(const std::vector<Image>& luminances, double quantile);
-
-/// M_i before dilation is L >= f_highlight * P and L > floor (floor keeps pixels that are
-/// black everywhere out); then dilated by a box of `dilation` pixels. Row-major 0/1.
-std::vector<std::uint8_t> highlight_mask(const Image& luminance, const Image& percentile,
-                                         double f_highlight, int dilation, float floor);
-
-/// D_i: `image` with `mask` filled in by inpainting from its surroundings (radius 3).
-Image remove_highlights(const Image& image, const std::vector<std::uint8_t>& mask);
-
-/// S_i for every direction: lit where the prefiltered luminance >= P, then region growing
-/// over `neighbours` (one-ring lists per direction) with factor f_lit.
-std::vector<ShadowMap> shadow_maps(const std::vector<Image>& prefiltered_luminances,
-                                   const Image& percentile,
-                                   const std::vector<std::vector<std::size_t>>& neighbours,
-                                   double f_lit);
-
-/// H_k half-way between two highlight layers of the same shape. Connected highlights that
-/// are each other's nearest (by energy centroid) within `blob_reach` pixels, within a
-/// factor 4 in energy and of the same shape (moved by the offset of their centroids, the one
-/// shares at least half its energy with the other, both blurred by a 3 x 3 box) are moved
-/// rigidly half-way, each with half its energy; a highlight that splits, merges or bends
-/// (a glossy streak over a curved surface) goes to the flow instead. A highlight
-/// with nothing of the other layer within `blob_reach` pixels of its bounding box is seen
-/// from one side only and stays in place, times `one_sided_weight`. The rest goes by
-/// optical flow both ways; a flow layer without a partner layer is also scaled by
-/// `one_sided_weight`. With `lights_overlap` (the two lights' discs overlap), a rest that
-/// the flow, carried all the way, lays onto the other layer no closer than it lies unmoved
-/// stays in place instead, pixel by pixel: the mean where both layers are lit, times
-/// `one_sided_weight` where one is. An empty image stands for a layer without highlights;
-/// returns empty when both are.
-Image halfway_highlights(const Image& first, const Image& second, double blob_reach = 12.0,
-                         double one_sided_weight = 0.5, bool lights_overlap = false);
-
-/// The share of a highlight seen at one light direction that a direction `distance` radians
-/// away still shows, when both are lights of angular radius `kernel_radius` and the
-/// highlight is a mirror reflection (a point in light space somewhere inside the first
-/// disc): the overlap of the two discs over the area of one (small-angle, planar), 1 at 0
-/// and 0 from 2 * kernel_radius on. A point light (radius 0) shares nothing.
-double one_sided_highlight_weight(double distance, double kernel_radius);
-
-/// The share of a mirror highlight lit at one end of an edge `edge` radians long and not at
-/// the other that the edge's midpoint still shows, for lights of angular radius
-/// `kernel_radius`: of the part of the one end's disc outside the other's, what the
-/// midpoint's disc covers, (f(edge / 2) - f(edge)) / (1 - f(edge)) with f =
-/// one_sided_highlight_weight (the lens of the two discs lies inside the midpoint's). It is
-/// f(edge / 2) where the discs do not overlap (edge >= 2 kernel_radius), tends to 1/2,
-/// blending's weight, as the edge shrinks, and is 0 for point lights.
-double midpoint_highlight_weight(double edge, double kernel_radius);
-
-/// One pixel's highlight as a function of the light direction l: a von Mises-Fisher lobe
-/// h(l) = exp(log_scale + sharpness_axis . l), with axis sharpness_axis / |sharpness_axis|.
-struct HighlightLobe {
-    double log_scale = 0.0;
-    Eigen::Vector3d sharpness_axis = Eigen::Vector3d::Zero();
-    double brightest = 0.0;  ///< the largest sample fitted; the lobe is capped at twice this
-
-    double operator()(const Eigen::Vector3d& light) const;
-    /// sigma of the lobe near its axis (radians): exp(k (cos t - 1)) ~ exp(-t^2 / (2 sigma^2))
-    /// with sigma = 1 / sqrt(k), k = |sharpness_axis|.
-    double angular_width() const;
-};
-
-/// Fits a lobe to one pixel's highlight samples (unit light directions, values > 0; others
-/// are skipped): least squares on log h, weighted by h so that the peak counts most.
-/// nullopt for fewer than `min_samples` samples (at least 4, the lobe's parameters), a lobe
-/// flatter than sharpness 1, or a sample farther than `max_spread` radians from the fitted
-/// axis (two highlights, or a caustic, at one pixel).
-std::optional<HighlightLobe> fit_highlight_lobe(const std::vector<Eigen::Vector3d>& directions,
-                                                const std::vector<double>& values, std::size_t min_samples,
-                                                double max_spread);
-
-/// S_k half-way between two shadow maps of width x height, by level-set blending.
-ShadowMap halfway_shadow_map(const ShadowMap& first, const ShadowMap& second, int width, int height);
 
 struct UpsampleStatistics {
     std::size_t inputs = 0;

@@ -10,7 +10,6 @@
 
 #include "core/error.hpp"
 #include "core/parallel.hpp"
-#include "relight/upsample.hpp"
 #include "relight/vision.hpp"
 
 namespace rfd::relight {

@@ -1,6 +1,6 @@
 #pragma once
-// Internal to relight/upsample*.cpp, not part of rfd_relight's interface (that is
-// relight/upsample.hpp): what the stages of the upsampling pipeline share. The node that
+// The semantics stage of feature-guided upsampling (relight/upsample.hpp): P and the shadow
+// maps, public for their tests. Then, internal to relight/upsample*.cpp: the node that
 // carries a direction's features from level to level, and the image and optical-flow
 // helpers both features (highlights and shadows) are moved with.
 
@@ -13,8 +13,26 @@
 #include <Eigen/Core>
 
 #include "core/image.hpp"
-#include "relight/upsample.hpp"
+#include "relight/upsample_types.hpp"
 #include "relight/vision.hpp"
+
+namespace rfd::relight {
+
+/// P: per pixel, the sample at index floor(quantile * n) (clamped to n - 1) of the n
+/// luminances sorted ascending. InputError for an empty list or quantile outside [0, 1].
+Image percentile_image(const std::vector<Image>& luminances, double quantile);
+
+/// S_i for every direction: lit where the prefiltered luminance >= P, then region growing
+/// over `neighbours` (one-ring lists per direction) with factor f_lit.
+std::vector<ShadowMap> shadow_maps(const std::vector<Image>& prefiltered_luminances,
+                                   const Image& percentile,
+                                   const std::vector<std::vector<std::size_t>>& neighbours,
+                                   double f_lit);
+
+/// S_k half-way between two shadow maps of width x height, by level-set blending.
+ShadowMap halfway_shadow_map(const ShadowMap& first, const ShadowMap& second, int width, int height);
+
+}  // namespace rfd::relight
 
 namespace rfd::relight::upsampling {
 

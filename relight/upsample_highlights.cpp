@@ -19,7 +19,6 @@
 #include "core/parallel.hpp"
 #include "core/sphere.hpp"
 #include "core/units.hpp"
-#include "relight/upsample.hpp"
 #include "relight/upsample_features.hpp"
 #include "relight/vision.hpp"
 

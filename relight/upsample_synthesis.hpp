@@ -10,7 +10,7 @@
 #include "core/image.hpp"
 #include "relight/field.hpp"
 #include "relight/interpolation.hpp"
-#include "relight/upsample.hpp"
+#include "relight/upsample_types.hpp"
 #include "relight/upsample_features.hpp"
 
 namespace rfd::relight::upsampling {

@@ -3,11 +3,13 @@
 // stand-in runner whose outputs depend on exactly the files a step names.
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <deque>
 #include <fstream>
 #include <iterator>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <type_traits>
@@ -15,6 +17,7 @@
 #include <string>
 
 #include <gmock/gmock.h>
+#include <nlohmann/json.hpp>
 #include <gtest/gtest.h>
 
 #include "core/error.hpp"
@@ -22,6 +25,7 @@
 #include "core/image.hpp"
 #include "project/make.hpp"
 #include "project/manifest.hpp"
+#include "project/preview.hpp"
 #include "project/project.hpp"
 #include "relight/field.hpp"
 #include "tests/support/error_of.hpp"
@@ -228,6 +232,47 @@ TEST(ProjectFile, DeclaredKeysTakeTheirOptionsRange) {
     // Below the preview's own range, 0 still turns its light control off.
     EXPECT_EQ(error_for("make", "preview_lights", "0"), "");
     EXPECT_EQ(load_project(dir / "p.toml").outputs.preview_lights, 0);
+}
+
+// data.js is a contract with the page: what write_preview_data writes reads back as the
+// same struct, with the set's directions, triangles and rims, and a file that is not one is
+// refused naming it.
+TEST(PreviewData, RoundTripsThroughDataJs) {
+    TempDir dir;
+    predict::PreviewSet set;
+    set.directions = {Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(0.1, 0, 0.995).normalized(),
+                      Eigen::Vector3d(0, 0.1, 0.995).normalized()};
+    for (std::size_t k = 0; k < set.directions.size(); ++k) {
+        set.predicted.push_back(Image(2, 3, 3, 0.25f * static_cast<float>(k)));
+        set.relit.push_back(Image(2, 3, 3, 0.5f));
+    }
+    set.scale = 1.5;
+    set.max_angle_deg = 8.0;
+    set.triangles = {{0, 1, 2}};
+    set.edge_planes = {{Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(0, 1, 0), Eigen::Vector3d(0, 0, 1)}};
+    set.rims = {{0.0, 12.5, std::nullopt}, {15.0, std::nullopt, 9.25}};
+    for (const bool direct : {false, true}) {
+        if (direct) set.predicted_direct = set.predicted;
+        const PreviewData written = write_preview_data(set, "a design", dir / "preview");
+        const PreviewData read = read_preview_data(dir / "preview" / "data.js");
+        EXPECT_EQ(nlohmann::json(read), nlohmann::json(written));
+        EXPECT_EQ(read.design, "a design");
+        ASSERT_EQ(read.directions.size(), set.directions.size());
+        for (std::size_t k = 0; k < set.directions.size(); ++k)
+            for (int i = 0; i < 3; ++i) EXPECT_EQ(read.directions[k][i], set.directions[k][i]);
+        EXPECT_EQ(read.triangles, set.triangles);
+        EXPECT_EQ(read.tile, (std::array<int, 2>{2, 3}));
+        EXPECT_EQ(read.columns, 2);  // ceil(sqrt(3))
+        ASSERT_EQ(read.rims.size(), 2u);
+        EXPECT_EQ(read.rims[0].wrap_over_deg, std::optional<double>(12.5));
+        EXPECT_FALSE(read.rims[0].crosstalk_deg);
+        EXPECT_EQ(read.rims[1].crosstalk_deg, std::optional<double>(9.25));
+        EXPECT_TRUE(read.predicted.starts_with("data:image/png;base64,"));
+        EXPECT_EQ(read.predicted_direct.has_value(), direct);
+    }
+    write(dir / "other.js", "window.SOMETHING = {};\n");
+    EXPECT_THAT(error_of([&] { read_preview_data(dir / "other.js"); }),
+                AllOf(HasSubstr("other.js"), HasSubstr("not a preview's data.js")));
 }
 
 TEST(ProjectPlan, EveryStepReadsOnlyWhatEarlierStepsOrTheUserMade) {

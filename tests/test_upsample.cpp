@@ -19,6 +19,8 @@
 #include "core/units.hpp"
 #include "relight/interpolation.hpp"
 #include "relight/upsample.hpp"
+#include "relight/upsample_features.hpp"
+#include "relight/upsample_highlights.hpp"
 
 namespace rfd::relight {
 namespace {
