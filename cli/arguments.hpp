@@ -12,6 +12,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "core/json.hpp"
 #include "core/options.hpp"
 #include "optics/design.hpp"
 #include "optics/display.hpp"
@@ -26,17 +27,6 @@
 #include "relight/scene.hpp"
 
 namespace rfd::cli {
-
-/// A value for a JSON report, null when there is none.
-inline nlohmann::json json_or_null(const std::optional<double>& value) {
-    return value ? nlohmann::json(*value) : nlohmann::json();
-}
-
-/// A figure for a JSON report, null when not finite: JSON cannot hold infinity (a PSNR of
-/// a perfect match) or NaN.
-inline nlohmann::json finite_or_null(double value) {
-    return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
-}
 
 /// MIN <= value <= MAX, with a message that names both ends as a user would write them
 /// (CLI::Range prints 0.000001 to 1000000.000000).

@@ -16,6 +16,7 @@
 
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
+#include "core/json.hpp"
 #include "core/text.hpp"
 #include "core/csv.hpp"
 #include "core/error.hpp"
@@ -31,11 +32,6 @@
 
 namespace rfd::cli {
 namespace {
-
-// JSON has no infinity: a perfect match is reported as null.
-nlohmann::json finite_or_null(double value) {
-    return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
-}
 
 void add_render(CLI::App& relight) {
     auto* cmd = relight.add_subcommand("render", "Relight a reflectance field under distant lights or an environment map");

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <random>
 
+#include "core/json.hpp"
 #include "core/error.hpp"
 #include "core/files.hpp"
 #include "core/plot.hpp"
@@ -13,14 +14,6 @@
 #include "core/units.hpp"
 
 namespace rfd::optics {
-namespace {
-
-nlohmann::json json_or_null(const std::optional<double>& value) {
-    return value ? nlohmann::json(*value) : nlohmann::json();
-}
-
-}  // namespace
-
 Chart accuracy_chart(const DesignOptics& optics, double phi, const std::string& name,
                      double max_angle_deg, int steps) {
     Chart chart;

@@ -6,6 +6,7 @@
 #include <numeric>
 #include <span>
 
+#include "core/json.hpp"
 #include "core/csv.hpp"
 #include "core/error.hpp"
 #include "core/files.hpp"
@@ -30,9 +31,6 @@ double mean_of(const std::vector<double>& values) {
         if (std::isfinite(v)) sum += v, ++count;
     return count ? sum / count : std::nan("");
 }
-
-// JSON cannot hold NaN or infinity: null instead.
-nlohmann::json finite_or_null(double value) { return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(); }
 
 // The directions to fit: the nodes' own (weighted by the solid angle each stands for), or a
 // light file's inside the field of view, equally weighted.

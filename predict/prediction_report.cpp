@@ -4,15 +4,12 @@
 #include <cmath>
 #include <cstdio>
 
+#include "core/json.hpp"
 #include "core/text.hpp"
 #include "core/units.hpp"
 
 namespace rfd::predict {
 namespace {
-
-nlohmann::json json_or_null(const std::optional<double>& value) {
-    return value ? nlohmann::json(*value) : nlohmann::json();
-}
 
 nlohmann::json light_checks_json(const std::vector<LightCheck>& checks) {
     nlohmann::json out = nlohmann::json::array();

@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/json.hpp"
 #include "core/error.hpp"
 #include "core/files.hpp"
 #include "core/image_io.hpp"
@@ -21,10 +22,6 @@ std::string read_bytes(const fs::path& file) {
     std::ifstream in(file, std::ios::binary);
     if (!in) throw IoError(SourceLocation{file.string()}, "cannot read");
     return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-nlohmann::json optional_json(const std::optional<double>& value) {
-    return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
 }
 
 // The directory of Debian's three.js (libjs-three), or empty.
@@ -58,8 +55,8 @@ void to_json(nlohmann::json& json, const PreviewData& data) {
     nlohmann::json rims = nlohmann::json::array();
     for (const PreviewData::Rim& rim : data.rims)
         rims.push_back({{"phi_deg", rim.phi_deg},
-                        {"wrap_over_deg", optional_json(rim.wrap_over_deg)},
-                        {"crosstalk_deg", optional_json(rim.crosstalk_deg)}});
+                        {"wrap_over_deg", json_or_null(rim.wrap_over_deg)},
+                        {"crosstalk_deg", json_or_null(rim.crosstalk_deg)}});
     json = {{"design", data.design},
             {"frame", data.frame},
             {"max_angle_deg", data.max_angle_deg},
