@@ -317,7 +317,10 @@ ImplicitModel train_implicit(const std::vector<Image>& probes) {
             ImplicitModel::Channel& pca = model.pca[c];
             pca.mean = a.rowwise().mean();
             a.colwise() -= pca.mean;
-            const Eigen::BDCSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeThinU | Eigen::ComputeThinV);
+            // Jacobi rather than divide-and-conquer (BDCSVD): as accurate or more, fast enough
+            // for a few hundred probes, and a third of the compile time (BDCSVD alone took 37 s
+            // of this file's build, 94 s under the sanitizers).
+            const Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeThinU | Eigen::ComputeThinV);
             const Eigen::VectorXd& w = svd.singularValues();
             // Directions the probes do not vary along (the centring removes one) carry no
             // light: dropped, so that eta = 0 is the pseudo-inverse rather than a division by 0.
