@@ -180,4 +180,6 @@ ExclusiveLock::~ExclusiveLock() {
     if (descriptor_ >= 0) close(descriptor_);  // closing releases the lock
 }
 
+SourceLocation line_in(const std::filesystem::path& path, int line) { return SourceLocation{path.string(), line, 0, ""}; }
+
 }  // namespace rfd

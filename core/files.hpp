@@ -7,7 +7,12 @@
 #include <ostream>
 #include <string>
 
+#include "core/error.hpp"
+
 namespace rfd {
+
+/// Line `line` (1-based) of `path`: where a reader of line-oriented files found an error.
+SourceLocation line_in(const std::filesystem::path& path, int line);
 
 /// Writes `path` through `write`, atomically. Throws IoError naming the path when the
 /// directory is missing or unwritable, or when the stream fails; `path` is then untouched.

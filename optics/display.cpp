@@ -11,17 +11,13 @@
 #include "core/error.hpp"
 #include "core/parallel.hpp"
 #include "core/sequence.hpp"
+#include "optics/cell_crossing.hpp"
 #include "optics/exact.hpp"
 #include "optics/paraxial.hpp"
 
 namespace rfd::optics {
 namespace {
 
-// A ray that leaves its lenslet is restarted at the surface where it left, now in the
-// lenslet it crossed into; each restart is one more cell boundary crossed.
-constexpr int kMaxCrossings = 4;
-// How far before a surface a restarted exact ray begins, mm: clear of its own surface.
-constexpr double kRestartBackoff = 1e-7;
 // Lenslets per side of the reference array the rays are traced through: a ray that crosses
 // kMaxCrossings cells from its centre lenslet still meets lenslets there.
 constexpr int kReferenceCells = 2 * (kMaxCrossings + 2) + 1;

@@ -10,16 +10,13 @@
 #include "core/parallel.hpp"
 #include "core/progress.hpp"
 #include "core/units.hpp"
+#include "optics/cell_crossing.hpp"
 #include "optics/exact.hpp"
 #include "optics/paraxial.hpp"
 
 namespace rfd::optics {
 namespace {
 
-// A ray that leaves its lenslet on D or E is restarted at the surface where it left, in
-// the lenslet it crossed into (as in display.cpp); each restart is one more cell crossed.
-constexpr int kMaxCrossings = 4;
-constexpr double kRestartBackoff = 1e-7;  // mm before the surface an exact restart begins
 // Exact rays start this far (mm, along z) in front of the main lens's vertex plane: its
 // front bulges toward the light, so every point of it lies behind that plane.
 constexpr double kLeadIn = 2.0;

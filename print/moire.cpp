@@ -18,7 +18,7 @@ namespace {
 
 constexpr double kLabelColumn = 36.0;  // mm left of the bands for their labels
 constexpr double kBandGap = 3.0;       // mm
-constexpr double kHeader = 16.0;       // mm for the instructions at the top of each page
+constexpr double kMoireHeader = 16.0;       // mm for the instructions at the top of each page
 
 const optics::Lattice& array_lattice(const optics::Design& design) {
     const optics::Plane& pattern = design.pattern_plane();
@@ -84,7 +84,7 @@ std::vector<MoireBand> write_moire_pdf(const std::filesystem::path& out, const o
     const double band_left = paper.margin + kLabelColumn;
     const double band_width = std::min(2.0 * lattice.half_extent().x(), paper.width - paper.margin - band_left);
     const double band_height = std::max({options.band_height, 4.0 * options.x.to, 4.0 * y_range.to * row_factor});
-    const double usable = paper.height - 2 * paper.margin - kHeader;
+    const double usable = paper.height - 2 * paper.margin - kMoireHeader;
     const int per_page = static_cast<int>(std::floor((usable + kBandGap) / (band_height + kBandGap)));
     if (per_page < 1 || band_width < 4.0 * options.x.to)
         throw InputError(SourceLocation{printer.file, 0, 0, "paper"},
@@ -96,7 +96,7 @@ std::vector<MoireBand> write_moire_pdf(const std::filesystem::path& out, const o
     for (const double p : y_range.values()) bands.push_back({false, p, p * row_factor, 0, 0.0});
     for (std::size_t k = 0; k < bands.size(); ++k) {
         bands[k].page = static_cast<int>(k) / per_page;
-        bands[k].top = paper.margin + kHeader + (static_cast<int>(k) % per_page) * (band_height + kBandGap);
+        bands[k].top = paper.margin + kMoireHeader + (static_cast<int>(k) % per_page) * (band_height + kBandGap);
     }
 
     const int pages = bands.back().page + 1;

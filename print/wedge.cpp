@@ -18,7 +18,7 @@ namespace {
 constexpr double kPatch = 16.0;   // mm, side of a patch
 constexpr double kGap = 4.0;      // mm between patches, across
 constexpr double kLabel = 10.0;   // mm below a patch for its label
-constexpr double kHeader = 20.0;  // mm for the instructions at the top of each page
+constexpr double kWedgeHeader = 20.0;  // mm for the instructions at the top of each page
 
 // One patch: a 1 x 1 image of `code` on every channel, drawn over the square without
 // smoothing, the way sheets draw patterns.
@@ -63,7 +63,7 @@ std::vector<WedgePatch> write_wedge_pdf(const std::filesystem::path& out, const 
     std::vector<WedgePatch> patches = wedge_patches(printer, steps);
     const Paper& paper = printer.paper;
     const int columns = static_cast<int>(std::floor((paper.width - 2 * paper.margin + kGap) / (kPatch + kGap)));
-    const int rows = static_cast<int>(std::floor((paper.height - 2 * paper.margin - kHeader) / (kPatch + kLabel)));
+    const int rows = static_cast<int>(std::floor((paper.height - 2 * paper.margin - kWedgeHeader) / (kPatch + kLabel)));
     if (columns < 1 || rows < 1)
         throw InputError(SourceLocation{printer.file, 0, 0, "paper"},
                          "a wedge patch (" + format_number(kPatch) + " mm and its label) does not fit the printable "
@@ -72,7 +72,7 @@ std::vector<WedgePatch> write_wedge_pdf(const std::filesystem::path& out, const 
         const int slot = static_cast<int>(k);
         patches[k].page = slot / (columns * rows);
         patches[k].left = paper.margin + (slot % columns) * (kPatch + kGap);
-        patches[k].top = paper.margin + kHeader + ((slot / columns) % rows) * (kPatch + kLabel);
+        patches[k].top = paper.margin + kWedgeHeader + ((slot / columns) % rows) * (kPatch + kLabel);
     }
 
     const int pages = patches.back().page + 1;

@@ -21,10 +21,6 @@
 namespace rfd::relight {
 namespace {
 
-SourceLocation at(const std::filesystem::path& path, int line) {
-    return SourceLocation{path.string(), line, 0, ""};
-}
-
 // The file name at the start of a light file's line, and the rest: the name's first word
 // and every following word that is not a number (names with spaces, as Windows tools
 // write them), kept with their spacing.
@@ -81,7 +77,7 @@ std::vector<LightEntry> read_light_file(const std::filesystem::path& lp_path) {
         if (declared < 0) {
             std::string extra;
             if (!(fields >> declared) || declared < 0 || (fields >> extra))
-                throw InputError(at(lp_path, line_number),
+                throw InputError(line_in(lp_path, line_number),
                                  "expected the image count (a non-negative integer), got '" +
                                      line + "'");
             continue;
@@ -93,26 +89,26 @@ std::vector<LightEntry> read_light_file(const std::filesystem::path& lp_path) {
         fields = std::istringstream(rest);
         double x = 0, y = 0, z = 0;
         if (!(fields >> x >> y >> z))
-            throw InputError(at(lp_path, line_number),
+            throw InputError(line_in(lp_path, line_number),
                              "expected 'filename x y z [kernel_degrees]', got '" + line + "'");
         double kernel_degrees = 0.0;
         if (fields >> kernel_degrees) {
             if (!(kernel_degrees >= 0.0 && kernel_degrees < 180.0))
-                throw InputError(at(lp_path, line_number),
+                throw InputError(line_in(lp_path, line_number),
                                  "kernel radius must be in [0, 180) degrees, got " +
                                      std::to_string(kernel_degrees));
         } else if (!fields.eof()) {
-            throw InputError(at(lp_path, line_number),
+            throw InputError(line_in(lp_path, line_number),
                              "the fifth value (kernel radius in degrees) is not a number");
         }
         std::string extra;
         fields.clear();
         if (fields >> extra)
-            throw InputError(at(lp_path, line_number), "unexpected extra value '" + extra + "'");
+            throw InputError(line_in(lp_path, line_number), "unexpected extra value '" + extra + "'");
         const Eigen::Vector3d d(x, y, z);
         const double length = d.norm();
         if (!std::isfinite(length) || length < 1e-12)
-            throw InputError(at(lp_path, line_number),
+            throw InputError(line_in(lp_path, line_number),
                              "light direction (" + std::to_string(x) + ", " + std::to_string(y) +
                                  ", " + std::to_string(z) + ") has zero length");
         // Unit directions are kept bit for bit, so a written field reads back identically.
@@ -127,9 +123,9 @@ std::vector<LightEntry> read_light_file(const std::filesystem::path& lp_path) {
                        "file name from " + (entries.front().path.parent_path().filename() == "jpeg-exports"
                                                 ? std::string("its jpeg-exports/ folder")
                                                 : std::string("its folder")));
-    if (declared < 0) throw InputError(at(lp_path, line_number), "light file is empty");
+    if (declared < 0) throw InputError(line_in(lp_path, line_number), "light file is empty");
     if (static_cast<long>(entries.size()) != declared)
-        throw InputError(at(lp_path, 1), "declares " + std::to_string(declared) +
+        throw InputError(line_in(lp_path, 1), "declares " + std::to_string(declared) +
                                              " images but lists " +
                                              std::to_string(entries.size()));
     return entries;
@@ -161,13 +157,13 @@ void check_field_images(const std::filesystem::path& lp_path, const std::vector<
     for (const LightEntry& entry : entries) {
         std::error_code ec;
         if (std::filesystem::exists(entry.path, ec) && !std::filesystem::is_regular_file(entry.path, ec))
-            throw InputError(at(lp_path, entry.line),
+            throw InputError(line_in(lp_path, entry.line),
                              "image '" + entry.file + "' (" + entry.path.string() + ") is not a regular file");
         ImageSize size;
         try {
             size = read_image_size(entry.path);
         } catch (const Error& error) {
-            rethrow_at(error, at(lp_path, entry.line), "image '" + entry.file + "': " + error.what());
+            rethrow_at(error, line_in(lp_path, entry.line), "image '" + entry.file + "': " + error.what());
         }
         const auto text = [](const ImageSize& s) {
             return std::to_string(s.width) + " x " + std::to_string(s.height) + " pixels, " +
@@ -175,7 +171,7 @@ void check_field_images(const std::filesystem::path& lp_path, const std::vector<
         };
         if (&entry == &entries.front()) first = size;
         else if (size.width != first.width || size.height != first.height || size.channels != first.channels)
-            throw InputError(at(lp_path, entry.line), "image '" + entry.file + "' is " + text(size) +
+            throw InputError(line_in(lp_path, entry.line), "image '" + entry.file + "' is " + text(size) +
                                                           ", the field's first image '" + entries.front().file +
                                                           "' is " + text(first));
     }
@@ -247,7 +243,7 @@ Image apply_window(const Image& image, const ImageWindow& window, const std::str
 ReflectanceField read_field(const std::filesystem::path& field_path, const ImageWindow& window) {
     const std::filesystem::path lp = light_file_of(field_path);
     const std::vector<LightEntry> entries = read_light_file(lp);
-    if (entries.empty()) throw InputError(at(lp, 1), "a field needs at least one image");
+    if (entries.empty()) throw InputError(line_in(lp, 1), "a field needs at least one image");
     check_field_images(lp, entries);
     ReflectanceField field;
     bool any_kernel = false;
@@ -256,11 +252,11 @@ ReflectanceField read_field(const std::filesystem::path& field_path, const Image
         try {
             image = apply_window(read_image(entry.path), window, entry.path.string());
         } catch (const Error& error) {
-            rethrow_at(error, at(lp, entry.line), std::string("image '") + entry.file + "': " + error.what());
+            rethrow_at(error, line_in(lp, entry.line), std::string("image '") + entry.file + "': " + error.what());
         }
         if (!field.images.empty() && !image.same_shape(field.images.front())) {
             const Image& first = field.images.front();
-            throw InputError(at(lp, entry.line),
+            throw InputError(line_in(lp, entry.line),
                              "image '" + entry.file + "' is " + std::to_string(image.width()) +
                                  "x" + std::to_string(image.height()) + "x" +
                                  std::to_string(image.channels()) + ", the first image is " +

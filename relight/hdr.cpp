@@ -108,10 +108,6 @@ bool any_unclipped(const Bracket& bracket) {
                      "in every exposure: nothing left to measure (add shorter or longer exposures)");
 }
 
-SourceLocation at(const std::filesystem::path& path, int line) {
-    return SourceLocation{path.string(), line, 0, ""};
-}
-
 }  // namespace
 
 CodeImage read_code_image(const std::filesystem::path& path) {
@@ -328,13 +324,13 @@ CameraResponse read_response(const std::filesystem::path& path) {
         if (line.empty() || line.front() == '#') continue;
         if (!header) {
             if (line != kResponseHeader)
-                throw InputError(at(path, line_number), "expected the header '" + std::string(kResponseHeader) +
+                throw InputError(line_in(path, line_number), "expected the header '" + std::string(kResponseHeader) +
                                                             "', got '" + line + "'");
             header = true;
             continue;
         }
         if (code == kCodeCount)
-            throw InputError(at(path, line_number), "more than 256 codes: unexpected '" + line + "'");
+            throw InputError(line_in(path, line_number), "more than 256 codes: unexpected '" + line + "'");
         // Four comma-separated numbers: the code, then g for red, green, blue.
         std::array<double, 4> values{};
         const char* p = line.data();
@@ -343,25 +339,25 @@ CameraResponse read_response(const std::filesystem::path& path) {
             const auto [next, ec] = std::from_chars(p, end, values[k]);
             const bool separator_ok = k + 1 < values.size() ? (next != end && *next == ',') : next == end;
             if (ec != std::errc() || !separator_ok)
-                throw InputError(at(path, line_number),
+                throw InputError(line_in(path, line_number),
                                  "expected 'code,red,green,blue' (four numbers), got '" + line + "'");
             p = next + 1;
         }
         if (values[0] != code)
-            throw InputError(at(path, line_number), "expected code " + std::to_string(code) + ", got '" + line + "'");
+            throw InputError(line_in(path, line_number), "expected code " + std::to_string(code) + ", got '" + line + "'");
         for (int c = 0; c < 3; ++c) {
             const double g = values[static_cast<std::size_t>(c) + 1];
             if (!(std::isfinite(g) && g >= 0.0 && g <= 3.0e38))
-                throw InputError(at(path, line_number), std::string(kChannelNames[c]) +
+                throw InputError(line_in(path, line_number), std::string(kChannelNames[c]) +
                                                             ": expected a finite, non-negative exposure, got '" +
                                                             line + "'");
             response.channels[c][code] = static_cast<float>(g);
         }
         ++code;
     }
-    if (!header) throw InputError(at(path, line_number), "no header line '" + std::string(kResponseHeader) + "'");
+    if (!header) throw InputError(line_in(path, line_number), "no header line '" + std::string(kResponseHeader) + "'");
     if (code != kCodeCount)
-        throw InputError(at(path, line_number),
+        throw InputError(line_in(path, line_number),
                          "expected 256 codes (0..255), the file ends after " + std::to_string(code));
     for (int c = 0; c < 3; ++c)
         if (std::all_of(response.channels[c].begin(), response.channels[c].end(), [](float g) { return g == 0.0f; }))

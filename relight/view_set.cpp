@@ -14,10 +14,6 @@
 namespace rfd::relight {
 namespace {
 
-SourceLocation at(const std::filesystem::path& path, int line) {
-    return SourceLocation{path.string(), line, 0, ""};
-}
-
 std::string size_text(const ReflectanceField& field) {
     return std::to_string(field.width()) + " x " + std::to_string(field.height()) + " x " +
            std::to_string(field.channels());
@@ -40,7 +36,7 @@ std::vector<ViewEntry> read_view_file(const std::filesystem::path& path) {
         if (declared < 0) {
             std::string extra;
             if (!(fields >> declared) || declared < 1 || (fields >> extra))
-                throw InputError(at(path, line_number),
+                throw InputError(line_in(path, line_number),
                                  "expected the view count (a positive integer), got '" + line + "'");
             count_line = line_number;
             continue;
@@ -50,24 +46,24 @@ std::vector<ViewEntry> read_view_file(const std::filesystem::path& path) {
         std::vector<double> numbers;
         std::string token;
         if (!(fields >> view.folder))
-            throw InputError(at(path, line_number), "expected 'folder x y z [9 rotation numbers]'");
+            throw InputError(line_in(path, line_number), "expected 'folder x y z [9 rotation numbers]'");
         while (fields >> token) {
             char* end = nullptr;
             const double value = std::strtod(token.c_str(), &end);
             if (end == token.c_str() || *end != '\0' || !std::isfinite(value))
-                throw InputError(at(path, line_number), "'" + token + "' is not a number");
+                throw InputError(line_in(path, line_number), "'" + token + "' is not a number");
             numbers.push_back(value);
         }
         if (numbers.size() != 3 && numbers.size() != 12)
-            throw InputError(at(path, line_number),
+            throw InputError(line_in(path, line_number),
                              "expected 'folder x y z' or 'folder x y z' and 9 rotation numbers, got " +
                                  std::to_string(numbers.size()) + " number(s)");
         const Eigen::Vector3d d(numbers[0], numbers[1], numbers[2]);
         if (d.norm() < 1e-12)
-            throw InputError(at(path, line_number), "view direction has zero length");
+            throw InputError(line_in(path, line_number), "view direction has zero length");
         view.direction = d.normalized();
         if (!(view.direction.z() > 0.0))
-            throw InputError(at(path, line_number),
+            throw InputError(line_in(path, line_number),
                              "view direction must point to the display's front (z > 0)");
         if (numbers.size() == 12) {
             for (int r = 0; r < 3; ++r)
@@ -75,13 +71,13 @@ std::vector<ViewEntry> read_view_file(const std::filesystem::path& path) {
             const double error = (view.to_display * view.to_display.transpose() -
                                   Eigen::Matrix3d::Identity()).norm();
             if (!(error < 1e-4) || !(view.to_display.determinant() > 0.0))
-                throw InputError(at(path, line_number), "the 9 numbers are not a rotation matrix");
+                throw InputError(line_in(path, line_number), "the 9 numbers are not a rotation matrix");
         }
         views.push_back(view);
     }
-    if (declared < 0) throw InputError(at(path, line_number), "empty view file: expected the view count");
+    if (declared < 0) throw InputError(line_in(path, line_number), "empty view file: expected the view count");
     if (static_cast<long>(views.size()) != declared)
-        throw InputError(at(path, count_line), "the file declares " + std::to_string(declared) +
+        throw InputError(line_in(path, count_line), "the file declares " + std::to_string(declared) +
                                                    " view(s) but lists " + std::to_string(views.size()));
     return views;
 }
@@ -121,16 +117,16 @@ ViewSet read_view_set(const std::filesystem::path& set_path, const ImageWindow& 
     for (const ViewEntry& view : set.views) {
         const std::filesystem::path folder = base / view.folder;
         if (!std::filesystem::is_directory(folder))
-            throw IoError(at(set.file, view.line), "view folder '" + folder.string() + "' does not exist");
+            throw IoError(line_in(set.file, view.line), "view folder '" + folder.string() + "' does not exist");
         ReflectanceField field = read_field(folder, window);
         if (field.size() == 0)
-            throw InputError(at(set.file, view.line), "view '" + view.folder + "' has no images");
+            throw InputError(line_in(set.file, view.line), "view '" + view.folder + "' has no images");
         for (auto& d : field.directions) d = (view.to_display * d).normalized();
         if (!set.fields.empty()) {
             const ReflectanceField& first = set.fields.front();
             if (field.width() != first.width() || field.height() != first.height() ||
                 field.channels() != first.channels())
-                throw InputError(at(set.file, view.line),
+                throw InputError(line_in(set.file, view.line),
                                  "view '" + view.folder + "' has images of " + size_text(field) +
                                      " but view '" + set.views.front().folder + "' has " + size_text(first) +
                                      " (width x height x channels): all views must match");
