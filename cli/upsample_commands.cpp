@@ -32,41 +32,18 @@ void add_upsample_command(CLI::App& relight) {
                     "so far); 1 or 2 are typical")
         ->capture_default_str();
     cmd->add_option("--out", opt->out, "Folder for the upsampled field: the inputs, then the new images")->required();
-    cmd->add_option("--f-highlight", opt->upsample.f_highlight,
-                    "A pixel is a highlight where it is this many times its percentile level (thesis: 2 or 4)")
-        ->capture_default_str();
-    cmd->add_option("--f-lit", opt->upsample.f_lit,
-                    "Shadow region growing: a neighbouring direction stays lit while it keeps this fraction of the "
-                    "light (thesis: 0.66 to 0.9)")
-        ->capture_default_str();
-    cmd->add_option("--percentile", opt->upsample.percentile,
-                    "Quantile of a pixel over all directions that is neither highlight nor shadow (230/256)")
-        ->capture_default_str();
-    cmd->add_option("--dilation", opt->upsample.highlight_dilation, "Box size growing the highlight masks (odd)")
-        ->capture_default_str();
-    cmd->add_option("--blur-neighbours", opt->upsample.blur_neighbours,
-                    "Directions averaged into the blurred shadow maps (the thesis: 10; 1 measured better here)")
-        ->capture_default_str();
-    cmd->add_option("--fit-neighbours", opt->upsample.fit_neighbours,
-                    "Nearest inputs offered to the spherical-harmonic extrapolation")
-        ->capture_default_str();
-    cmd->add_option("--blob-reach", opt->upsample.blob_reach,
-                    "Pixels a compact highlight may move between neighbouring inputs and still be matched as one "
-                    "(0: optical flow only)")
-        ->capture_default_str();
-    cmd->add_option("--lobe-samples", opt->upsample.lobe_samples,
-                    "Inputs a pixel's highlight must show in to be fitted as a glossy lobe over the light "
-                    "directions (0: off; else >= 4)")
-        ->capture_default_str();
-    cmd->add_option("--lobe-spread", opt->upsample.lobe_spread_deg,
-                    "Degrees from the lobe's axis within which all of a pixel's highlight samples must lie")
-        ->capture_default_str();
-    cmd->add_option("--prior-iterations", opt->upsample.priors.iterations,
-                    "Image-based prior iterations on extrapolated and shadow-edge pixels (thesis 6.4.2: 3; 0: off)")
-        ->capture_default_str();
-    cmd->add_option("--prior-proximity", opt->upsample.priors.proximity,
-                    "How strongly the prior prefers windows close by (patch-distance units per pixel)")
-        ->capture_default_str();
+    relight::UpsampleOptions& u = opt->upsample;
+    add_option(*cmd, relight::kHighlightFactorOption, u.f_highlight);
+    add_option(*cmd, relight::kLitFractionOption, u.f_lit);
+    add_option(*cmd, relight::kPercentileOption, u.percentile);
+    add_option(*cmd, relight::kDilationOption, u.highlight_dilation);
+    add_option(*cmd, relight::kBlurNeighboursOption, u.blur_neighbours);
+    add_option(*cmd, relight::kFitNeighboursOption, u.fit_neighbours);
+    add_option(*cmd, relight::kBlobReachOption, u.blob_reach);
+    add_option(*cmd, relight::kLobeSamplesOption, u.lobe_samples);
+    add_option(*cmd, relight::kLobeSpreadOption, u.lobe_spread_deg);
+    add_option(*cmd, relight::kPriorIterationsOption, u.priors.iterations);
+    add_option(*cmd, relight::kPriorProximityOption, u.priors.proximity);
     // Checked before any work: a field is linear radiance, so only the float formats keep it.
     cmd->add_option("--format", opt->extension, "Image format of the output field: .exr or .hdr (linear float)")
         ->check(CLI::IsMember({".exr", ".hdr"}))

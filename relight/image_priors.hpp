@@ -32,12 +32,21 @@
 #include <Eigen/Dense>
 
 #include "core/image.hpp"
+#include "core/options.hpp"
 
 namespace rfd::relight {
 
+// As `rfd relight upsample` offers them (core/options.hpp).
+inline constexpr IntegerOption kPriorIterationsOption{
+    "--prior-iterations", "", "", 0, 20, 3,
+    "Image-based prior iterations on extrapolated and shadow-edge pixels (thesis 6.4.2: 3; 0: off)"};
+inline constexpr NumberOption kPriorProximityOption{
+    "--prior-proximity", "", "", 0.0, 1e6, 0.05,
+    "How strongly the prior prefers windows close by (patch-distance units per pixel)"};
+
 struct PriorOptions {
-    int iterations = 3;        ///< thesis: three are usually enough (0: off)
-    double proximity = 0.05;   ///< feature units per pixel of window displacement
+    int iterations = static_cast<int>(kPriorIterationsOption.fallback);  ///< thesis: three are usually enough
+    double proximity = kPriorProximityOption.fallback;  ///< feature units per pixel of window displacement
     int candidates = 4;        ///< nearest windows re-scored with the exact distance
 };
 

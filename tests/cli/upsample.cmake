@@ -34,6 +34,12 @@ run(0 relight eval ${OUT}/a --reference ${OUT}/sparse)
 expect("PSNR +inf dB")  # the inputs are kept: at their directions the match is exact
 
 run(2 relight upsample ${OUT}/sparse --f-lit 1.5 --out ${OUT}/bad)
+expect("--f-lit: expected a number from 0 to 1, got 1.5")
+if(EXISTS ${OUT}/bad)
+  message(FATAL_ERROR "f_lit out of range: ${OUT}/bad was written")
+endif()
+# Inside the command line's range but not a value the method can use: the library says why.
+run(2 relight upsample ${OUT}/sparse --f-lit 0 --out ${OUT}/bad)
 expect("f_lit must be in \\(0, 1\\]")
 if(EXISTS ${OUT}/bad)
   message(FATAL_ERROR "f_lit out of range: ${OUT}/bad was written")
