@@ -12,20 +12,19 @@
 #include "optics/accuracy_chart.hpp"
 #include "optics/analysis.hpp"
 
+#include "tests/support/bundled.hpp"
+
 namespace rfd::optics {
 namespace {
 
 using ::testing::HasSubstr;
-
-Design preset(int n) {
-    return load_design(std::string(RFD_SOURCE_DIR) + "/designs/design" + std::to_string(n) + ".toml");
-}
+using rfd::testing::bundled_design;
 
 TEST(Analysis, ParaxialWrapOverIsTheClosedForm) {
     // The chief ray through a lenslet's vertex lands at B tan(theta) (B of the lenslet's
     // matrix); it leaves a hexagonal cell at pitch/2 along the flat direction and at
     // pitch/sqrt(3) toward the corner.
-    const DesignOptics optics(preset(1));
+    const DesignOptics optics(bundled_design(1));
     const double b = std::abs(optics.paraxial_b());
     const double pitch = optics.lattice().pitch_x();
     const double flat = radians_to_degrees(std::atan(0.5 * pitch / b));
@@ -38,7 +37,7 @@ TEST(Analysis, ParaxialWrapOverIsTheClosedForm) {
 
 TEST(Analysis, ExactWrapOverIsWhereTheChiefRayLeavesTheCell) {
     for (int n : {1, 2}) {
-        const DesignOptics optics(preset(n));
+        const DesignOptics optics(bundled_design(n));
         const CellIndex cell = optics.centre_cell();
         const double angle = *wrap_over_angle(optics, 0.0, Model::Exact);
         const auto before = optics.land(incident_direction(degrees_to_radians(angle - 1e-6), 0.0), cell, Model::Exact);
@@ -53,7 +52,7 @@ TEST(Analysis, ExactWrapOverIsWhereTheChiefRayLeavesTheCell) {
 }
 
 TEST(Analysis, ModelsAgreeNearTheAxisAndDivergeAtSteepAngles) {
-    const DesignOptics optics(preset(1));
+    const DesignOptics optics(bundled_design(1));
     const CellIndex cell = optics.centre_cell();
     const auto small = incident_direction(1e-5, 0.3);
     const auto p = optics.land(small, cell, Model::Paraxial);
@@ -67,7 +66,7 @@ TEST(Analysis, ModelsAgreeNearTheAxisAndDivergeAtSteepAngles) {
 
 TEST(Analysis, InverseMapRoundTripsThroughTheForwardMap) {
     for (int n : {1, 2}) {
-        const DesignOptics optics(preset(n));
+        const DesignOptics optics(bundled_design(n));
         const CellIndex cell = optics.centre_cell();
         const Lattice& lattice = optics.lattice();
         std::mt19937_64 random(7);
@@ -93,13 +92,13 @@ TEST(Analysis, InverseMapRoundTripsThroughTheForwardMap) {
 
 TEST(Analysis, InverseMapRefusesPositionsBeyondWrapOver) {
     // A position outside the lenslet's cell has no incident direction under that lenslet.
-    const DesignOptics optics(preset(1));
+    const DesignOptics optics(bundled_design(1));
     const Eigen::Vector2d outside(0.6 * optics.lattice().pitch_x(), 0.0);
     EXPECT_FALSE(optics.direction_for(outside, optics.centre_cell(), Model::Exact).has_value());
 }
 
 TEST(Analysis, BundleOnAxisArrivesWholeAndSpotShrinksWithAperture) {
-    const DesignOptics optics(preset(1));
+    const DesignOptics optics(bundled_design(1));
     const auto bundle = optics.trace_bundle(incident_direction(0, 0), optics.centre_cell(), 31);
     EXPECT_GT(bundle.rays, 500u);
     EXPECT_EQ(bundle.arrived, bundle.rays);
@@ -113,7 +112,7 @@ TEST(Analysis, BundleOnAxisArrivesWholeAndSpotShrinksWithAperture) {
 TEST(Analysis, FlatSideFirstLensletsWarnAboutTotalInternalReflection) {
     // Turning Design I's array round sends rays at the rim onto the curved exit beyond the
     // critical angle (sin(theta) = r/R > 1/n for r > R/n = 0.99 mm).
-    Design design = preset(1);
+    Design design = bundled_design(1);
     for (auto& plane : design.planes)
         if (plane.name == "A") plane.curved_side = CurvedSide::Observer;
     const DesignOptics optics(design);
@@ -126,7 +125,7 @@ TEST(Analysis, FlatSideFirstLensletsWarnAboutTotalInternalReflection) {
 }
 
 TEST(Analysis, SummaryCountsDirectionsPerLenslet) {
-    const DesignOptics optics(preset(1));
+    const DesignOptics optics(bundled_design(1));
     const auto summary = summarise(optics);
     // Hex cell area pitch^2 sqrt(3)/2 over one 2880 x 1440 dpi dot.
     const double pitch = optics.lattice().pitch_x();
@@ -137,7 +136,7 @@ TEST(Analysis, SummaryCountsDirectionsPerLenslet) {
 }
 
 TEST(Analysis, DesignTwoWarnsThatThickLensletsMagnifyTheMacroPixels) {
-    const auto summary = summarise(DesignOptics(preset(2)));
+    const auto summary = summarise(DesignOptics(bundled_design(2)));
     ASSERT_GE(summary.conjugates.size(), 2u);
     EXPECT_GT(std::abs(summary.conjugates[1].magnification), 1.1);
     bool warned = false;
@@ -201,7 +200,7 @@ double dense_crosstalk_onset(const DesignOptics& optics, double phi) {
 // to cross enters the steep corners of the lenslets).
 TEST(Analysis, CrosstalkOnsetAgreesWithADenseBundle) {
     for (int n : {1, 2}) {
-        const DesignOptics optics(preset(n));
+        const DesignOptics optics(bundled_design(n));
         const DesignSummary summary = summarise(optics);
         const Lattice& lattice = optics.lattice();
         std::vector<double> phis = {0.0, kPi / 2};
@@ -217,7 +216,7 @@ TEST(Analysis, CrosstalkOnsetAgreesWithADenseBundle) {
 }
 
 TEST(Analysis, ChartMarksWhereParaxialErrorPassesHalfAPixel) {
-    const DesignOptics optics(preset(1));
+    const DesignOptics optics(bundled_design(1));
     const Chart chart = accuracy_chart(optics, 0.0, "x", 20.0, 80);
     ASSERT_EQ(chart.rows.size(), 81u);
     EXPECT_NEAR(chart.rows.front().error_um, 0.0, 1e-9);

@@ -16,16 +16,14 @@
 #include "patterns/angular.hpp"
 #include "relight/field.hpp"
 #include "tests/support/temp_dir.hpp"
+#include "tests/support/bundled.hpp"
 
 namespace rfd::patterns {
 namespace {
 
 using ::testing::HasSubstr;
+using rfd::testing::bundled_design;
 using rfd::testing::TempDir;
-
-optics::Design preset(int n) {
-    return optics::load_design(std::string(RFD_SOURCE_DIR) + "/designs/design" + std::to_string(n) + ".toml");
-}
 
 // A smooth field, so that what the encoder does is checked, not the sampling of edges.
 void smooth(const Eigen::Vector3d& light, const Eigen::Vector3d& view, int u, int v, std::span<float> out) {
@@ -43,7 +41,7 @@ std::vector<float> render(const PatternSource& source) {
 }
 
 TEST(AngularPattern, RoundTripThroughTheFileAtDotsFoundByTheForwardMaps) {
-    const optics::DesignOptics optics(preset(3));
+    const optics::DesignOptics optics(bundled_design(3));
     const FunctionField field(3, smooth);
     TempDir dir;
     for (const optics::Model model : {optics::Model::Paraxial, optics::Model::Exact}) {
@@ -99,7 +97,7 @@ TEST(AngularPattern, RoundTripThroughTheFileAtDotsFoundByTheForwardMaps) {
 }
 
 TEST(AngularPattern, OnlyLitDotsCarryLightAndTheTablesAgreeWithTheOptics) {
-    const optics::DesignOptics optics(preset(3));
+    const optics::DesignOptics optics(bundled_design(3));
     const FunctionField field(1, [](const Eigen::Vector3d&, const Eigen::Vector3d&, int, int, std::span<float> out) { out[0] = 1.0f; });
     AngularOptions options;
     options.table_size = 129;
@@ -134,7 +132,7 @@ TEST(AngularPattern, OnlyLitDotsCarryLightAndTheTablesAgreeWithTheOptics) {
 }
 
 TEST(AngularPattern, LetterPatternDecodesToTheRightLetterInEveryBin) {
-    const optics::DesignOptics optics(preset(3));
+    const optics::DesignOptics optics(bundled_design(3));
     const optics::MesoPixelOptics meso(optics);
     const std::string characters = "0123456789ABCDEFGHIJKLMNOPQRST";
     std::vector<Eigen::Vector3d> centres;
@@ -228,7 +226,7 @@ TEST(DiamondField, GrowsAsTheLightMovesDownHollowsFromTheSidesTintsByView) {
 }
 
 TEST(AngularPattern, DesignFourDotsCarryTheirMacroPixelsDiamond) {
-    const optics::DesignOptics optics(preset(4));
+    const optics::DesignOptics optics(bundled_design(4));
     const DiamondField diamonds(0.25, 0.25);
     AngularOptions options;
     options.table_size = 33;
@@ -291,7 +289,7 @@ TEST(ViewSet, RoundTripsThroughTheEncoderWithViewInterpolation) {
     relight::write_view_file(dir.path() / "views.txt", entries);
     const ViewSetField field(relight::read_view_set(dir.path()));
     EXPECT_EQ(field.views().views.size(), 5u);
-    const optics::DesignOptics optics(preset(3));
+    const optics::DesignOptics optics(bundled_design(3));
     AngularOptions options;
     options.table_size = 33;
     options.dpi_x = options.dpi_y = 150;
@@ -327,7 +325,7 @@ TEST(ViewSet, FieldThatMissesTheIncidentBinsNamesTheDirections) {
     write_view(dir.path() / "only", lights, 1.0f);
     write_lines(dir.path() / "views.txt", "1\nonly 0 0 1\n");
     const ViewSetField field(relight::read_view_set(dir.path()));
-    const optics::DesignOptics optics(preset(3));
+    const optics::DesignOptics optics(bundled_design(3));
     try {
         AngularOptions options;
         options.table_size = 5;

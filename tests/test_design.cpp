@@ -13,14 +13,13 @@
 #include "optics/analysis.hpp"
 #include "optics/design.hpp"
 
+#include "tests/support/bundled.hpp"
+
 namespace rfd::optics {
 namespace {
 
 using ::testing::HasSubstr;
-
-std::string preset(int n) {
-    return std::string(RFD_SOURCE_DIR) + "/designs/design" + std::to_string(n) + ".toml";
-}
+using rfd::testing::bundled_design_path;
 
 // A small valid Design I; tests break one thing at a time with replace().
 const std::string kDesignI = R"([design]
@@ -79,7 +78,7 @@ std::string error_of(const std::string& text) {
 }
 
 TEST(Design, PresetsLoadWithTheThesisParts) {
-    const Design one = load_design(preset(1));
+    const Design one = load_design(bundled_design_path(1));
     EXPECT_EQ(one.kind, DesignKind::I);
     const auto& array = std::get<LensletArrayPart>(*one.plane("A").part);
     // 20.77 lenses per cm^2 on a hexagonal lattice: pitch^2 * sqrt(3)/2 = 100/20.77 mm^2.
@@ -89,18 +88,18 @@ TEST(Design, PresetsLoadWithTheThesisParts) {
     EXPECT_EQ(one.printer.dpi_x.value, 2880);
     EXPECT_EQ(one.printer.dpi_y.value, 1440);
 
-    const Design two = load_design(preset(2));
+    const Design two = load_design(bundled_design_path(2));
     const auto& glass = std::get<LensletArrayPart>(*two.plane("A").part);
     EXPECT_EQ(glass.lattice.count_x() * glass.lattice.count_y(), 30);
     EXPECT_NEAR(glass.lattice.count_x() * glass.lattice.pitch_x(), 24.0, 1e-12);
     EXPECT_NEAR(glass.lattice.count_y() * glass.lattice.pitch_y(), 24.0, 1e-12);
     EXPECT_EQ(two.plane("B").arrangement, Arrangement::BackToBack);
 
-    const Design three = load_design(preset(3));
+    const Design three = load_design(bundled_design_path(3));
     EXPECT_NEAR(focal_length(std::get<LensPart>(*three.plane("A").part).lens), 50.0, 0.01);
     EXPECT_EQ(std::get<LensPart>(*three.plane("B").part).diameter, 30.0);
 
-    const Design four = load_design(preset(4));
+    const Design four = load_design(bundled_design_path(4));
     ASSERT_TRUE(four.macro.has_value());
     EXPECT_EQ(four.macro->count_x, 7);
     EXPECT_EQ(four.macro->count_y, 7);
@@ -110,7 +109,7 @@ TEST(Design, PresetPlanesSitWhereTheOpticsWantThem) {
     // Design I and II: the pattern is in the back focal plane of A; Design II's diffuser is
     // the image of A through B (thesis 8.2.3).
     for (int n : {1, 2, 3}) {
-        const DesignOptics optics(load_design(preset(n)));
+        const DesignOptics optics(load_design(bundled_design_path(n)));
         const DesignSummary summary = summarise(optics);
         EXPECT_LT(std::abs(summary.focus_error_mm), 1e-3) << "design " << n;
         ASSERT_FALSE(summary.conjugates.empty());

@@ -12,17 +12,18 @@
 #include "optics/display.hpp"
 #include "optics/paraxial.hpp"
 #include "tests/support/error_of.hpp"
+#include "tests/support/bundled.hpp"
 
 namespace rfd::optics {
 namespace {
 
 using ::testing::HasSubstr;
+using rfd::testing::bundled_design;
 using rfd::testing::error_of;
 
-const std::filesystem::path kDesigns = std::filesystem::path(RFD_SOURCE_DIR) / "designs";
 
-Design small_design1() { return with_lenslet_count(load_design(kDesigns / "design1.toml"), 5, 5); }
-Design design2() { return load_design(kDesigns / "design2.toml"); }
+Design small_design1() { return with_lenslet_count(bundled_design(1), 5, 5); }
+Design design2() { return bundled_design(2); }
 
 // A one-channel transparency at the design's print resolution, centred like a pattern:
 // transmittance `inside` under the cells `keep` accepts, 0 elsewhere.
@@ -345,7 +346,7 @@ TEST(DisplaySimulator, BadInputIsNamed) {
                 HasSubstr("light 1: a light must shine through the display from behind"));
     EXPECT_THAT(error_of([&] { sim.simulate(clear, {{{0.0, 0.0, 1.0}, {1, -1, 1}, 0.0}}, {}); }),
                 HasSubstr("not negative"));
-    EXPECT_THAT(error_of([&] { DisplaySimulator(load_design(kDesigns / "design3.toml")); }),
+    EXPECT_THAT(error_of([&] { DisplaySimulator(bundled_design(3)); }),
                 HasSubstr("Designs I and II"));
 }
 

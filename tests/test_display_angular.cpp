@@ -21,16 +21,14 @@
 #include "optics/display_angular.hpp"
 #include "patterns/angular.hpp"
 #include "tests/support/temp_dir.hpp"
+#include "tests/support/bundled.hpp"
 
 namespace rfd::optics {
 namespace {
 
 using ::testing::HasSubstr;
+using rfd::testing::bundled_design;
 using rfd::testing::TempDir;
-
-Design preset(int n) {
-    return load_design(std::string(RFD_SOURCE_DIR) + "/designs/design" + std::to_string(n) + ".toml");
-}
 
 // Design IV with 2 x 2 macro-pixels instead of 7 x 7: the same optics, a smaller pattern.
 Design small_design4(const TempDir& dir) {
@@ -96,7 +94,7 @@ void smooth(const Eigen::Vector3d& light, const Eigen::Vector3d& view, int u, in
 }
 
 TEST(AngularDisplay, ClearPatternGivesTheClosedFormRadiance) {
-    const AngularDisplaySimulator sim(preset(3));
+    const AngularDisplaySimulator sim(bundled_design(3));
     const Lattice& lattice = sim.meso().lattice();
     const CellIndex cell{1, 2};
     const Eigen::Vector3d light = sim.meso().bin(cell, Model::Paraxial, 1).centre;
@@ -129,7 +127,7 @@ TEST(AngularDisplay, ClearPatternGivesTheClosedFormRadiance) {
 // Which output directions a meso-pixel sends light into, against the chief-ray statuses of
 // MesoPixelOptics (an independent tracer) and the front-focal-plane rule tan = gain * p.
 TEST(AngularDisplay, LitOutputDirectionsMatchTheMesoPixelOptics) {
-    const AngularDisplaySimulator sim(preset(3));
+    const AngularDisplaySimulator sim(bundled_design(3));
     const MesoPixelOptics& meso = sim.meso();
     const Lattice& lattice = meso.lattice();
     const CellIndex cell{3, 2};
@@ -221,7 +219,7 @@ double psnr_of(const std::vector<double>& got, const std::vector<double>& want, 
 // display shows R averaged over the incident bin (its lights are binned by meso cell), at
 // the dot whose output direction is V, scaled by cos(theta_l) / cos^4(theta_v).
 TEST(AngularDisplay, ReproducesAnEncodedFieldThroughThePrintedPattern) {
-    const Encoded encoded(preset(3), Model::Paraxial, 600);
+    const Encoded encoded(bundled_design(3), Model::Paraxial, 600);
     const AngularDisplaySimulator sim(encoded.optics.design());
     const RasterTransparency transparency = printed(encoded.pattern, encoded.white);
     const Lattice& lattice = sim.meso().lattice();
@@ -257,7 +255,7 @@ TEST(AngularDisplay, ReproducesAnEncodedFieldThroughThePrintedPattern) {
 // exact optics lose light to Fresnel reflections and distort the slope grid): what a
 // calibrated display shows.
 TEST(AngularDisplay, ReproducesAnEncodedFieldWithTheExactOptics) {
-    const Encoded encoded(preset(3), Model::Exact, 600);
+    const Encoded encoded(bundled_design(3), Model::Exact, 600);
     const AngularDisplaySimulator sim(encoded.optics.design());
     const RasterTransparency transparency = printed(encoded.pattern, encoded.white);
     const Lattice& lattice = sim.meso().lattice();
@@ -317,7 +315,7 @@ TEST(AngularDisplay, DesignFourMacroPixelsShowTheirOwnValues) {
 }
 
 TEST(AngularDisplay, IsLinearInTheLights) {
-    const AngularDisplaySimulator sim(preset(3));
+    const AngularDisplaySimulator sim(bundled_design(3));
     const Lattice& lattice = sim.meso().lattice();
     const Eigen::Vector3d a = sim.meso().bin({1, 1}, Model::Exact, 1).centre;
     const Eigen::Vector3d b = (sim.meso().bin({2, 1}, Model::Exact, 1).centre + Eigen::Vector3d(0.01, 0.005, 0)).normalized();
@@ -346,7 +344,7 @@ TEST(AngularDisplay, IsLinearInTheLights) {
 }
 
 TEST(AngularDisplay, ALightOutsideTheAcceptanceLeavesTheDisplayDark) {
-    const AngularDisplaySimulator sim(preset(3));
+    const AngularDisplaySimulator sim(bundled_design(3));
     AngularSimulationOptions options;
     options.rays_per_side = 32;
     options.views = {{from_slopes(0.0, 0.0), std::nullopt}, {from_slopes(0.1, 0.1), std::nullopt}};
@@ -365,7 +363,7 @@ TEST(AngularDisplay, ALightOutsideTheAcceptanceLeavesTheDisplayDark) {
 // An eye far away sees what a distant observer in its direction sees; a near eye sees each
 // meso-pixel along the line from it.
 TEST(AngularDisplay, EyesSeeEachMesoPixelAlongTheirOwnLine) {
-    const AngularDisplaySimulator sim(preset(3));
+    const AngularDisplaySimulator sim(bundled_design(3));
     const Lattice& lattice = sim.meso().lattice();
     const CellIndex cell{3, 2};
     const Eigen::Vector3d light = sim.meso().bin(cell, Model::Paraxial, 1).centre;
@@ -391,7 +389,7 @@ TEST(AngularDisplay, EyesSeeEachMesoPixelAlongTheirOwnLine) {
 // A distribution image holds, at each pixel centre, what a distant observer there sees of
 // the whole macro-pixel (when its pixels are finer than the kernel, so both use one kernel).
 TEST(AngularDisplay, DistributionImagesAgreeWithTheViews) {
-    const AngularDisplaySimulator sim(preset(3));
+    const AngularDisplaySimulator sim(bundled_design(3));
     const Eigen::Vector3d light = sim.meso().bin({2, 2}, Model::Paraxial, 1).centre;
     AngularSimulationOptions options;
     options.rays_per_side = 64;
@@ -414,7 +412,7 @@ TEST(AngularDisplay, DistributionImagesAgreeWithTheViews) {
 }
 
 TEST(AngularDisplay, IsDeterministic) {
-    const AngularDisplaySimulator sim(preset(3));
+    const AngularDisplaySimulator sim(bundled_design(3));
     AngularSimulationOptions options;
     options.model = Model::Exact;
     options.rays_per_side = 48;
@@ -434,8 +432,9 @@ TEST(AngularDisplay, IsDeterministic) {
 }
 
 TEST(AngularDisplay, BadInputIsRefusedWithTheReason) {
-    EXPECT_THAT([] { AngularDisplaySimulator sim(preset(2)); }, ::testing::ThrowsMessage<InputError>(HasSubstr("Design III or IV")));
-    const AngularDisplaySimulator sim(preset(3));
+    EXPECT_THAT([] { AngularDisplaySimulator sim(bundled_design(2)); },
+                ::testing::ThrowsMessage<InputError>(HasSubstr("Design III or IV")));
+    const AngularDisplaySimulator sim(bundled_design(3));
     const Clear clear;
     AngularSimulationOptions options;
     options.rays_per_side = 8;

@@ -14,18 +14,19 @@
 #include "optics/design.hpp"
 #include "patterns/encode.hpp"
 #include "tests/support/error_of.hpp"
+#include "tests/support/bundled.hpp"
 
 namespace rfd::patterns {
 namespace {
 
 using ::testing::HasSubstr;
+using rfd::testing::bundled_design;
 using rfd::testing::error_of;
 
-const std::filesystem::path kDesigns = std::filesystem::path(RFD_SOURCE_DIR) / "designs";
 
 // Design I with a small array (the preset's 63 x 73 lenslets are 143 million dots).
 optics::Design small_design1(int count_x, int count_y) {
-    return optics::with_lenslet_count(optics::load_design(kDesigns / "design1.toml"), count_x, count_y);
+    return optics::with_lenslet_count(bundled_design(1), count_x, count_y);
 }
 
 // A smooth, colourful field: every pixel a Lambertian patch with its own normal and colour.
@@ -90,7 +91,7 @@ TEST(AngularMapping, DisplayDirectionInvertsFieldDirection) {
 }
 
 TEST(Encoder, ConstantFieldGivesOneOverCosKappa) {
-    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const optics::Design design = bundled_design(2);
     relight::ReflectanceField field;
     field.directions = fibonacci_hemisphere(200);
     for (std::size_t i = 0; i < field.size(); ++i) field.images.emplace_back(6, 5, 1, 0.5f);
@@ -118,7 +119,7 @@ TEST(Encoder, ConstantFieldGivesOneOverCosKappa) {
 TEST(Encoder, LensletSamplesAreTheFieldPixelsWhenTheyAlign) {
     // Design II's 6 x 5 rectangular array, a 6 x 5 image stretched over it: lenslet (i, j)
     // sees exactly pixel (i, 4 - j) (rows run up the array and down the image).
-    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const optics::Design design = bundled_design(2);
     relight::ReflectanceField field;
     field.directions = fibonacci_hemisphere(64);
     for (std::size_t i = 0; i < field.size(); ++i) {
@@ -153,7 +154,7 @@ class DecodeRoundTrip : public ::testing::TestWithParam<RoundTripCase> {};
 
 TEST_P(DecodeRoundTrip, RecoversTheFieldSamplesAtEveryLenslet) {
     const RoundTripCase& param = GetParam();
-    const optics::Design design = param.hexagonal ? small_design1(9, 10) : optics::load_design(kDesigns / "design2.toml");
+    const optics::Design design = param.hexagonal ? small_design1(9, 10) : bundled_design(2);
     const relight::ReflectanceField field = smooth_field(1024, 16, 12);
     EncodeOptions options;
     options.model = param.model;
@@ -193,7 +194,7 @@ class RenderRow : public ::testing::TestWithParam<PerDotCase> {};
 
 TEST_P(RenderRow, EveryDotIsThePerDotBlendOfItsLenslet) {
     const PerDotCase& param = GetParam();
-    const optics::Design design = param.hexagonal ? small_design1(5, 4) : optics::load_design(kDesigns / "design2.toml");
+    const optics::Design design = param.hexagonal ? small_design1(5, 4) : bundled_design(2);
     const relight::ReflectanceField field = smooth_field(600, 8, 6);
     EncodeOptions options;
     options.model = param.model;
@@ -263,7 +264,7 @@ TEST(Encoder, ExactTableMatchesDirectNewtonSolves) {
 }
 
 TEST(Encoder, FieldThatMissesTheDisplayRangeIsRefusedWithTheDirections) {
-    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const optics::Design design = bundled_design(2);
     relight::ReflectanceField field;
     for (const Eigen::Vector3d& d : fibonacci_hemisphere(400))
         if (angle_between(d, Eigen::Vector3d::UnitZ()) < degrees_to_radians(8)) field.directions.push_back(d);
@@ -283,7 +284,7 @@ TEST(Encoder, FieldThatMissesTheDisplayRangeIsRefusedWithTheDirections) {
 TEST(Encoder, FieldsThatCannotBePrintedAreRefused) {
     // A transparency is grey or R, G, B: two channels, or five (a multispectral capture),
     // are an input error naming the field, not an internal check failing mid-encode.
-    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const optics::Design design = bundled_design(2);
     const PatternGeometry g = pattern_geometry(design, Dpi{360}, Dpi{360});
     EncodeOptions options;
     options.field_name = "five-channel-field";
@@ -297,7 +298,7 @@ TEST(Encoder, FieldsThatCannotBePrintedAreRefused) {
 }
 
 TEST(Encoder, RefusesAngularDesigns) {
-    const optics::Design design = optics::load_design(kDesigns / "design3.toml");
+    const optics::Design design = bundled_design(3);
     const relight::ReflectanceField field = smooth_field(64, 2, 2);
     EXPECT_THAT(error_of([&] { Encoder(design, field, PatternGeometry{}, EncodeOptions{}); }),
                 HasSubstr("Designs I and II"));
@@ -331,7 +332,7 @@ optics::ResolvedModel resolve_at(const optics::Design& design, double dpi, optic
 }
 
 TEST(ResolveModel, AutoIsParaxialOnlyWhereItIsWithinAQuarterDot) {
-    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const optics::Design design = bundled_design(2);
     const optics::ResolvedModel fine = resolve_at(design, 2880, optics::ModelChoice::Auto);
     const optics::ResolvedModel coarse = resolve_at(design, 20, optics::ModelChoice::Auto);
     EXPECT_EQ(fine.model, optics::Model::Exact);
@@ -345,10 +346,10 @@ TEST(ResolveModel, AutoIsParaxialOnlyWhereItIsWithinAQuarterDot) {
 }
 
 TEST(ResolveModel, AChoiceMadeByHandIsKeptAndDesignsIIIAndIVAreExactUnderAuto) {
-    const optics::Design design2 = optics::load_design(kDesigns / "design2.toml");
+    const optics::Design design2 = bundled_design(2);
     EXPECT_EQ(resolve_at(design2, 2880, optics::ModelChoice::Paraxial).model, optics::Model::Paraxial);
     EXPECT_EQ(resolve_at(design2, 20, optics::ModelChoice::Exact).model, optics::Model::Exact);
-    const optics::Design design3 = optics::load_design(kDesigns / "design3.toml");
+    const optics::Design design3 = bundled_design(3);
     const optics::DesignOptics optics3(design3);
     const optics::ResolvedModel automatic = optics::resolve(optics::ModelChoice::Auto, optics3, optics3.dot_mm());
     EXPECT_EQ(automatic.model, optics::Model::Exact);

@@ -27,16 +27,16 @@
 #include "optics/design.hpp"
 #include "tests/support/error_of.hpp"
 #include "tests/support/temp_dir.hpp"
+#include "tests/support/bundled.hpp"
 
 namespace rfd::holders {
 namespace {
 
 using ::testing::HasSubstr;
+using rfd::testing::bundled_design_path;
 
 // The film of the default printer (the Epson: two sheets back to back).
 const PatternFilm kFilm{0.1, 2};
-
-std::string preset(int n) { return std::string(RFD_SOURCE_DIR) + "/designs/design" + std::to_string(n) + ".toml"; }
 
 std::string read_text(const std::string& path) {
     std::ifstream in(path);
@@ -47,11 +47,11 @@ std::string read_text(const std::string& path) {
 
 // The preset's text with one line replaced (the design keeps its file name for messages).
 optics::Design edited_preset(int n, const std::string& from, const std::string& to) {
-    std::string text = read_text(preset(n));
+    std::string text = read_text(bundled_design_path(n));
     const auto at = text.find(from);
     EXPECT_NE(at, std::string::npos) << from;
     text.replace(at, from.size(), to);
-    return optics::parse_design(text, preset(n));
+    return optics::parse_design(text, bundled_design_path(n));
 }
 
 TEST(HolderExpr, CarriesTextAndValueWithTheRightBrackets) {
@@ -147,7 +147,7 @@ HolderCheck build_and_check(const Holder& holder, const optics::Design& design, 
 TEST(HolderFilm, ThePatternPocketKeepsRoomForEverySheetOfFilm) {
     // Design I's pattern sheets rest in front of the pattern face: the pocket's front moves
     // forward by the thickness of the stack.
-    const optics::Design design = optics::load_design(preset(1));
+    const optics::Design design = optics::load_design(bundled_design_path(1));
     const auto pattern_pocket_front = [&](const PatternFilm& film) {
         const Holder holder = make_holder(design, HolderProfile{}, film);
         for (const auto& entry : holder.parameters.entries())
@@ -167,7 +167,7 @@ TEST_P(PresetHolder, BuildsAndPassesEveryCheck) {
     // Design IV's 7 x 7 block takes OpenSCAD about a minute; a 3 x 3 block has every kind
     // of plate (bottom, middle, top) and every seam between cells.
     const optics::Design design = GetParam() == 4 ? edited_preset(4, "count = [7, 7]\npitch_mm", "count = [3, 3]\npitch_mm")
-                                                  : optics::load_design(preset(GetParam()));
+                                                  : optics::load_design(bundled_design_path(GetParam()));
     const Holder holder = make_holder(design, HolderProfile{}, kFilm);
     const testing::TempDir dir;
     const HolderCheck check = build_and_check(holder, design, dir);
@@ -197,7 +197,7 @@ INSTANTIATE_TEST_SUITE_P(Designs, PresetHolder, ::testing::Values(1, 2, 3, 4),
 
 TEST(HolderSeats, LieWhereThePartsFacesMustBe) {
     // Independent of the generator's own numbers: the faces from the design's prescription.
-    const optics::Design design = optics::load_design(preset(3));
+    const optics::Design design = optics::load_design(bundled_design_path(3));
     const Holder holder = make_holder(design, HolderProfile{}, kFilm);
     ASSERT_EQ(holder.seats.size(), 5u);
     EXPECT_NEAR(holder.seats[0].z, 0.0 + 5.3, 1e-9);  // main lens's flat back
@@ -229,7 +229,7 @@ TEST(HolderBeam, EnvelopeOverAnIntervalIsTheLargestAtAnyDepth) {
 
     // Design II's traced beam: never below the envelope at any depth inside, equal to the
     // largest of a fine sampling up to the sampling's own resolution.
-    const optics::Design design = optics::load_design(preset(2));
+    const optics::Design design = optics::load_design(bundled_design_path(2));
     const std::vector<BeamPath> beam = beam_paths(design, {}, -1.0, 30.0, BeamSampling{3, 4});
     ASSERT_FALSE(beam.empty());
     const double z0 = 0.0, z1 = 25.0;  // the lenslets to the diffuser
@@ -252,7 +252,7 @@ TEST(HolderBeam, EnvelopeOverAnIntervalIsTheLargestAtAnyDepth) {
 
 TEST(HolderChecks, FailWhenTheHolderIsWrong) {
     if (!find_openscad()) GTEST_SKIP() << "openscad is not installed";
-    const optics::Design design = optics::load_design(preset(2));
+    const optics::Design design = optics::load_design(bundled_design_path(2));
     Holder holder = make_holder(design, HolderProfile{}, kFilm);
     // Narrow the channel from the corrective pair to the diffuser: light must hit it.
     for (Section& s : holder.sections)
@@ -291,7 +291,7 @@ TEST(HolderDesigns, BrokenDesignsAreRejectedBeforeOpenScad) {
 }
 
 TEST(HolderDesigns, DesignTwoBafflesThinTowardThePattern) {
-    const Holder holder = make_holder(optics::load_design(preset(2)), HolderProfile{}, kFilm);
+    const Holder holder = make_holder(optics::load_design(bundled_design_path(2)), HolderProfile{}, kFilm);
     std::vector<const Section*> baffles;
     for (const Section& s : holder.sections)
         if (s.kind == Section::Kind::Cells) baffles.push_back(&s);
@@ -310,7 +310,7 @@ TEST(HolderDesigns, DesignTwoBafflesThinTowardThePattern) {
 }
 
 TEST(HolderScad, IsDeterministicAndParametric) {
-    const optics::Design design = optics::load_design(preset(1));
+    const optics::Design design = optics::load_design(bundled_design_path(1));
     const std::string a = to_scad(make_holder(design, HolderProfile{}, kFilm));
     const std::string b = to_scad(make_holder(design, HolderProfile{}, kFilm));
     EXPECT_EQ(a, b);

@@ -14,14 +14,13 @@
 #include "core/units.hpp"
 #include "optics/meso_pixel.hpp"
 
+#include "tests/support/bundled.hpp"
+
 namespace rfd::optics {
 namespace {
 
 using ::testing::HasSubstr;
-
-Design preset(int n) {
-    return load_design(std::string(RFD_SOURCE_DIR) + "/designs/design" + std::to_string(n) + ".toml");
-}
+using rfd::testing::bundled_design;
 
 // Design III with an almost flat pattern pair (R = 1e5 mm) and projection lenslets of
 // f = R / (n - 1) = 10 mm placed so that the pattern lies in their front focal plane:
@@ -125,7 +124,7 @@ TEST(MesoPixel, APatternPointInTheFrontFocalPlaneLeavesAtMinusPOverF) {
 }
 
 TEST(MesoPixel, ParaxialTraceEqualsTheMatrixGainInEveryCell) {
-    const DesignOptics optics(preset(3));
+    const DesignOptics optics(bundled_design(3));
     const MesoPixelOptics meso(optics);
     const SequentialSystem& system = optics.system();
     // gain = C_de + D_de D_cd / B_cd, from two matrix products; the dot's output comes from
@@ -159,7 +158,7 @@ TEST(MesoPixel, DotsOutsideTheMainLensImageAreUnlitAsTheMatricesPredict) {
     // Independent of the tracer: carry the chief ray with vertex matrices from A to E and
     // test every aperture; the corners of the 4 x 4.8 mm cells lie outside the ~2.3 mm
     // image of the main lens.
-    const DesignOptics optics(preset(3));
+    const DesignOptics optics(bundled_design(3));
     const MesoPixelOptics meso(optics);
     const SequentialSystem& system = optics.system();
     const std::size_t c = meso.meso_front();
@@ -207,7 +206,7 @@ TEST(MesoPixel, DotsWhoseRayLeavesThroughANeighbourAreCrossed) {
     // Behind the pattern the chief ray keeps spreading away from the cell's axis: at the
     // pair's back surface its height is B_c8 s = (B_c8 / B_cd) p, so dots beyond
     // p = (pitch/2) B_cd / B_c8 leave through the neighbouring lenslet (crosstalk).
-    const DesignOptics optics(preset(3));
+    const DesignOptics optics(bundled_design(3));
     const MesoPixelOptics meso(optics);
     const SequentialSystem& system = optics.system();
     const std::size_t back = meso.pattern_surface() + 1;
@@ -229,7 +228,7 @@ TEST(MesoPixel, DotsWhoseRayLeavesThroughANeighbourAreCrossed) {
 }
 
 TEST(MesoPixel, ExactMatchesParaxialNearTheAxisAndPartsAtTheCellEdge) {
-    const DesignOptics optics(preset(3));
+    const DesignOptics optics(bundled_design(3));
     const MesoPixelOptics meso(optics);
     const CellIndex cell{3, 2};
     const Eigen::Vector2d tiny(1e-3, -5e-4);
@@ -245,7 +244,7 @@ TEST(MesoPixel, ExactMatchesParaxialNearTheAxisAndPartsAtTheCellEdge) {
 }
 
 TEST(MesoPixel, OffsetForInvertsTheOutputMapInBothModels) {
-    const DesignOptics optics(preset(3));
+    const DesignOptics optics(bundled_design(3));
     const MesoPixelOptics meso(optics);
     const CellIndex cell{1, 3};
     for (const Model model : {Model::Paraxial, Model::Exact})
@@ -259,7 +258,7 @@ TEST(MesoPixel, OffsetForInvertsTheOutputMapInBothModels) {
 }
 
 TEST(MesoPixel, BinSamplesLandInTheirMesoCell) {
-    const DesignOptics optics(preset(3));
+    const DesignOptics optics(bundled_design(3));
     const MesoPixelOptics meso(optics);
     const double b = optics.paraxial_b();
     for (const CellIndex cell : {CellIndex{0, 0}, CellIndex{3, 2}, CellIndex{5, 4}}) {
@@ -290,7 +289,7 @@ TEST(MesoPixel, BinSamplesLandInTheirMesoCell) {
 }
 
 TEST(MesoPixel, ObserverInvariantDesignsAreRejected) {
-    const DesignOptics optics(preset(1));
+    const DesignOptics optics(bundled_design(1));
     try {
         const MesoPixelOptics meso(optics);
         FAIL() << "Design I accepted";

@@ -24,16 +24,17 @@
 #include "print/wedge.hpp"
 #include "tests/support/error_of.hpp"
 #include "tests/support/temp_dir.hpp"
+#include "tests/support/bundled.hpp"
 
 namespace rfd::print {
 namespace {
 
 using ::testing::HasSubstr;
+using rfd::testing::bundled_design;
 using ::testing::MatchesRegex;
 using rfd::testing::error_of;
 using rfd::testing::TempDir;
 
-const std::filesystem::path kDesigns = std::filesystem::path(RFD_SOURCE_DIR) / "designs";
 
 // A small test printer: non-square dots, a paper just big enough for Design II and its marks.
 std::string small_printer_toml(double dpi_x, double dpi_y, double paper_w = 50, double paper_h = 60) {
@@ -113,7 +114,7 @@ private:
 
 TEST(PrintedTransparency, EachPointSeesItsDotAsPrinted) {
     const TempDir dir;
-    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const optics::Design design = bundled_design(2);
     const PrinterProfile printer = parse_printer(small_printer_toml(300, 150), "test.toml");
     const auto g = patterns::pattern_geometry(design, printer.dpi_x, printer.dpi_y);
     patterns::write_pattern(dir / "steps.exr", Steps(g), {{"white", "0.8"}});
@@ -144,7 +145,7 @@ TEST(PrintedTransparency, EachPointSeesItsDotAsPrinted) {
 
 TEST(PrintedTransparency, APatternForAnotherResolutionIsRefused) {
     const TempDir dir;
-    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const optics::Design design = bundled_design(2);
     const PrinterProfile printer = parse_printer(small_printer_toml(300, 150), "test.toml");
     const auto path = write_test_pattern(dir, design, parse_printer(small_printer_toml(200, 200), "other.toml"), 0.5f);
     EXPECT_THAT(error_of([&] { PrintedTransparency(design, printer, path, 1.0, 0); }),
@@ -153,7 +154,7 @@ TEST(PrintedTransparency, APatternForAnotherResolutionIsRefused) {
 
 TEST(PrinterForPattern, ThePatternsRecordUnlessAnotherIsAskedFor) {
     const TempDir dir;
-    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const optics::Design design = bundled_design(2);
     const PrinterProfile inkjet = load_printer("inkjet_720");
     auto attributes = printer_attributes(inkjet);
     attributes["white"] = "0.8";
@@ -291,7 +292,7 @@ TEST(PrinterProfile, BadKeysNameFileLineAndKey) {
 
 TEST(SheetTiff, ResolutionTagsAndMarkersWhereTheDesignPutsTheCornerLenslets) {
     TempDir dir;
-    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const optics::Design design = bundled_design(2);
     const PrinterProfile printer = parse_printer(small_printer_toml(1200, 600), "test.toml");
     const auto pattern = write_test_pattern(dir, design, printer, 0.4f);
     SheetOptions options;
@@ -361,7 +362,7 @@ TEST(SheetTiff, ResolutionTagsAndMarkersWhereTheDesignPutsTheCornerLenslets) {
 
 TEST(SheetTiff, MirrorIsTheExactLeftRightMirrorAndRerunsAreIdentical) {
     TempDir dir;
-    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const optics::Design design = bundled_design(2);
     const PrinterProfile printer = parse_printer(small_printer_toml(600, 300), "test.toml");
     const auto pattern = write_test_pattern(dir, design, printer, 0.3f);
     write_sheet(dir / "front.tif", design, printer, pattern, {});
@@ -395,7 +396,7 @@ TEST(SheetTiff, MirrorIsTheExactLeftRightMirrorAndRerunsAreIdentical) {
 // differently, so the page as a whole differs by more).
 TEST(SheetPreview, ThePageAsPrintedAtScreenSize) {
     TempDir dir;
-    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const optics::Design design = bundled_design(2);
     const PrinterProfile printer = parse_printer(small_printer_toml(600, 300), "test.toml");
     const auto pattern = write_test_pattern(dir, design, printer, 0.3f);
     SheetOptions options;
@@ -438,7 +439,7 @@ TEST(SheetPreview, ThePageAsPrintedAtScreenSize) {
 // copy's dots are the first copy's, dot for dot; too many asked for says how many fit.
 TEST(SheetCopies, AsManyAsFitEachTheSamePrint) {
     TempDir dir;
-    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const optics::Design design = bundled_design(2);
     const PrinterProfile printer = parse_printer(small_printer_toml(300, 150, 120, 150), "test.toml");
     const auto g = patterns::pattern_geometry(design, printer.dpi_x, printer.dpi_y);
     patterns::write_pattern(dir / "steps.exr", Steps(g), {{"white", "0.8"}});
@@ -484,7 +485,7 @@ TEST(SheetCopies, AsManyAsFitEachTheSamePrint) {
 
 TEST(SheetTiff, SixteenBitsKeepTheResolution) {
     TempDir dir;
-    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const optics::Design design = bundled_design(2);
     const PrinterProfile printer = parse_printer(small_printer_toml(300, 150), "test.toml");
     const auto pattern = write_test_pattern(dir, design, printer, 0.5f);
     SheetOptions options;
@@ -519,7 +520,7 @@ long long number_after(const std::string& pdf, const std::string& key, std::size
 
 TEST(SheetPdf, PageIsThePaperSizeAndReRunsAreIdentical) {
     TempDir dir;
-    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const optics::Design design = bundled_design(2);
     const PrinterProfile printer = parse_printer(small_printer_toml(720, 360), "test.toml");
     const auto pattern = write_test_pattern(dir, design, printer, 0.5f);
     write_sheet(dir / "sheet.pdf", design, printer, pattern, {});
@@ -532,7 +533,7 @@ TEST(SheetPdf, PageIsThePaperSizeAndReRunsAreIdentical) {
 
 TEST(SheetPdf, RasterWiderThanCairosLimitIsTiled) {
     TempDir dir;
-    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const optics::Design design = bundled_design(2);
     // 40000 dpi across: Design II's 24 mm are 37796 dots, beyond Cairo's 32767.
     const PrinterProfile printer = parse_printer(small_printer_toml(40000, 60), "test.toml");
     const auto pattern = write_test_pattern(dir, design, printer, 0.5f);
@@ -562,7 +563,7 @@ TEST(SheetPdf, TileJoinsDoNotShowInAntiAliasedViewers) {
     const std::string pdftoppm = RFD_PDFTOPPM, pdftocairo = RFD_PDFTOCAIRO;
     if (pdftoppm.empty() || pdftocairo.empty()) GTEST_SKIP() << "poppler-utils (pdftoppm, pdftocairo) not installed";
     TempDir dir;
-    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const optics::Design design = bundled_design(2);
     const PrinterProfile printer = parse_printer(small_printer_toml(2880, 2880), "test.toml");
     const auto pattern = write_test_pattern(dir, design, printer, 0.5f);
     const SheetLayout layout = write_sheet(dir / "sheet.pdf", design, printer, pattern, {}).layout;
@@ -617,7 +618,7 @@ TEST(SheetPdf, EveryDotAtATileJoinIsThePatternsAtThePrintersResolution) {
     const std::string pdftocairo = RFD_PDFTOCAIRO;
     if (pdftocairo.empty()) GTEST_SKIP() << "poppler-utils (pdftocairo) not installed";
     TempDir dir;
-    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const optics::Design design = bundled_design(2);
     // A paper of whole dots (2 x 2.5 inches): PDF puts the origin at the page's foot, and a
     // fractional page height would shift a renderer that does not snap images to pixels.
     const PrinterProfile printer = parse_printer(small_printer_toml(2880, 2880, 50.8, 63.5), "test.toml");
@@ -654,7 +655,7 @@ TEST(SheetPdf, EveryDotAtATileJoinIsThePatternsAtThePrintersResolution) {
 
 TEST(Sheet, PatternOfTheWrongSizeSaysBothSizes) {
     TempDir dir;
-    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const optics::Design design = bundled_design(2);
     const PrinterProfile at_720 = parse_printer(small_printer_toml(720, 720), "a.toml");
     const PrinterProfile at_600 = parse_printer(small_printer_toml(600, 300), "b.toml");
     const auto pattern = write_test_pattern(dir, design, at_720, 0.5f);
@@ -667,7 +668,7 @@ TEST(Sheet, PatternOfTheWrongSizeSaysBothSizes) {
 
 TEST(Sheet, UnwritableOutputLeavesNothingBehind) {
     TempDir dir;
-    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const optics::Design design = bundled_design(2);
     const PrinterProfile printer = parse_printer(small_printer_toml(300, 150), "test.toml");
     const auto pattern = write_test_pattern(dir, design, printer, 0.5f);
     // A directory where the file should go: the rename fails after the whole sheet is written.
@@ -692,7 +693,7 @@ TEST(Sheet, UnwritableOutputLeavesNothingBehind) {
 
 TEST(Sheet, BadOptionsAndAttributes) {
     TempDir dir;
-    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const optics::Design design = bundled_design(2);
     const PrinterProfile printer = parse_printer(small_printer_toml(300, 150), "test.toml");
     const auto pattern = write_test_pattern(dir, design, printer, 0.5f, {{"white", "bright"}});
     EXPECT_THAT(error_of([&] { write_sheet(dir / "s.tif", design, printer, pattern, {}); }),
@@ -711,7 +712,7 @@ TEST(Sheet, BadOptionsAndAttributes) {
                 HasSubstr("--mirror: a mirrored page is the back sheet of two, but this print has one sheet (--sheets 1)"));
     EXPECT_FALSE(std::filesystem::exists(dir / "s.tif"));
     // Design I does not fit the test printer's small paper.
-    const optics::Design big = optics::load_design(kDesigns / "design1.toml");
+    const optics::Design big = bundled_design(1);
     const PrinterProfile coarse = parse_printer(small_printer_toml(100, 100), "coarse.toml");
     const auto big_pattern = dir / "big.exr";
     patterns::write_pattern(big_pattern, Uniform(patterns::pattern_geometry(big, Dpi{100}, Dpi{100}), 0.5f), {});
@@ -781,7 +782,7 @@ TEST(Moire, PitchRangeParsing) {
 
 // Design I's lenslets: 20.77 per cm^2 on a hexagonal lattice, pitch sqrt(200 / (sqrt(3) 20.77)).
 TEST(Moire, DefaultHypothesesAreCentredOnTheDesignsPitch) {
-    const PitchRange r = default_pitch_range(optics::load_design(kDesigns / "design1.toml"));
+    const PitchRange r = default_pitch_range(bundled_design(1));
     const double pitch = std::sqrt(200.0 / (std::sqrt(3.0) * 20.77));
     ASSERT_EQ(r.steps, 9);
     EXPECT_NEAR(r.values()[4], pitch, 1e-9);
@@ -790,7 +791,7 @@ TEST(Moire, DefaultHypothesesAreCentredOnTheDesignsPitch) {
 
 TEST(Moire, BandsForEveryHypothesisOnPaperSizedPages) {
     TempDir dir;
-    const optics::Design design = optics::load_design(kDesigns / "design1.toml");
+    const optics::Design design = bundled_design(1);
     const PrinterProfile printer = load_printer("epson_stylus_pro_4800");
     MoireOptions options;
     options.x = parse_pitch_range("2.33:2.39:13", "--pitch");
@@ -824,7 +825,7 @@ TEST(Moire, BandsForEveryHypothesisOnPaperSizedPages) {
     for (const auto& band : bands) EXPECT_LE(band.top + 10.0, 297.0 - 3.0);
 
     // A rectangular array: rows default to the x range scaled by pitch_y / pitch_x.
-    const optics::Design rect = optics::load_design(kDesigns / "design2.toml");
+    const optics::Design rect = bundled_design(2);
     options.x = parse_pitch_range("3.9:4.1:5", "--pitch");
     const auto rect_bands = write_moire_pdf(dir / "rect.pdf", rect, printer, options);
     EXPECT_NEAR(rect_bands[5].period, 3.9 * 4.8 / 4.0, 1e-12);

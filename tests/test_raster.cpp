@@ -16,15 +16,16 @@
 #include "patterns/raster.hpp"
 #include "tests/support/error_of.hpp"
 #include "tests/support/temp_dir.hpp"
+#include "tests/support/bundled.hpp"
 
 namespace rfd::patterns {
 namespace {
 
 using ::testing::HasSubstr;
+using rfd::testing::bundled_design;
 using rfd::testing::error_of;
 using rfd::testing::TempDir;
 
-const std::filesystem::path kDesigns = std::filesystem::path(RFD_SOURCE_DIR) / "designs";
 
 // A value every dot can be checked against: distinct per dot and channel, exact in half floats.
 float expected_value(int x, int y, int c) { return static_cast<float>((x * 7 + y * 3 + c) % 64) / 64.0f; }
@@ -62,7 +63,7 @@ PatternGeometry small_geometry() {
 }
 
 TEST(PatternGeometry, CoversTheArrayCentredOnIt) {
-    const optics::Design design = optics::load_design(kDesigns / "design1.toml");
+    const optics::Design design = bundled_design(1);
     const PatternGeometry g = pattern_geometry(design, Dpi{2880}, Dpi{1440});
     const auto& array = std::get<optics::LensletArrayPart>(*design.plane("A").part);
     const Eigen::Vector2d half = array.lattice.half_extent();
@@ -84,7 +85,7 @@ TEST(PatternGeometry, CoversTheArrayCentredOnIt) {
 }
 
 TEST(PatternGeometry, RejectsNonPositiveResolution) {
-    const optics::Design design = optics::load_design(kDesigns / "design2.toml");
+    const optics::Design design = bundled_design(2);
     EXPECT_THAT(error_of([&] { pattern_geometry(design, Dpi{0}, Dpi{1440}); }),
                 HasSubstr("print resolution must be positive"));
 }

@@ -15,16 +15,17 @@
 #include "optics/paraxial.hpp"
 #include "optics/tolerance.hpp"
 #include "tests/support/error_of.hpp"
+#include "tests/support/bundled.hpp"
 
 namespace rfd::optics {
 namespace {
 
 using ::testing::HasSubstr;
+using rfd::testing::bundled_design;
 using rfd::testing::error_of;
 
-const std::filesystem::path kDesigns = std::filesystem::path(RFD_SOURCE_DIR) / "designs";
 
-Design small_design1(int count) { return with_lenslet_count(load_design(kDesigns / "design1.toml"), count, count); }
+Design small_design1(int count) { return with_lenslet_count(bundled_design(1), count, count); }
 
 // Transmittance as a function of the offset from the centre of the lenslet cell a point
 // lies under (0 outside the array): an analytic pattern that repeats with the lattice.
@@ -128,7 +129,7 @@ TEST(SpacerError, MovesTheDiffuserAndThickensTheSpacer) {
     EXPECT_EQ(thicker.plane("B").z, nominal.plane("B").z);
     EXPECT_THAT(error_of([&] { with_spacer_error(nominal, -3.0); }), HasSubstr("without thickness"));
     // Design II: the diffuser hangs in air behind the corrective pair; too thin runs into it.
-    const Design two = load_design(kDesigns / "design2.toml");
+    const Design two = bundled_design(2);
     EXPECT_NEAR(with_spacer_error(two, -1.0).plane("C").z, two.plane("C").z - 1.0, 1e-12);
     EXPECT_THAT(error_of([&] { with_spacer_error(two, -12.0); }), HasSubstr("overlap"));
 }

@@ -7,10 +7,9 @@
 
 #include "core/image.hpp"
 #include "optics/design.hpp"
+#include "tests/support/bundled.hpp"
 
 namespace rfd::testing {
-
-inline const std::filesystem::path kBundledDesigns = std::filesystem::path(RFD_SOURCE_DIR) / "designs";
 
 inline optics::Design design2() { return optics::load_design(kBundledDesigns / "design2.toml"); }
 
