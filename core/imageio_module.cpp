@@ -109,17 +109,20 @@ public:
 
 private:
     // OpenImageIO 2.4's read_scanlines allocates a 64 MB buffer on every call, however few
-    // rows are asked for: a pattern read a strip at a time paid for a fresh mapping per strip
-    // (a minute of page faults under the sanitizers). Rows of a file whose channels share one
-    // type are read as stored, a bounded band at a time into a buffer kept here, and
-    // converted into `out` by OpenImageIO's own conversion.
+    // rows are asked for and whatever their type: a pattern read a strip at a time paid for
+    // a fresh mapping per strip (a minute of page faults under the sanitizers). Rows of a
+    // file whose channels share one type are read as stored: straight into `out` when that
+    // is the type asked for, else a bounded band at a time into a buffer kept here and
+    // converted by OpenImageIO's own conversion.
     bool read_scanlines(int y0, int y1, OIIO::TypeDesc type, void* out) {
         const OIIO::ImageSpec& spec = input_->spec();
-        if (type == spec.format || !spec.channelformats.empty() || spec_.channels != spec.nchannels)
+        if (!spec.channelformats.empty() || spec_.channels != spec.nchannels)
             return input_->read_scanlines(0, 0, y0, y1, 0, 0, spec_.channels, type, out);
+        if (type == spec.format) return input_->read_native_scanlines(0, 0, y0, y1, 0, 0, spec.nchannels, out);
         constexpr std::size_t kBandBytes = std::size_t{8} << 20;
         const std::size_t row_values = static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec.nchannels);
-        const int band = static_cast<int>(std::clamp<std::size_t>(kBandBytes / std::max<std::size_t>(1, row_values * spec.format.size()), 1, 4096));
+        const std::size_t row_bytes = std::max<std::size_t>(1, row_values * spec.format.size());
+        const int band = static_cast<int>(std::clamp<std::size_t>(kBandBytes / row_bytes, 1, 4096));
         auto* to = static_cast<std::byte*>(out);
         for (int y = y0; y < y1; y += band) {
             const int rows = std::min(band, y1 - y);

@@ -50,8 +50,9 @@ TEST(ImageIo, ExrRoundTripIsBitExact) {
 
 TEST(ImageIo, RowsReadAsStoredConvertExactlyAcrossTheReadersBands) {
     // Half-float rows read as floats go through the reader's own buffer, 8 MB of stored rows
-    // at a time (932 rows of this width): reads within a band, across its edge and of the
-    // whole image give every value back. Whole numbers below 2048 are exact in half floats.
+    // at a time (932 rows of this width); float rows go straight into the caller's. Reads
+    // within a band, across its edge and of the whole image give every value back. Whole
+    // numbers below 2048 are exact in half floats.
     TempDir dir;
     const int width = 1500, height = 1000, channels = 3;
     const auto value = [](int x, int y, int c) { return static_cast<float>((7 * x + 13 * y + 5 * c) % 2048); };
@@ -60,23 +61,26 @@ TEST(ImageIo, RowsReadAsStoredConvertExactlyAcrossTheReadersBands) {
         for (int x = 0; x < width; ++x)
             for (int c = 0; c < channels; ++c)
                 written[static_cast<std::size_t>((y * width + x) * channels + c)] = value(x, y, c);
-    ImageFileSpec spec;
-    spec.width = width;
-    spec.height = height;
-    spec.channels = channels;
-    spec.type = SampleType::Half;
-    ImageFileWriter writer(dir / "big.exr", spec);
-    writer.write_rows(0, height, written);
-    writer.finish();
+    for (const SampleType type : {SampleType::Half, SampleType::Float32}) {
+        ImageFileSpec spec;
+        spec.width = width;
+        spec.height = height;
+        spec.channels = channels;
+        spec.type = type;
+        const auto path = dir / (type == SampleType::Half ? "half.exr" : "float.exr");
+        ImageFileWriter writer(path, spec);
+        writer.write_rows(0, height, written);
+        writer.finish();
 
-    ImageFileReader reader(dir / "big.exr");
-    ASSERT_EQ(reader.spec().type, SampleType::Half);
-    const std::size_t row = static_cast<std::size_t>(width * channels);
-    for (const auto& [y0, y1] : {std::pair{0, 1}, std::pair{100, 164}, std::pair{930, 935}, std::pair{0, height}}) {
-        std::vector<float> read(row * static_cast<std::size_t>(y1 - y0), -1.0f);
-        reader.read_rows(y0, y1, read);
-        EXPECT_TRUE(std::equal(read.begin(), read.end(), written.begin() + static_cast<std::ptrdiff_t>(row * y0)))
-            << "rows " << y0 << "-" << y1;
+        ImageFileReader reader(path);
+        ASSERT_EQ(reader.spec().type, type);
+        const std::size_t row = static_cast<std::size_t>(width * channels);
+        for (const auto& [y0, y1] : {std::pair{0, 1}, std::pair{100, 164}, std::pair{930, 935}, std::pair{0, height}}) {
+            std::vector<float> read(row * static_cast<std::size_t>(y1 - y0), -1.0f);
+            reader.read_rows(y0, y1, read);
+            EXPECT_TRUE(std::equal(read.begin(), read.end(), written.begin() + static_cast<std::ptrdiff_t>(row * y0)))
+                << path.filename() << ", rows " << y0 << "-" << y1;
+        }
     }
 }
 
