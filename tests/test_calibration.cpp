@@ -21,7 +21,7 @@
 namespace rfd::relight {
 namespace {
 
-struct DiskLight {
+struct LampDisk {
     Eigen::Vector3d direction;  // unit, toward the light
     double radius = degrees_to_radians(3.0);
     float intensity = 20.0f;
@@ -29,7 +29,7 @@ struct DiskLight {
 
 // An orthographic photograph of a mirror sphere: each of s x s sub-pixels inside the outline
 // reflects the view vector and sees the lights' disks, else a dim environment.
-Image render(int width, int height, const MirrorSphere& sphere, const std::vector<DiskLight>& lights,
+Image photograph(int width, int height, const MirrorSphere& sphere, const std::vector<LampDisk>& lights,
              float environment = 0.05f, int supersample = 6, float clip = 0.0f) {
     Image image(width, height, 3);
     for (int y = 0; y < height; ++y)
@@ -46,7 +46,7 @@ Image render(int width, int height, const MirrorSphere& sphere, const std::vecto
                     const double nz = std::sqrt(std::max(0.0, 1.0 - nx * nx - ny * ny));
                     const Eigen::Vector3d l(2 * nz * nx, 2 * nz * ny, 2 * nz * nz - 1);
                     double v = environment;
-                    for (const DiskLight& light : lights)
+                    for (const LampDisk& light : lights)
                         if (angle_between(l, light.direction) < light.radius) v += light.intensity;
                     sum += v;
                 }
@@ -58,7 +58,7 @@ Image render(int width, int height, const MirrorSphere& sphere, const std::vecto
 }
 
 const MirrorSphere kSphere{64.3, 63.8, 60.0};  // off the pixel grid on purpose
-constexpr int kSize = 128;
+constexpr int kPhotoSide = 128;
 
 double error_degrees(const Highlight& h, const Eigen::Vector3d& truth) {
     return radians_to_degrees(angle_between(h.direction, truth));
@@ -91,7 +91,7 @@ TEST(Calibration, RecoversDirectionsOverTheUpperHemisphere) {
     for (const double theta : {0.0, 10.0, 25.0, 40.0, 55.0, 70.0, 85.0})
         for (const double phi : {0.0, 37.0, 100.0, 200.0, 290.0}) {
             const Eigen::Vector3d truth = direction_from_angles(degrees_to_radians(theta), degrees_to_radians(phi));
-            const Highlight h = find_highlight(render(kSize, kSize, kSphere, {{truth}}), kSphere);
+            const Highlight h = find_highlight(photograph(kPhotoSide, kPhotoSide, kSphere, {{truth}}), kSphere);
             ASSERT_EQ(h.status, HighlightStatus::Found) << theta << " " << phi;
             EXPECT_EQ(h.blobs, 1);
             EXPECT_FALSE(h.touches_rim);
@@ -114,14 +114,14 @@ TEST(Calibration, NearTheRimAccuracyDegradesAsStated) {
     for (const auto& c : cases)
         for (const double phi : {20.0, 135.0, 250.0}) {
             const Eigen::Vector3d truth = direction_from_angles(degrees_to_radians(c.theta_deg), degrees_to_radians(phi));
-            const Highlight h = find_highlight(render(kSize, kSize, kSphere, {{truth}}), kSphere);
+            const Highlight h = find_highlight(photograph(kPhotoSide, kPhotoSide, kSphere, {{truth}}), kSphere);
             ASSERT_EQ(h.status, HighlightStatus::Found) << c.theta_deg << " " << phi;
             EXPECT_LT(error_degrees(h, truth), c.bound_deg)
                 << "theta " << c.theta_deg << " phi " << phi << ": " << error_degrees(h, truth) << " deg";
         }
     // At 165 degrees the highlight reaches the outermost ring of pixels and is flagged.
     const Highlight far = find_highlight(
-        render(kSize, kSize, kSphere, {{direction_from_angles(degrees_to_radians(165.0), 0.3)}}), kSphere);
+        photograph(kPhotoSide, kPhotoSide, kSphere, {{direction_from_angles(degrees_to_radians(165.0), 0.3)}}), kSphere);
     EXPECT_TRUE(far.touches_rim);
 }
 
@@ -131,7 +131,7 @@ TEST(Calibration, ClippedHighlightsStillCentre) {
     // against 0.07 degrees unclipped. Calibrate from HDR images where it matters.
     for (const double theta : {5.0, 45.0, 80.0}) {
         const Eigen::Vector3d truth = direction_from_angles(degrees_to_radians(theta), degrees_to_radians(60.0));
-        const Highlight h = find_highlight(render(kSize, kSize, kSphere, {{truth}}, 0.05f, 6, 1.0f), kSphere);
+        const Highlight h = find_highlight(photograph(kPhotoSide, kPhotoSide, kSphere, {{truth}}, 0.05f, 6, 1.0f), kSphere);
         ASSERT_EQ(h.status, HighlightStatus::Found);
         EXPECT_LT(error_degrees(h, truth), 0.5) << theta;
     }
@@ -140,23 +140,23 @@ TEST(Calibration, ClippedHighlightsStillCentre) {
 TEST(Calibration, ReportsPhotographsWithoutOneUsableHighlight) {
     const Eigen::Vector3d a = direction_from_angles(degrees_to_radians(30.0), 0.0);
     const Eigen::Vector3d b = direction_from_angles(degrees_to_radians(50.0), degrees_to_radians(180.0));
-    EXPECT_EQ(find_highlight(Image(kSize, kSize, 3, 0.0f), kSphere).status, HighlightStatus::None);
+    EXPECT_EQ(find_highlight(Image(kPhotoSide, kPhotoSide, 3, 0.0f), kSphere).status, HighlightStatus::None);
     // Outlines off the image or meaningless find nothing (and must not overflow or crash).
-    const Image lit = render(kSize, kSize, kSphere, {{a}});
+    const Image lit = photograph(kPhotoSide, kPhotoSide, kSphere, {{a}});
     EXPECT_EQ(find_highlight(lit, MirrorSphere{1e300, -1e300, 1e300}).status, HighlightStatus::None);
     EXPECT_EQ(find_highlight(lit, MirrorSphere{NAN, 64, 60}).status, HighlightStatus::None);
     EXPECT_EQ(find_highlight(lit, MirrorSphere{-500, 64, 60}).status, HighlightStatus::None);
-    EXPECT_EQ(find_highlight(Image(kSize, kSize, 3, 1.0f), kSphere).status, HighlightStatus::None);  // all clipped
-    const Highlight two = find_highlight(render(kSize, kSize, kSphere, {{a}, {b}}), kSphere);
+    EXPECT_EQ(find_highlight(Image(kPhotoSide, kPhotoSide, 3, 1.0f), kSphere).status, HighlightStatus::None);  // all clipped
+    const Highlight two = find_highlight(photograph(kPhotoSide, kPhotoSide, kSphere, {{a}, {b}}), kSphere);
     EXPECT_EQ(two.status, HighlightStatus::Multiple);
     EXPECT_EQ(two.blobs, 2);
     // A light of 70 degrees radius floods the sphere; clipped, it is flat over half of it.
     const Highlight flooded = find_highlight(
-        render(kSize, kSize, kSphere, {{a, degrees_to_radians(70.0)}}, 0.05f, 2, 1.0f), kSphere);
+        photograph(kPhotoSide, kPhotoSide, kSphere, {{a, degrees_to_radians(70.0)}}, 0.05f, 2, 1.0f), kSphere);
     EXPECT_EQ(flooded.status, HighlightStatus::Overexposed);
     EXPECT_GT(flooded.coverage, 0.25);
     // A dimmer second light below half the peak is environment, not a second highlight.
-    const Highlight dim = find_highlight(render(kSize, kSize, kSphere, {{a}, {b, degrees_to_radians(3.0), 5.0f}}), kSphere);
+    const Highlight dim = find_highlight(photograph(kPhotoSide, kPhotoSide, kSphere, {{a}, {b, degrees_to_radians(3.0), 5.0f}}), kSphere);
     EXPECT_EQ(dim.status, HighlightStatus::Found);
     EXPECT_LT(error_degrees(dim, a), 0.25);
 }
@@ -164,9 +164,9 @@ TEST(Calibration, ReportsPhotographsWithoutOneUsableHighlight) {
 TEST(Calibration, CalibrateLightsNamesTheFailingImage) {
     rfd::testing::TempDir dir;
     const Eigen::Vector3d truth = direction_from_angles(degrees_to_radians(40.0), degrees_to_radians(70.0));
-    write_image(dir / "ball_0.exr", render(kSize, kSize, kSphere, {{truth}}));
-    write_image(dir / "ball_1.png", render(kSize, kSize, kSphere, {{truth}}, 0.05f, 6, 1.0f));
-    write_image(dir / "black.png", Image(kSize, kSize, 3, 0.0f));
+    write_image(dir / "ball_0.exr", photograph(kPhotoSide, kPhotoSide, kSphere, {{truth}}));
+    write_image(dir / "ball_1.png", photograph(kPhotoSide, kPhotoSide, kSphere, {{truth}}, 0.05f, 6, 1.0f));
+    write_image(dir / "black.png", Image(kPhotoSide, kPhotoSide, 3, 0.0f));
     write_image(dir / "small.png", Image(100, 100, 3, 0.0f));
     const auto lights = calibrate_lights({dir / "ball_0.exr", dir / "ball_1.png"}, kSphere);
     ASSERT_EQ(lights.size(), 2u);

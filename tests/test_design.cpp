@@ -68,7 +68,7 @@ std::string replace(std::string text, const std::string& from, const std::string
 }
 
 // Parses `text` and returns the InputError message ("" if it parsed).
-std::string error_of(const std::string& text) {
+std::string design_error_of(const std::string& text) {
     try {
         parse_design(text, "test.toml");
     } catch (const InputError& error) {
@@ -120,42 +120,42 @@ TEST(Design, PresetPlanesSitWhereTheOpticsWantThem) {
     }
 }
 
-TEST(Design, ValidTestDesignParses) { EXPECT_EQ(error_of(kDesignI), ""); }
+TEST(Design, ValidTestDesignParses) { EXPECT_EQ(design_error_of(kDesignI), ""); }
 
 TEST(Design, UnknownKeyNamesFileLineAndKey) {
     const std::string text = replace(kDesignI, "focal_length_mm = 3.0", "focal_length_mm = 3.0\nfocal_lenght_mm = 3.0");
-    EXPECT_THAT(error_of(text), HasSubstr("test.toml:18"));
-    EXPECT_THAT(error_of(text), HasSubstr("parts.array.focal_lenght_mm: unknown key"));
+    EXPECT_THAT(design_error_of(text), HasSubstr("test.toml:18"));
+    EXPECT_THAT(design_error_of(text), HasSubstr("parts.array.focal_lenght_mm: unknown key"));
 }
 
 TEST(Design, MissingKeyNamesItsTable) {
     const std::string text = replace(kDesignI, "center_thickness_mm = 2.0\n", "");
-    EXPECT_THAT(error_of(text), HasSubstr("missing required key 'parts.array.center_thickness_mm'"));
+    EXPECT_THAT(design_error_of(text), HasSubstr("missing required key 'parts.array.center_thickness_mm'"));
 }
 
 TEST(Design, WrongUnitIsSaidToBeAUnit) {
     const std::string text = replace(kDesignI, "z_mm = 6.0", "z_cm = 0.6");
-    EXPECT_THAT(error_of(text), HasSubstr("wrong unit"));
-    EXPECT_THAT(error_of(text), HasSubstr("planes.C.z_cm"));
+    EXPECT_THAT(design_error_of(text), HasSubstr("wrong unit"));
+    EXPECT_THAT(design_error_of(text), HasSubstr("planes.C.z_cm"));
 }
 
 TEST(Design, CellCornersOutsideTheLensSphereAreImpossible) {
     // Hex corner distance pitch/sqrt(3) = 1.361 mm > R = 1.2 mm.
     std::string text = replace(kDesignI, "radius_mm = 1.4751", "radius_mm = 1.2");
     text = replace(text, "focal_length_mm = 3.0", "focal_length_mm = 2.44");
-    EXPECT_THAT(error_of(text), HasSubstr("cell corners"));
-    EXPECT_THAT(error_of(text), HasSubstr("outside the lens sphere"));
-    EXPECT_THAT(error_of(text), HasSubstr("parts.array.radius_mm"));
+    EXPECT_THAT(design_error_of(text), HasSubstr("cell corners"));
+    EXPECT_THAT(design_error_of(text), HasSubstr("outside the lens sphere"));
+    EXPECT_THAT(design_error_of(text), HasSubstr("parts.array.radius_mm"));
 }
 
 TEST(Design, LensThinnerThanItsSagIsImpossible) {
     const std::string text = replace(kDesignI, "center_thickness_mm = 2.0", "center_thickness_mm = 0.5");
-    EXPECT_THAT(error_of(text), HasSubstr("thinner than its sag"));
+    EXPECT_THAT(design_error_of(text), HasSubstr("thinner than its sag"));
 }
 
 TEST(Design, OverlappingPlanesAreRejected) {
     const std::string text = replace(kDesignI, "z_mm = 3.6592", "z_mm = 1.5");
-    EXPECT_THAT(error_of(text), HasSubstr("plane B overlaps plane A by 0.5 mm"));
+    EXPECT_THAT(design_error_of(text), HasSubstr("plane B overlaps plane A by 0.5 mm"));
 }
 
 TEST(Design, PlanesTouchingWithinRoundingBuildASystemInOrder) {
@@ -163,7 +163,7 @@ TEST(Design, PlanesTouchingWithinRoundingBuildASystemInOrder) {
     // check takes for touching; build_system then put B's surface before A's back and
     // failed its ordering check (an abort) instead of placing B on A.
     const std::string text = replace(kDesignI, "z_mm = 3.6592", "z_mm = 1.9999995");
-    ASSERT_EQ(error_of(text), "");
+    ASSERT_EQ(design_error_of(text), "");
     const SequentialSystem system = build_system(parse_design(text, "test.toml"));
     ASSERT_EQ(system.surfaces[2].label, "B pattern");
     EXPECT_EQ(system.surfaces[2].z, system.surfaces[1].z);
@@ -172,57 +172,57 @@ TEST(Design, PlanesTouchingWithinRoundingBuildASystemInOrder) {
 
 TEST(Design, NegativeDistancesAreRejected) {
     const std::string text = replace(kDesignI, "z_mm = 6.0", "z_mm = 3.0");
-    EXPECT_THAT(error_of(text), HasSubstr("negative or zero distance from plane B"));
-    EXPECT_THAT(error_of(text), HasSubstr("planes.C.z_mm"));
+    EXPECT_THAT(design_error_of(text), HasSubstr("negative or zero distance from plane B"));
+    EXPECT_THAT(design_error_of(text), HasSubstr("planes.C.z_mm"));
 }
 
 TEST(Design, NegativeThicknessIsRejected) {
     const std::string text = replace(kDesignI, "thickness_mm = 0.13", "thickness_mm = -0.13");
-    EXPECT_THAT(error_of(text), HasSubstr("parts.diffuser.thickness_mm"));
-    EXPECT_THAT(error_of(text), HasSubstr("outside the allowed range [0.001, 100000]"));
+    EXPECT_THAT(design_error_of(text), HasSubstr("parts.diffuser.thickness_mm"));
+    EXPECT_THAT(design_error_of(text), HasSubstr("outside the allowed range [0.001, 100000]"));
 }
 
 // Values no part has, which would make every derived figure 0, huge or NaN, are refused
 // with their key (rfd design show printed "pitch 0.0000 mm" and "nan um" for 3e38).
 TEST(Design, LengthsAndDensitiesOutsideWhatPartsHaveAreRejected) {
     const std::string dense = replace(kDesignI, "pitch_mm = 2.358", "lenses_per_cm2 = 3e38");
-    EXPECT_THAT(error_of(dense), AllOf(HasSubstr("parts.array.lenses_per_cm2"), HasSubstr("outside the allowed range")));
-    EXPECT_EQ(error_of(replace(kDesignI, "pitch_mm = 2.358", "lenses_per_cm2 = 20.77")), "");
-    EXPECT_THAT(error_of(replace(kDesignI, "pitch_mm = 2.358", "pitch_mm = 1e-9")),
+    EXPECT_THAT(design_error_of(dense), AllOf(HasSubstr("parts.array.lenses_per_cm2"), HasSubstr("outside the allowed range")));
+    EXPECT_EQ(design_error_of(replace(kDesignI, "pitch_mm = 2.358", "lenses_per_cm2 = 20.77")), "");
+    EXPECT_THAT(design_error_of(replace(kDesignI, "pitch_mm = 2.358", "pitch_mm = 1e-9")),
                 AllOf(HasSubstr("parts.array.pitch_mm"), HasSubstr("outside the allowed range")));
-    EXPECT_THAT(error_of(replace(kDesignI, "radius_mm = 1.4751", "radius_mm = 1e300")),
+    EXPECT_THAT(design_error_of(replace(kDesignI, "radius_mm = 1.4751", "radius_mm = 1e300")),
                 HasSubstr("parts.array.radius_mm"));
     const std::string rectangular = replace(replace(kDesignI, "lattice = \"hexagonal\"", "lattice = \"rectangular\""),
                                             "pitch_mm = 2.358", "pitch_mm = [2.358, 1e7]");
-    EXPECT_THAT(error_of(rectangular), AllOf(HasSubstr("parts.array.pitch_mm"), HasSubstr("expected lengths from")));
+    EXPECT_THAT(design_error_of(rectangular), AllOf(HasSubstr("parts.array.pitch_mm"), HasSubstr("expected lengths from")));
 }
 
 TEST(Design, FocalLengthMustMatchThePrescription) {
     const std::string text = replace(kDesignI, "focal_length_mm = 3.0", "focal_length_mm = 4.0");
-    EXPECT_THAT(error_of(text), HasSubstr("give f = R/(n-1) = 3"));
+    EXPECT_THAT(design_error_of(text), HasSubstr("give f = R/(n-1) = 3"));
 }
 
 TEST(Design, ExactlyOnePatternPlaneAndADiffuserForDesignI) {
-    EXPECT_THAT(error_of(replace(kDesignI, "pattern = true", "pattern = false\npart = \"diffuser\"")),
+    EXPECT_THAT(design_error_of(replace(kDesignI, "pattern = true", "pattern = false\npart = \"diffuser\"")),
                 HasSubstr("exactly one plane with pattern = true"));
-    EXPECT_THAT(error_of(replace(kDesignI, "diffuser = true", "diffuser = false")),
+    EXPECT_THAT(design_error_of(replace(kDesignI, "diffuser = true", "diffuser = false")),
                 HasSubstr("diffuser"));
 }
 
 TEST(Design, UnknownPartAndMaterialAreNamed) {
-    EXPECT_THAT(error_of(replace(kDesignI, "part = \"array\"", "part = \"arrray\"")),
+    EXPECT_THAT(design_error_of(replace(kDesignI, "part = \"array\"", "part = \"arrray\"")),
                 HasSubstr("no part named 'arrray'"));
-    EXPECT_THAT(error_of(replace(kDesignI, "material = \"PMMA\"", "material = \"unobtainium\"")),
+    EXPECT_THAT(design_error_of(replace(kDesignI, "material = \"PMMA\"", "material = \"unobtainium\"")),
                 HasSubstr("unknown material 'unobtainium'"));
 }
 
 TEST(Design, MacroGridOnlyForDesignIVAndItMustFitThePart) {
-    EXPECT_THAT(error_of(kDesignI + "\n[macro]\ncount = [2, 2]\npitch_mm = [30.0, 30.0]\n"),
+    EXPECT_THAT(design_error_of(kDesignI + "\n[macro]\ncount = [2, 2]\npitch_mm = [30.0, 30.0]\n"),
                 HasSubstr("Design IV only"));
     std::ifstream file(std::string(RFD_SOURCE_DIR) + "/designs/design4.toml");
     const std::string four((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
-    EXPECT_EQ(error_of(four), "");
-    EXPECT_THAT(error_of(replace(four, "pitch_mm = [34.0, 34.0]", "pitch_mm = [20.0, 34.0]")),
+    EXPECT_EQ(design_error_of(four), "");
+    EXPECT_THAT(design_error_of(replace(four, "pitch_mm = [34.0, 34.0]", "pitch_mm = [20.0, 34.0]")),
                 HasSubstr("smaller than the widest part (30 x 30 mm)"));
 }
 

@@ -14,17 +14,17 @@
 namespace rfd::relight {
 namespace {
 
-constexpr int kSide = 40;
+constexpr int kPriorSide = 40;
 
 // A colour texture with edges in both directions and a slow gradient: every window of it is
 // distinctive enough to be found again.
 Image texture(int shift_x = 0) {
-    Image out(kSide, kSide, 3);
-    for (int y = 0; y < kSide; ++y)
-        for (int x = 0; x < kSide; ++x) {
+    Image out(kPriorSide, kPriorSide, 3);
+    for (int y = 0; y < kPriorSide; ++y)
+        for (int x = 0; x < kPriorSide; ++x) {
             const int u = x + shift_x;
             const float checker = ((u / 5 + y / 7) % 2 == 0) ? 1.0f : 0.35f;
-            const float ramp = 0.5f + 0.5f * static_cast<float>(u + y) / (2.0f * kSide);
+            const float ramp = 0.5f + 0.5f * static_cast<float>(u + y) / (2.0f * kPriorSide);
             for (int c = 0; c < 3; ++c) out.at(x, y, c) = checker * ramp * (0.6f + 0.2f * static_cast<float>(c));
         }
     return out;
@@ -51,9 +51,9 @@ Image corrupted(const Image& image, const std::vector<std::uint8_t>& mask, float
 }
 
 std::vector<std::uint8_t> square(int x0, int y0, int size) {
-    std::vector<std::uint8_t> mask(static_cast<std::size_t>(kSide * kSide), 0);
+    std::vector<std::uint8_t> mask(static_cast<std::size_t>(kPriorSide * kPriorSide), 0);
     for (int y = y0; y < y0 + size; ++y)
-        for (int x = x0; x < x0 + size; ++x) mask[static_cast<std::size_t>(y * kSide + x)] = 1;
+        for (int x = x0; x < x0 + size; ++x) mask[static_cast<std::size_t>(y * kPriorSide + x)] = 1;
     return mask;
 }
 
@@ -123,7 +123,7 @@ TEST(ImagePriors, TheMatchingSourceWinsOverAnUnrelatedOne) {
     // Two sources: a flat grey image and the texture. A smeared (mean-filled) square must
     // take its texture back from the second.
     const Image truth = scaled(texture(), 0.8f);
-    Image flat(kSide, kSide, 3);
+    Image flat(kPriorSide, kPriorSide, 3);
     for (float& v : flat.samples()) v = 0.4f;
     const Image source = texture();
     const auto mask = square(10, 10, 8);
@@ -171,7 +171,7 @@ TEST(ImagePriorsDeathTest, MismatchedSourcesAreABug) {
     const Image source = texture();
     const PatchBasis basis = PatchBasis::fit({&source}, 2, 8);
     const auto mask = square(5, 5, 5);
-    const Image other(kSide + 1, kSide, 3);
+    const Image other(kPriorSide + 1, kPriorSide, 3);
     EXPECT_DEATH(regularise_with_priors(source, mask, {}, basis, PriorOptions{}), "check failed");
     EXPECT_DEATH(regularise_with_priors(source, mask, {&other}, basis, PriorOptions{}), "check failed");
     EXPECT_DEATH(regularise_with_priors(source, {1, 0}, {&source}, basis, PriorOptions{}), "check failed");

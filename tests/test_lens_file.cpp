@@ -19,7 +19,7 @@ using ::testing::AllOf;
 using ::testing::HasSubstr;
 
 // The message of the InputError that parsing `text` throws ("" if none is thrown).
-std::string error_of(const std::string& text) {
+std::string lens_error_of(const std::string& text) {
     try {
         parse_lens_system(text, "lens.toml");
     } catch (const InputError& error) {
@@ -35,44 +35,44 @@ std::string lens(const std::string& first_surface_keys) {
 }
 
 TEST(LensFile, EachMistakeNamesFileLineAndKey) {
-    EXPECT_THAT(error_of(lens("radius_mm = 0\nthickness_mm = 2\nindex = 1.5\nsemi_diameter_mm = 5\n")),
+    EXPECT_THAT(lens_error_of(lens("radius_mm = 0\nthickness_mm = 2\nindex = 1.5\nsemi_diameter_mm = 5\n")),
                 HasSubstr("lens.toml:3:13: surface[0].radius_mm: a radius of 0 is not a surface; "
                           "use radius = \"flat\""));
-    EXPECT_THAT(error_of(lens("radius_mm = 20\nthickness_mm = 2\nindex = 1.5\nmaterial = \"N-BK7\"\n"
+    EXPECT_THAT(lens_error_of(lens("radius_mm = 20\nthickness_mm = 2\nindex = 1.5\nmaterial = \"N-BK7\"\n"
                               "semi_diameter_mm = 5\n")),
                 HasSubstr("lens.toml:5:9: surface[0].index: give exactly one of material = \"NAME\" "
                           "or index = N"));
-    EXPECT_THAT(error_of(lens("radius_mm = 20\nthickness_mm = 2\nsemi_diameter_mm = 5\n")),
+    EXPECT_THAT(lens_error_of(lens("radius_mm = 20\nthickness_mm = 2\nsemi_diameter_mm = 5\n")),
                 AllOf(HasSubstr("lens.toml:2:"), HasSubstr("surface[0]"), HasSubstr("give exactly one of")));
-    EXPECT_THAT(error_of(lens("radius_mm = 20\nthickness_mm = 2\nmaterial = \"BK7\"\nsemi_diameter_mm = 5\n")),
+    EXPECT_THAT(lens_error_of(lens("radius_mm = 20\nthickness_mm = 2\nmaterial = \"BK7\"\nsemi_diameter_mm = 5\n")),
                 HasSubstr("lens.toml:5:12: surface[0].material: unknown material 'BK7'; known: air, N-BK7, "
                           "B270, fused-silica, PMMA, polycarbonate, PET"));
-    EXPECT_THAT(error_of(lens("radius_mm = 4\nthickness_mm = 2\nindex = 1.5\nsemi_diameter_mm = 5\n")),
+    EXPECT_THAT(lens_error_of(lens("radius_mm = 4\nthickness_mm = 2\nindex = 1.5\nsemi_diameter_mm = 5\n")),
                 HasSubstr("lens.toml:6:20: surface[0].semi_diameter_mm: the surface does not extend to "
                           "this semi-diameter"));
-    EXPECT_THAT(error_of(lens("radius_mm = 20\nthikness_mm = 2\nindex = 1.5\nsemi_diameter_mm = 5\n")),
+    EXPECT_THAT(lens_error_of(lens("radius_mm = 20\nthikness_mm = 2\nindex = 1.5\nsemi_diameter_mm = 5\n")),
                 HasSubstr("lens.toml:4:15: surface[0].thikness_mm: unknown key (did you mean 'thickness_mm'?)"));
-    EXPECT_THAT(error_of(lens("radius = \"flat\"\nconic = -1\nthickness_mm = 2\nindex = 1.5\nsemi_diameter_mm = 5\n")),
+    EXPECT_THAT(lens_error_of(lens("radius = \"flat\"\nconic = -1\nthickness_mm = 2\nindex = 1.5\nsemi_diameter_mm = 5\n")),
                 HasSubstr("lens.toml:4:9: surface[0].conic: a flat surface has no conic constant"));
-    EXPECT_THAT(error_of(lens("radius = 20\nthickness_mm = 2\nindex = 1.5\nsemi_diameter_mm = 5\n")),
+    EXPECT_THAT(lens_error_of(lens("radius = 20\nthickness_mm = 2\nindex = 1.5\nsemi_diameter_mm = 5\n")),
                 HasSubstr("surface[0].radius: expected a string, found an integer"));
-    EXPECT_THAT(error_of(lens("radius = \"convex\"\nthickness_mm = 2\nindex = 1.5\nsemi_diameter_mm = 5\n")),
+    EXPECT_THAT(lens_error_of(lens("radius = \"convex\"\nthickness_mm = 2\nindex = 1.5\nsemi_diameter_mm = 5\n")),
                 HasSubstr("surface[0].radius: expected radius = \"flat\" or a number in radius_mm"));
-    EXPECT_THAT(error_of(lens("radius_mm = 20\nthickness_mm = 2\nindex = 5\nsemi_diameter_mm = 5\n")),
+    EXPECT_THAT(lens_error_of(lens("radius_mm = 20\nthickness_mm = 2\nindex = 5\nsemi_diameter_mm = 5\n")),
                 HasSubstr("surface[0].index: value 5 is outside the allowed range [1, 4]"));
-    EXPECT_THAT(error_of(lens("radius_mm = 20\nthickness_mm = -2\nindex = 1.5\nsemi_diameter_mm = 5\n")),
+    EXPECT_THAT(lens_error_of(lens("radius_mm = 20\nthickness_mm = -2\nindex = 1.5\nsemi_diameter_mm = 5\n")),
                 HasSubstr("surface[0].thickness_mm: expected a number >= 0, found -2"));
-    EXPECT_THAT(error_of(lens("radius_mm = 20\nthickness_mm = 2\nindex = 1.5\nsemi_diameter_mm = 0\n")),
+    EXPECT_THAT(lens_error_of(lens("radius_mm = 20\nthickness_mm = 2\nindex = 1.5\nsemi_diameter_mm = 0\n")),
                 HasSubstr("surface[0].semi_diameter_mm: expected a positive number, found 0"));
-    EXPECT_THAT(error_of(lens("radius_mm = 20\nthickness_cm = 0.2\nindex = 1.5\nsemi_diameter_mm = 5\n")),
+    EXPECT_THAT(lens_error_of(lens("radius_mm = 20\nthickness_cm = 0.2\nindex = 1.5\nsemi_diameter_mm = 5\n")),
                 HasSubstr("lens.toml:4:16: surface[0].thickness_cm: wrong unit: expected 'thickness_mm' in "
                           "millimetres, found 'thickness_cm' (centimetres)"));
-    EXPECT_THAT(error_of("name = \"x\"\nfocal_length_mm = 50\n" + lens("radius_mm = 20\nthickness_mm = 2\n"
+    EXPECT_THAT(lens_error_of("name = \"x\"\nfocal_length_mm = 50\n" + lens("radius_mm = 20\nthickness_mm = 2\n"
                                                                        "index = 1.5\nsemi_diameter_mm = 5\n")
                                                                      .substr(std::string("name = \"test\"\n").size())),
                 HasSubstr("lens.toml:2:19: focal_length_mm: unknown key"));
-    EXPECT_THAT(error_of("name = \"x\"\n"), HasSubstr("missing required key 'surface'"));
-    EXPECT_THAT(error_of("name = \"x\"\n[[surface]]\nradius = \"flat\"\nindex = 1.5\n"),
+    EXPECT_THAT(lens_error_of("name = \"x\"\n"), HasSubstr("missing required key 'surface'"));
+    EXPECT_THAT(lens_error_of("name = \"x\"\n[[surface]]\nradius = \"flat\"\nindex = 1.5\n"),
                 HasSubstr("a lens system needs at least two surfaces"));
     EXPECT_THROW(load_lens_system("/nonexistent/lens.toml"), IoError);
 }
@@ -84,16 +84,16 @@ TEST(LensFile, TheLastSurfacesThicknessIsOptionalButChecked) {
                              "[[surface]]\nradius = \"flat\"\nmaterial = \"air\"\nsemi_diameter_mm = 5\n";
     EXPECT_EQ(parse_lens_system(text, "lens.toml").surfaces.size(), 2u);
     EXPECT_EQ(parse_lens_system(text + "thickness_mm = 30\n", "lens.toml").surfaces.size(), 3u);
-    EXPECT_THAT(error_of(text + "thickness_cm = 3\n"),
+    EXPECT_THAT(lens_error_of(text + "thickness_cm = 3\n"),
                 HasSubstr("lens.toml:10:16: surface[1].thickness_cm: wrong unit: expected 'thickness_mm' in "
                           "millimetres, found 'thickness_cm' (centimetres)"));
-    EXPECT_THAT(error_of(text + "thicknes_mm = 30\n"),
+    EXPECT_THAT(lens_error_of(text + "thicknes_mm = 30\n"),
                 HasSubstr("surface[1].thicknes_mm: unknown key (did you mean 'thickness_mm'?)"));
 }
 
 TEST(LensFile, SurfacesThatCrossInsideTheApertureAreRejected) {
     // Spheres: a biconvex lens too thin for its sags crosses at the rim.
-    EXPECT_THAT(error_of("[[surface]]\nradius_mm = 10\nthickness_mm = 1\nindex = 1.5\nsemi_diameter_mm = 5\n"
+    EXPECT_THAT(lens_error_of("[[surface]]\nradius_mm = 10\nthickness_mm = 1\nindex = 1.5\nsemi_diameter_mm = 5\n"
                          "[[surface]]\nradius_mm = -10\nmaterial = \"air\"\nsemi_diameter_mm = 5\n"),
                 AllOf(HasSubstr("lens.toml:3:16: surface[0].thickness_mm: surfaces S1 and S2 intersect "
                                 "inside the aperture"),
@@ -109,13 +109,13 @@ TEST(LensFile, SurfacesThatCrossInsideTheApertureAreRejected) {
     const double mid_gap = 0.03 + sag(Conic{0.1}, 1.0).value() - sag(Conic{0.5, -50}, 1.0).value();
     ASSERT_GT(rim_gap, 0.5);   // apart at the rim ...
     ASSERT_LT(mid_gap, -0.02);  // ... crossed at r = 1 mm
-    EXPECT_THAT(error_of(crossing), AllOf(HasSubstr("lens.toml:4:16: surface[0].thickness_mm"),
+    EXPECT_THAT(lens_error_of(crossing), AllOf(HasSubstr("lens.toml:4:16: surface[0].thickness_mm"),
                                           HasSubstr("intersect inside the aperture")));
     // With room to spare (0.1 mm more than the deepest crossing) the same pair is accepted.
     const std::string apart =
         "[[surface]]\nradius_mm = 2.0\nconic = -50\nthickness_mm = 0.13\nindex = 1.5\nsemi_diameter_mm = 5\n"
         "[[surface]]\nradius_mm = 10\nmaterial = \"air\"\nsemi_diameter_mm = 5\n";
-    EXPECT_EQ(error_of(apart), "");
+    EXPECT_EQ(lens_error_of(apart), "");
 }
 
 std::filesystem::path lens_file(const char* name) {
