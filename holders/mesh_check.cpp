@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <fstream>
+#include <numeric>
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
@@ -48,12 +49,35 @@ namespace {
 // corners coincide once the STL's repeated vertices are merged.
 using Soup = std::vector<std::vector<std::size_t>>;
 
+// OpenSCAD writes the same triangles in an order that changes from run to run. Sorted (the
+// points by coordinates, each triangle turned to start at its lowest point, which keeps its
+// orientation, then the triangles), the soup depends only on the surface, and so do the
+// mesh made from it and the STL written back: a holder made twice is the same file.
+void put_in_canonical_order(std::vector<Point>& points, Soup& triangles) {
+    std::vector<std::size_t> order(points.size());
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return points[a] < points[b]; });
+    std::vector<std::size_t> rank(points.size());
+    std::vector<Point> sorted(points.size());
+    for (std::size_t r = 0; r < order.size(); ++r) {
+        rank[order[r]] = r;
+        sorted[r] = points[order[r]];
+    }
+    points = std::move(sorted);
+    for (std::vector<std::size_t>& triangle : triangles) {
+        for (std::size_t& corner : triangle) corner = rank[corner];
+        std::rotate(triangle.begin(), std::min_element(triangle.begin(), triangle.end()), triangle.end());
+    }
+    std::sort(triangles.begin(), triangles.end());
+}
+
 void read_soup(const std::filesystem::path& stl, std::vector<Point>& points, Soup& triangles) {
     std::ifstream in(stl, std::ios::binary);
     if (!in || !CGAL::IO::read_STL(in, points, triangles, CGAL::parameters::verbose(false)) || triangles.empty())
         throw IoError(stl.string() + ": cannot read a triangle mesh (STL) from it");
     // STL repeats each vertex per triangle: merge them.
     PMP::repair_polygon_soup(points, triangles);
+    put_in_canonical_order(points, triangles);
 }
 
 }  // namespace

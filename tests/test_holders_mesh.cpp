@@ -2,7 +2,9 @@
 // (closed, outward, one piece, volume and box exact), the same with a face missing, turned
 // inside out, two cubes apart and two cubes overlapping.
 
+#include <algorithm>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -92,6 +94,33 @@ TEST(MeshCheck, FlawsAreNamed) {
     for (const Triangle& t : box({0.5, 0.5, 0.5}, {1.5, 1.5, 1.5})) overlapping.push_back(t);
     EXPECT_THAT(check_stl(write_stl(dir.path() / "overlap.stl", overlapping)).problems(),
                 Contains(HasSubstr("intersects itself")));
+}
+
+// OpenSCAD writes a part's triangles in an order that changes from run to run; the STL that
+// remove_slivers writes back depends only on the surface. The same two boxes written in
+// another order, every triangle starting at another corner, give the same bytes.
+TEST(RemoveSlivers, TheSameSurfaceInAnotherOrderGivesTheSameFile) {
+    const rfd::testing::TempDir dir;
+    std::vector<Triangle> first = box({0, 0, 0}, {10, 6, 4});
+    const std::vector<Triangle> second_box = box({20, 0, 0}, {23, 2, 5});
+    first.insert(first.end(), second_box.begin(), second_box.end());
+    std::vector<Triangle> shuffled(first.rbegin(), first.rend());
+    for (std::size_t k = 0; k < shuffled.size(); ++k)
+        std::rotate(shuffled[k].begin(), shuffled[k].begin() + static_cast<std::ptrdiff_t>(k % 3), shuffled[k].end());
+    const auto a = write_stl(dir.path() / "a.stl", first), b = write_stl(dir.path() / "b.stl", shuffled);
+    EXPECT_EQ(remove_slivers(a), 0u);
+    EXPECT_EQ(remove_slivers(b), 0u);
+    const auto bytes = [](const std::filesystem::path& p) {
+        std::ifstream in(p, std::ios::binary);
+        return std::string(std::istreambuf_iterator<char>(in), {});
+    };
+    EXPECT_EQ(bytes(a), bytes(b));
+    // Still the two boxes, outward: the order changed, not the surface.
+    const MeshCheck c = check_stl(b);
+    EXPECT_EQ(c.faces, 24u);
+    EXPECT_EQ(c.components, 2u);
+    EXPECT_TRUE(c.outward);
+    EXPECT_NEAR(c.volume_mm3, 10.0 * 6 * 4 + 3.0 * 2 * 5, 1e-9);
 }
 
 TEST(MeshCheck, AFileThatIsNoMeshIsAnIoError) {
