@@ -15,6 +15,7 @@
 #include "core/text.hpp"
 #include "predict/compare.hpp"
 #include "predict/display_operator.hpp"
+#include "predict/summaries.hpp"
 #include "relight/field.hpp"
 
 namespace rfd::predict {
@@ -162,17 +163,28 @@ std::vector<JudgedDirection> judge_patterns(const optics::DisplaySimulator& simu
     judge.rays_per_side = judge_direct.core().fraction < 1.0 ? 32 : 16;
     judge.pixels_per_pitch = 16.0;
     const std::vector<Eigen::Vector3d> sweep = judge_direct.sweep(count);
-    std::vector<JudgedDirection> judged;
+    std::vector<DirectionComparison> direct_results, optimized_results;
     Progress judging("judging", sweep.size());
     for (const Eigen::Vector3d& v : sweep) {
-        const DirectionComparison d = judge_direct.compare(v, judge);
-        const DirectionComparison o = judge_optimized.compare(v, judge);
-        judged.push_back({d.display_angle_deg, d.inside_field_of_view, d.crosstalk_free, d.comparison.psnr_db,
-                          o.comparison.psnr_db, d.cell_comparison.psnr_db, o.cell_comparison.psnr_db,
-                          d.core.fraction < 1.0});
+        direct_results.push_back(judge_direct.compare(v, judge));
+        optimized_results.push_back(judge_optimized.compare(v, judge));
         judging.advance();
     }
+    // Both patterns are judged against the same reference, and so against one field peak.
+    double field_peak = 0.0;
+    for (const DirectionComparison& d : direct_results) field_peak = std::max(field_peak, d.comparison.peak);
+    std::vector<JudgedDirection> judged;
+    for (std::size_t k = 0; k < sweep.size(); ++k)
+        judged.push_back(judge_direction(direct_results[k], optimized_results[k], field_peak));
     return judged;
+}
+
+JudgedDirection judge_direction(const DirectionComparison& direct, const DirectionComparison& optimized,
+                                double field_peak) {
+    const auto psnr = [&](double mse) { return psnr_against_field_db(mse, field_peak).value_or(0.0); };
+    return {direct.display_angle_deg, direct.inside_field_of_view, direct.crosstalk_free,
+            psnr(direct.comparison.mse), psnr(optimized.comparison.mse),
+            psnr(direct.cell_comparison.mse), psnr(optimized.cell_comparison.mse), direct.core.fraction < 1.0};
 }
 
 JudgedMeans judged_means(const std::vector<JudgedDirection>& judged) {

@@ -21,6 +21,7 @@
 #include "optics/display.hpp"
 #include "optics/model.hpp"
 #include "patterns/encode.hpp"
+#include "predict/compare.hpp"
 #include "predict/node_grid.hpp"
 #include "predict/optimize.hpp"
 #include "print/printed.hpp"
@@ -75,7 +76,8 @@ void write_optimized_pattern(const std::filesystem::path& file, const PatternOpt
                              const PatternOptimizationSettings& settings, const print::ToneMap& tone);
 
 /// The simulator's judgement of one light direction, as `simulate compare` measures it:
-/// exact model, every pattern as printed.
+/// exact model, every pattern as printed, each PSNR against the field's brightest value over
+/// the sweep (psnr_against_field_db; 0 where the field is black everywhere).
 struct JudgedDirection {
     double display_angle_deg = 0.0;
     bool inside_field_of_view = false, crosstalk_free = false;
@@ -83,6 +85,11 @@ struct JudgedDirection {
     double direct_cell_psnr_db = 0.0, optimized_cell_psnr_db = 0.0;  ///< over whole cells
     bool cores = false;  ///< the per-lenslet figures are over macro-pixel cores (Design II)
 };
+/// One direction from the two patterns' comparisons against the same reference, with the
+/// one PSNR of `simulate compare` and the verdict: against `field_peak`, so that where the
+/// field is dark a faint residue does not read as a failure.
+JudgedDirection judge_direction(const DirectionComparison& direct, const DirectionComparison& optimized,
+                                double field_peak);
 std::vector<JudgedDirection> judge_patterns(const optics::DisplaySimulator& simulator,
                                             const print::PrintedTransparency& direct,
                                             const print::PrintedTransparency& optimized,

@@ -22,6 +22,7 @@
 #include "patterns/procedural.hpp"
 #include "predict/compare.hpp"
 #include "predict/optimize.hpp"
+#include "predict/pattern_optimization.hpp"
 #include "print/printer.hpp"
 #include "tests/support/displays.hpp"
 #include "tests/support/lambertian_sphere.hpp"
@@ -308,6 +309,37 @@ std::unique_ptr<optics::RasterTransparency> print_source(const PatternSource& so
 // A Lambertian sphere on 10 x 10 lenslets, light directions spread over the hemisphere:
 // measured 22.6 dB direct, 31.5 dB optimised (mean over the 6 directions of a 7-sweep
 // inside the field of view); asserted +6 dB, and no loss on the axis.
+// The judge of `pattern optimize` uses the one PSNR of `simulate compare` and the verdict:
+// against the field's brightest value. In a direction where the field is nearly black (peak
+// 0.001 of a field whose peak is 1), a residue of 0.01 reads 20 log10(1 / 0.01) = 40 dB, not
+// the -20 dB it is against that direction's own faint peak, and the optimised pattern's gain
+// (residue 0.001: 60 dB) is the same whichever peak is used.
+TEST(OptimizedPattern, JudgedDarkDirectionsReadAgainstTheFieldsPeak) {
+    const auto comparison_with_residue = [](float residue) {
+        DirectionComparison d;
+        d.display_angle_deg = 12.5;
+        d.inside_field_of_view = true;
+        const Image reference(4, 3, 1, 0.001f);
+        Image prediction = reference;
+        for (float& v : prediction.samples()) v += residue;
+        d.comparison = compare_images(prediction, reference);
+        d.cell_comparison = d.comparison;
+        return d;
+    };
+    const DirectionComparison direct = comparison_with_residue(0.01f), optimized = comparison_with_residue(0.001f);
+    ASSERT_LT(direct.comparison.psnr_db, 0.0);  // against its own peak: negative
+    const JudgedDirection judged = judge_direction(direct, optimized, 1.0);
+    EXPECT_NEAR(judged.direct_psnr_db, 40.0, 1e-4);
+    EXPECT_NEAR(judged.optimized_psnr_db, 60.0, 1e-3);
+    EXPECT_NEAR(judged.direct_cell_psnr_db, judged.direct_psnr_db, 1e-12);
+    EXPECT_NEAR(judged.optimized_psnr_db - judged.direct_psnr_db,
+                optimized.comparison.psnr_db - direct.comparison.psnr_db, 1e-9);
+    EXPECT_TRUE(judged.inside_field_of_view);
+    EXPECT_DOUBLE_EQ(judged.display_angle_deg, 12.5);
+    // A black field has no PSNR to give: 0, never NaN or infinity.
+    EXPECT_EQ(judge_direction(direct, optimized, 0.0).direct_psnr_db, 0.0);
+}
+
 TEST(OptimizedPattern, DesignOneGainsAtLeastSixDecibelsOnDirectionsItWasNotFittedOn) {
     const optics::Design design = small_design1(10, 10);
     const Fixture f = encoded(design, rfd::testing::lambertian_sphere_field(fibonacci_hemisphere(100), 40));
