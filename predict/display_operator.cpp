@@ -10,6 +10,7 @@
 #include "core/error.hpp"
 #include "core/parallel.hpp"
 #include "predict/compare.hpp"
+#include "predict/summaries.hpp"
 
 namespace rfd::predict {
 
@@ -201,12 +202,12 @@ std::vector<double> direction_psnr(const DisplayOperator& op, const std::vector<
                                    std::span<const double> u, std::optional<LensletWindow> fitted) {
     const std::size_t block = op.block_size();
     const optics::Lattice& lattice = op.nodes().lattice();
-    std::vector<double> psnr(op.directions());
+    std::vector<double> mse(op.directions()), peak(op.directions());
     parallel_for_chunks(op.directions(), 1, [&](std::size_t begin, std::size_t end) {
         std::vector<double> y(block);
         for (std::size_t d = begin; d < end; ++d) {
             op.forward_direction(d, u, y);
-            double peak = 0.0, sum = 0.0;
+            double sum = 0.0;
             std::size_t count = 0;
             for (int j = 0; j < lattice.count_y(); ++j)
                 for (int i = 0; i < lattice.count_x(); ++i) {
@@ -214,17 +215,18 @@ std::vector<double> direction_psnr(const DisplayOperator& op, const std::vector<
                     const std::size_t l = lattice.linear_index({i, j});
                     for (std::size_t c = 0; c < 3; ++c) {
                         const double t = target[d * block + l * 3 + c], e = y[l * 3 + c] - t;
-                        peak = std::max(peak, t);
+                        peak[d] = std::max(peak[d], t);
                         sum += e * e;
                         ++count;
                     }
                 }
-            const double mse = count ? sum / static_cast<double>(count) : 0.0;
-            psnr[d] = !(peak > 0.0)  ? std::nan("")
-                      : mse > 0.0 ? 10.0 * std::log10(peak * peak / mse)
-                                  : std::numeric_limits<double>::infinity();
+            mse[d] = count ? sum / static_cast<double>(count) : 0.0;
         }
     });
+    const double field_peak = peak.empty() ? 0.0 : *std::max_element(peak.begin(), peak.end());
+    std::vector<double> psnr(op.directions());
+    for (std::size_t d = 0; d < psnr.size(); ++d)
+        psnr[d] = psnr_against_field_db(mse[d], field_peak).value_or(std::nan(""));
     return psnr;
 }
 

@@ -123,10 +123,12 @@ SweepDirections sweep_directions(const patterns::Encoder& encoder, const NodeGri
 std::vector<double> optimization_targets(const DisplayOperator& op, const std::vector<double>& flat_field,
                                          const patterns::Encoder& encoder, const print::ToneMap& tone);
 
-/// Per direction of `op`, the PSNR of A_d u against the targets over the fitted whole cells (peak:
-/// the direction's largest target), as predict/compare.hpp measures (without the black
-/// level's b W_d on both sides, so these read a little lower). NaN for a direction whose
-/// targets are all 0 (nothing to show), +inf for an exact match.
+/// Per direction of `op`, the PSNR of A_d u against the targets over the fitted whole cells,
+/// the one PSNR of `simulate compare` (psnr_against_field_db): the peak is the largest target
+/// over all of `op`'s directions, so a direction where the field is dark reads what the
+/// display shows there (without the black level's b W_d on both sides, so these read a
+/// little lower). NaN when every target is 0 (nothing to show); an exact match reads the
+/// ceiling, optics::kPsnrCeilingDb.
 std::vector<double> direction_psnr(const DisplayOperator& op, const std::vector<double>& target,
                                    std::span<const double> u, std::optional<LensletWindow> fitted = std::nullopt);
 

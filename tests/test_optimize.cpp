@@ -18,9 +18,11 @@
 #include "core/sphere.hpp"
 #include "core/units.hpp"
 #include "optics/display.hpp"
+#include "optics/tolerance.hpp"
 #include "patterns/encode.hpp"
 #include "patterns/procedural.hpp"
 #include "predict/compare.hpp"
+#include "predict/display_operator.hpp"
 #include "predict/optimize.hpp"
 #include "predict/pattern_optimization.hpp"
 #include "print/printer.hpp"
@@ -144,6 +146,35 @@ TEST(DisplayOperator, AdjointIsTheTranspose) {
         EXPECT_NEAR(left, right, 1e-12 * std::sqrt(inner(au, au) * inner(y, y))) << design.name;
         EXPECT_GT(std::abs(left), 0.0);
     }
+}
+
+// The optimiser's own progress figures (iterations.csv) use the one PSNR: against the
+// largest target over all directions. Direction 0's targets are A_0 u itself (an exact match:
+// the ceiling); direction 1's are a thousandth of A_1 u, nearly black, and its figure is
+// 10 log10(peak^2 / MSE) with direction 0's peak, computed here from the outputs, not minus
+// the 60 dB it would read against its own faint peak.
+TEST(DisplayOperator, DirectionPsnrReadsDarkDirectionsAgainstTheFieldsPeak) {
+    const optics::Design design = small_design1(5, 4);
+    const optics::DisplaySimulator simulator(design);
+    const NodeGrid nodes(simulator.optics().lattice(), geometry_of(design), 0.25);
+    const DisplayOperator op(simulator, nodes, {spread_directions()[0], spread_directions()[1]}, exact(6));
+    const std::vector<double> u = random_values(op.input_size(), 3, 0.1, 0.9);
+    std::vector<double> y(op.output_size());
+    op.forward(u, y);
+    const std::size_t block = op.block_size();
+    std::vector<double> target = y;
+    for (std::size_t k = block; k < 2 * block; ++k) target[k] = 0.001 * y[k];
+    const double peak = *std::max_element(target.begin(), target.begin() + static_cast<std::ptrdiff_t>(block));
+    double sum = 0.0;
+    for (std::size_t k = block; k < 2 * block; ++k) sum += (y[k] - target[k]) * (y[k] - target[k]);
+    const double expected = 10.0 * std::log10(peak * peak / (sum / static_cast<double>(block)));
+    const std::vector<double> psnr = direction_psnr(op, target, u);
+    ASSERT_EQ(psnr.size(), 2u);
+    EXPECT_EQ(psnr[0], optics::kPsnrCeilingDb);
+    EXPECT_NEAR(psnr[1], expected, 1e-9);
+    EXPECT_GT(psnr[1], 0.0);
+    // Nothing to show anywhere: no figure, not a number.
+    EXPECT_TRUE(std::isnan(direction_psnr(op, std::vector<double>(op.output_size(), 0.0), u)[1]));
 }
 
 // The operator is the simulator: a pattern of nodes, printed through NodePattern, simulated
