@@ -171,8 +171,7 @@ std::vector<JudgedDirection> judge_patterns(const optics::DisplaySimulator& simu
         judging.advance();
     }
     // Both patterns are judged against the same reference, and so against one field peak.
-    double field_peak = 0.0;
-    for (const DirectionComparison& d : direct_results) field_peak = std::max(field_peak, d.comparison.peak);
+    const double field_peak = field_peak_of(direct_results);
     std::vector<JudgedDirection> judged;
     for (std::size_t k = 0; k < sweep.size(); ++k)
         judged.push_back(judge_direction(direct_results[k], optimized_results[k], field_peak));

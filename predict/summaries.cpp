@@ -74,11 +74,17 @@ std::optional<double> psnr_against_field_db(double mse, double field_peak) {
     return std::min(optics::kPsnrCeilingDb, 10.0 * std::log10(field_peak * field_peak / mse));
 }
 
+double field_peak_of(const std::vector<DirectionComparison>& results) {
+    double peak = 0.0;
+    for (const DirectionComparison& r : results) peak = std::max(peak, r.comparison.peak);
+    return peak;
+}
+
 CompareSummary summarise_comparison(const std::vector<DirectionComparison>& results,
                                     const std::vector<std::string>& images) {
     RFD_CHECK(images.size() == results.size());
     CompareSummary summary;
-    for (const DirectionComparison& r : results) summary.field_peak = std::max(summary.field_peak, r.comparison.peak);
+    summary.field_peak = field_peak_of(results);
     std::vector<const CompareDirection*> in_fov, clean;
     for (std::size_t k = 0; k < results.size(); ++k) {
         const DirectionComparison& r = results[k];

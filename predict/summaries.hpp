@@ -35,6 +35,8 @@ struct Verdict;
 /// (mse 0) and anything above capped at 100 dB so that means stay finite; nullopt when the
 /// field is black (field_peak <= 0) or mse is not finite.
 std::optional<double> psnr_against_field_db(double mse, double field_peak);
+/// That PSNR's peak: the reference's brightest value over the compared directions.
+double field_peak_of(const std::vector<DirectionComparison>& results);
 
 /// PSNR figures over a set of directions (those inside the field of view, or the
 /// crosstalk-free ones); nullopt where the set is empty.
