@@ -13,6 +13,7 @@
 #include "cli/commands.hpp"
 #include "core/files.hpp"
 #include "core/plot.hpp"
+#include "core/text.hpp"
 #include "core/units.hpp"
 #include "optics/accuracy_chart.hpp"
 #include "optics/analysis.hpp"
@@ -79,30 +80,26 @@ nlohmann::json to_json(const optics::DesignSummary& s) {
 
 std::string summary_text(const optics::DesignSummary& s, bool observer_variant) {
     std::string out;
-    char line[512];
-    auto add = [&](const char* format, auto... values) {
-        std::snprintf(line, sizeof line, format, values...);
-        out += line;
-    };
-    add("%s  (Design %s)\n", s.name.c_str(), s.kind.c_str());
-    add("  lattice                   %s, %d x %d lenslets\n", s.lattice.c_str(), s.count_x, s.count_y);
-    add("  pitch                     %.4f mm (rows %.4f mm apart)\n", s.pitch_x, s.pitch_y);
+    out += format_text("%s  (Design %s)\n", s.name.c_str(), s.kind.c_str());
+    out += format_text("  lattice                   %s, %d x %d lenslets\n", s.lattice.c_str(), s.count_x, s.count_y);
+    out += format_text("  pitch                     %.4f mm (rows %.4f mm apart)\n", s.pitch_x, s.pitch_y);
     if (s.macro)
-        add("  macro-pixels              %d x %d Design III cells, %.2f mm x %.2f mm apart\n",
+        out += format_text("  macro-pixels              %d x %d Design III cells, %.2f mm x %.2f mm apart\n",
             s.macro->count_x, s.macro->count_y, s.macro->pitch_x, s.macro->pitch_y);
-    add("  focal length              %.4f mm paraxial (maker: %.4g mm)\n", s.focal_length_paraxial,
+    out += format_text("  focal length              %.4f mm paraxial (maker: %.4g mm)\n", s.focal_length_paraxial,
         s.focal_length_nominal);
-    add("  printer                   %.0f x %.0f dpi\n", s.dpi_x, s.dpi_y);
+    out += format_text("  printer                   %.0f x %.0f dpi\n", s.dpi_x, s.dpi_y);
     if (observer_variant) {
-        add("  print pixels per meso-pixel %.0f (output directions)\n", s.directions_per_lenslet);
-        add("  incident angle per meso-pixel %.3f deg (x), %.3f deg (y)\n", s.angular_step_x_deg,
+        out += format_text("  print pixels per meso-pixel %.0f (output directions)\n", s.directions_per_lenslet);
+        out += format_text("  incident angle per meso-pixel %.3f deg (x), %.3f deg (y)\n", s.angular_step_x_deg,
             s.angular_step_y_deg);
     } else {
-        add("  directions per lenslet    %.0f (print pixels under one cell)\n", s.directions_per_lenslet);
-        add("  angular step (on axis)    %.4f deg per pixel in x, %.4f deg in y\n",
+        out += format_text("  directions per lenslet    %.0f (print pixels under one cell)\n",
+                           s.directions_per_lenslet);
+        out += format_text("  angular step (on axis)    %.4f deg per pixel in x, %.4f deg in y\n",
             s.angular_step_x_deg, s.angular_step_y_deg);
     }
-    add("  %s (paraxial / exact chief ray):\n",
+    out += format_text("  %s (paraxial / exact chief ray):\n",
         observer_variant ? "edge of the meso-pixel array" : "wrap-over angle");
     // An angle, or where nothing happened up to the searched limit.
     auto angle_text = [](const std::optional<double>& angle) {
@@ -112,31 +109,36 @@ std::string summary_text(const optics::DesignSummary& s, bool observer_variant) 
         return std::string(text);
     };
     for (std::size_t k = 0; k < s.wrap_over_exact_deg.size(); ++k)
-        add("    along %-12s          %s / %s\n", s.wrap_over_exact_deg[k].first.c_str(),
-            angle_text(s.wrap_over_paraxial_deg[k].second).c_str(), angle_text(s.wrap_over_exact_deg[k].second).c_str());
+        out += format_text("    along %-12s          %s / %s\n", s.wrap_over_exact_deg[k].first.c_str(),
+                           angle_text(s.wrap_over_paraxial_deg[k].second).c_str(),
+                           angle_text(s.wrap_over_exact_deg[k].second).c_str());
     for (const auto& [name, angle] : s.crosstalk_exact_deg)
-        add("  crosstalk begins (exact, full bundle) along %-10s %s\n", name.c_str(), angle_text(angle).c_str());
-    if (s.field_of_view_deg) add("  field of view             %.2f deg (full cone, exact)\n", *s.field_of_view_deg);
-    else add("  field of view             no wrap-over up to %.0f deg from the axis\n", optics::kWrapOverSearchLimitDeg);
-    add("  light efficiency          %.1f %% on axis, %.1f %% at half the field of view\n",
+        out += format_text("  crosstalk begins (exact, full bundle) along %-10s %s\n", name.c_str(),
+                           angle_text(angle).c_str());
+    if (s.field_of_view_deg)
+        out += format_text("  field of view             %.2f deg (full cone, exact)\n", *s.field_of_view_deg);
+    else
+        out += format_text("  field of view             no wrap-over up to %.0f deg from the axis\n",
+                           optics::kWrapOverSearchLimitDeg);
+    out += format_text("  light efficiency          %.1f %% on axis, %.1f %% at half the field of view\n",
         100 * s.efficiency_on_axis, 100 * s.efficiency_at_half_fov);
-    add("                            (rays reaching the last surface of the optics)\n");
-    add("    with Fresnel reflections  %.1f %% on axis, %.1f %% at half the field of view (uncoated)\n",
+    out += "                            (rays reaching the last surface of the optics)\n";
+    out += format_text("    with Fresnel reflections  %.1f %% on axis, %.1f %% at half the field of view (uncoated)\n",
         100 * s.efficiency_fresnel_on_axis, 100 * s.efficiency_fresnel_at_half_fov);
     for (const auto& loss : s.losses)
-        add("    at %5.2f deg: %5.1f %% lost at '%s' (%s)\n", loss.angle_deg, 100 * loss.fraction,
+        out += format_text("    at %5.2f deg: %5.1f %% lost at '%s' (%s)\n", loss.angle_deg, 100 * loss.fraction,
             loss.surface.c_str(), std::string(optics::to_string(loss.status)).c_str());
-    add("  RMS spot on encoding plane %.2f um on axis, %.2f um at half the field of view\n",
+    out += format_text("  RMS spot on encoding plane %.2f um on axis, %.2f um at half the field of view\n",
         s.spot_rms_on_axis_um, s.spot_rms_at_half_fov_um);
-    add("  encoding plane vs focus   %+.4f mm\n", s.focus_error_mm);
+    out += format_text("  encoding plane vs focus   %+.4f mm\n", s.focus_error_mm);
     for (const auto& check : s.conjugates) {
-        add("  %s\n      plane at z = %.4f mm, optics want z = %.4f mm (%+.4f mm)", check.description.c_str(),
-            check.plane_z, check.target_z, check.plane_z - check.target_z);
-        if (std::isfinite(check.magnification)) add(", magnification %.4f", check.magnification);
+        out += format_text("  %s\n      plane at z = %.4f mm, optics want z = %.4f mm (%+.4f mm)",
+                           check.description.c_str(), check.plane_z, check.target_z, check.plane_z - check.target_z);
+        if (std::isfinite(check.magnification)) out += format_text(", magnification %.4f", check.magnification);
         out += "\n";
     }
-    if (s.warnings.empty()) add("  design rules              no warnings\n");
-    for (const auto& warning : s.warnings) add("  warning: %s\n", warning.c_str());
+    if (s.warnings.empty()) out += "  design rules              no warnings\n";
+    for (const auto& warning : s.warnings) out += format_text("  warning: %s\n", warning.c_str());
     return out;
 }
 

@@ -83,8 +83,9 @@ std::string project_keys_table() {
         std::visit(
             [&](const auto& option) {
                 const bool integer = std::is_same_v<std::decay_t<decltype(option)>, IntegerOption>;
-                const std::string fallback =
-                    integer ? std::to_string(static_cast<long long>(option.fallback)) : format_number(option.fallback);
+                std::string fallback;
+                if constexpr (integer) fallback = std::to_string(option.fallback);
+                else fallback = format_number(option.fallback);
                 out += "| `[" + std::string(key.table) + "] " + std::string(option.key) + "` | " +
                        (integer ? "integer, " : "number, ") + range_text(option) + " | " + fallback + " | " +
                        cell(help_text(option)) + " (as `" + std::string(option.flag) + "`) |\n";

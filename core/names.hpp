@@ -26,6 +26,9 @@ struct Named {
     Enum value;
     std::string_view name;
 };
+// Spelled out for compilers without C++20's deduction for aggregates (clang before 17).
+template <class Enum>
+Named(Enum, const char*) -> Named<Enum>;
 
 /// The name of `value`; every enumerator has one (RFD_CHECK'ed).
 template <class Enum, std::size_t N>

@@ -540,7 +540,7 @@ TEST(ImplicitStudy, ScoresEveryEtaAsAnIndependentComputationDoes) {
             double squares = 0.0;
             for (int c = 0; c < 3; ++c) {  // each channel with its own coefficients
                 const Image predicted = combine(set.scenes, fit.l.col(c));
-                for (const auto i : std::views::iota(std::size_t{0}, truths[t].pixel_count()))
+                for (std::size_t i = 0; i < truths[t].pixel_count(); ++i)
                     squares += std::pow(double(predicted.plane(c)[i]) - truths[t].plane(c)[i], 2);
             }
             const double n = static_cast<double>(truths[t].samples().size());

@@ -581,8 +581,9 @@ TEST(SheetPdf, TileJoinsDoNotShowInAntiAliasedViewers) {
         // markers at its corner lenslets and of the joins the other way.
         const Eigen::Vector2d lo = layout.pattern_min() * px_per_mm, hi = layout.pattern_max() * px_per_mm;
         const auto band = [](double a, double b) { return std::pair<int, int>(static_cast<int>(a + 0.3 * (b - a)), static_cast<int>(a + 0.6 * (b - a))); };
-        const auto [row0, row1] = band(lo.y(), hi.y());
-        const auto [col0, col1] = band(lo.x(), hi.x());
+        // Named copies, not structured bindings: lambdas capture those only from clang 16.
+        const std::pair<int, int> rows = band(lo.y(), hi.y()), cols = band(lo.x(), hi.x());
+        const int row0 = rows.first, row1 = rows.second, col0 = cols.first, col1 = cols.second;
         auto column = [&](int x) {
             double sum = 0.0;
             for (int y = row0; y < row1; ++y) sum += view.code(x, y);
