@@ -17,10 +17,24 @@ float sample(const Image& image, int x, int y, int c) {
     return image.at(std::clamp(x, 0, image.width() - 1), std::clamp(y, 0, image.height() - 1), c);
 }
 
-// The (2 radius + 1)^2 window of a one-channel image around (cx, cy), row-major.
-void window_of(const Image& one_channel, int cx, int cy, int radius, float* out) {
-    for (int v = -radius; v <= radius; ++v)
-        for (int u = -radius; u <= radius; ++u) *out++ = sample(one_channel, cx + u, cy + v, 0);
+// The (2 radius + 1)^2 window of channel c around (cx, cy), row-major. Most windows lie
+// inside the image and are copied row by row; this runs for every window of every source
+// and query, several times per synthesised pixel.
+void window_of(const Image& image, int cx, int cy, int radius, float* out, int c = 0) {
+    const int width = image.width();
+    if (cx - radius < 0 || cy - radius < 0 || cx + radius >= width || cy + radius >= image.height()) {
+        for (int v = -radius; v <= radius; ++v)
+            for (int u = -radius; u <= radius; ++u) *out++ = sample(image, cx + u, cy + v, c);
+        return;
+    }
+    const float* row = image.plane(c).data() + static_cast<std::ptrdiff_t>(cy - radius) * width + (cx - radius);
+    for (int v = -radius; v <= radius; ++v, row += width) out = std::copy(row, row + 2 * radius + 1, out);
+}
+
+// The window of every channel, channel after channel.
+void windows_of(const Image& image, int cx, int cy, int radius, float* out) {
+    const int side = 2 * radius + 1;
+    for (int c = 0; c < image.channels(); ++c) window_of(image, cx, cy, radius, out + c * side * side, c);
 }
 
 // The sources' windows as points of the k-d tree: PCA coordinates, then position.
@@ -84,7 +98,7 @@ void check_prior_options(const PriorOptions& options) {
 
 PatchBasis PatchBasis::fit(const std::vector<const Image*>& images, int radius, int components, int stride) {
     // The callers' own choices, not a user's: a failure is a bug.
-    RFD_CHECK(!images.empty() && radius >= 1 && stride >= 1);
+    RFD_CHECK(!images.empty() && radius >= 1 && radius <= kMaxRadius && stride >= 1);
     const int side = 2 * radius + 1, size = side * side;
     RFD_CHECK(components >= 1 && components <= size);
     for (const Image* image : images) RFD_CHECK(image->same_shape(*images.front()));
@@ -116,8 +130,14 @@ void PatchBasis::project(const float* window, float* out) const {
     const Eigen::Map<const Eigen::VectorXf> w(window, axes_.rows());
     const float norm = w.norm();
     Eigen::Map<Eigen::VectorXf> coordinates(out, axes_.cols());
-    if (norm <= 0.0f) coordinates.setZero();
-    else coordinates.noalias() = axes_.transpose() * (w / norm);
+    if (norm <= 0.0f) {
+        coordinates.setZero();
+        return;
+    }
+    // The unit window on the stack: as an expression, Eigen would copy it to the heap for
+    // the product, once for every window of every source and query (millions per upsampling).
+    Eigen::Matrix<float, Eigen::Dynamic, 1, 0, kMaxWindowSize, 1> unit = w / norm;
+    coordinates.noalias() = axes_.transpose() * unit;
 }
 
 Image regularise_with_priors(const Image& estimate, const std::vector<std::uint8_t>& uncertain,
@@ -161,6 +181,8 @@ Image regularise_with_priors(const Image& estimate, const std::vector<std::uint8
     const auto candidates = std::min<std::size_t>(static_cast<std::size_t>(options.candidates), cloud.origins.size());
     std::vector<std::uint32_t> found(candidates);
     std::vector<float> found_distance(candidates), query(cloud.dims);
+    std::vector<float> estimate_window(static_cast<std::size_t>(channels * side * side)),
+        source_window(estimate_window.size());
     std::vector<Match> matches(estimate.pixel_count());
     std::vector<double> distances;
     Image current = estimate;
@@ -178,19 +200,18 @@ Image regularise_with_priors(const Image& estimate, const std::vector<std::uint8
                 query[components + 1] = proximity * static_cast<float>(y);
                 const std::size_t count = tree.knnSearch(query.data(), candidates, found.data(), found_distance.data());
                 // The exact distance up to a scale, over every channel (eq. 6.1).
+                windows_of(current, x, y, radius, estimate_window.data());
+                double ee = 0.0;
+                for (const float e : estimate_window) ee += static_cast<double>(e) * e;
                 for (std::size_t k = 0; k < count; ++k) {
                     const WindowCloud::Origin& origin = cloud.origins[found[k]];
-                    const Image& source = *sources[origin.source];
-                    double ee = 0.0, ei = 0.0, ii = 0.0;
-                    for (int c = 0; c < channels; ++c)
-                        for (int v = -radius; v <= radius; ++v)
-                            for (int u = -radius; u <= radius; ++u) {
-                                const double e = sample(current, x + u, y + v, c);
-                                const double i = sample(source, origin.x + u, origin.y + v, c);
-                                ee += e * e;
-                                ei += e * i;
-                                ii += i * i;
-                            }
+                    windows_of(*sources[origin.source], origin.x, origin.y, radius, source_window.data());
+                    double ei = 0.0, ii = 0.0;
+                    for (std::size_t j = 0; j < source_window.size(); ++j) {
+                        const double e = estimate_window[j], i = source_window[j];
+                        ei += e * i;
+                        ii += i * i;
+                    }
                     const double lambda = ii > 0.0 ? ei / ii : 0.0;
                     const double residual = std::max(0.0, ee - lambda * ei);
                     const double distance = ee > 0.0 ? residual / ee : 0.0;

@@ -57,9 +57,12 @@ void check_prior_options(const PriorOptions& options);
 /// searches in.
 class PatchBasis {
 public:
+    static constexpr int kMaxRadius = 7;  ///< windows of at most 15 x 15 pixels
+    static constexpr int kMaxWindowSize = (2 * kMaxRadius + 1) * (2 * kMaxRadius + 1);
+
     /// From the windows of `images` (every `stride`-th window centre in x and y, so that
-    /// the fit stays cheap on large fields). InputError for no images, a radius < 1,
-    /// components outside [1, window size] or images of different shapes.
+    /// the fit stays cheap on large fields). A radius outside [1, kMaxRadius], components
+    /// outside [1, window size] or images of different shapes are the caller's bug.
     static PatchBasis fit(const std::vector<const Image*>& images, int radius, int components, int stride = 4);
 
     int radius() const { return radius_; }
@@ -75,8 +78,8 @@ private:
 
 /// `estimate` with its `uncertain` pixels (row-major, 1 = uncertain) regularised against
 /// `sources` (same shape as the estimate). Returns the estimate unchanged when nothing is
-/// uncertain or options.iterations == 0. InputError for shapes that differ, an empty
-/// source list or options out of range. Deterministic.
+/// uncertain or options.iterations == 0. InputError for options out of range; shapes that
+/// differ or an empty source list are the caller's bug. Deterministic.
 Image regularise_with_priors(const Image& estimate, const std::vector<std::uint8_t>& uncertain,
                              const std::vector<const Image*>& sources, const PatchBasis& basis,
                              const PriorOptions& options);
