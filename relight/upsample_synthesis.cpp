@@ -97,6 +97,7 @@ public:
         }
 
         std::vector<double> lit(static_cast<std::size_t>(channels)), shadowed(lit.size()), blend(lit.size());
+        FitSums sums;
         for (std::size_t p = 0; p < pixels; ++p) {
             const float sk = blurred_k[p];
             bool all_lit = true, all_shadowed = true;
@@ -117,14 +118,14 @@ public:
                 if (all_lit) lit = blend;
                 else {
                     extrapolated = true;
-                    fell_back = !fit(p, fit_set, basis, closeness, true, blend, lit) || fell_back;
+                    fell_back = !fit(p, fit_set, basis, closeness, true, blend, sums, lit) || fell_back;
                 }
             }
             if (sk < 1.0f) {
                 if (all_shadowed) shadowed = blend;
                 else {
                     extrapolated = true;
-                    fell_back = !fit(p, fit_set, basis, closeness, false, blend, shadowed) || fell_back;
+                    fell_back = !fit(p, fit_set, basis, closeness, false, blend, sums, shadowed) || fell_back;
                 }
             }
             for (int c = 0; c < channels; ++c) {
@@ -140,19 +141,27 @@ public:
     }
 
 private:
+    // The per-channel sums of one fit, kept across pixels so that a fit allocates nothing.
+    struct FitSums {
+        std::vector<Eigen::Vector4d> rhs;
+        std::vector<double> high;
+    };
+
     // Least-squares fit of (1, x, y, z) to the fit set's samples labelled lit (or shadowed)
     // at pixel p, weighted by closeness and by how reliable the label is (S-bar), evaluated
     // at the target. Fewer than 4 samples: their weighted mean; none: the barycentric blend
     // (returns false). The result is kept in [0, twice the largest sample] so that a poorly
     // conditioned fit cannot run off, while extrapolation past the samples stays possible.
     bool fit(std::size_t p, const std::vector<std::size_t>& fit_set, const std::vector<Eigen::Vector4d>& basis,
-             const std::vector<double>& closeness, bool want_lit, const std::vector<double>& blend,
+             const std::vector<double>& closeness, bool want_lit, const std::vector<double>& blend, FitSums& sums,
              std::vector<double>& out) const {
         const int channels = field_.channels();
         const std::uint8_t wanted = want_lit ? 1 : 0;
         Eigen::Matrix4d normal = Eigen::Matrix4d::Zero();
-        std::vector<Eigen::Vector4d> rhs(static_cast<std::size_t>(channels), Eigen::Vector4d::Zero());
-        std::vector<double> high(rhs.size(), 0.0);
+        std::vector<Eigen::Vector4d>& rhs = sums.rhs;
+        std::vector<double>& high = sums.high;
+        rhs.assign(static_cast<std::size_t>(channels), Eigen::Vector4d::Zero());
+        high.assign(rhs.size(), 0.0);
         double weight_sum = 0.0;
         std::size_t used = 0;
         for (std::size_t s = 0; s < fit_set.size(); ++s) {
