@@ -5,6 +5,9 @@ set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build pkg-config
+  # clang and its sanitizer runtimes: the ASan+UBSan build (the asan preset; a second
+  # compiler's warnings) and the libFuzzer build (the fuzz preset).
+  clang libclang-rt-dev
   libeigen3-dev libcgal-dev libtbb-dev
   libopenimageio-dev openimageio-tools libcairo2-dev
   # The font of procedural letter fields and sheet labels (patterns/glyphs.cpp).
