@@ -85,28 +85,26 @@ std::string summary_text(const optics::DesignSummary& s, bool observer_variant) 
     out += format_text("  pitch                     %.4f mm (rows %.4f mm apart)\n", s.pitch_x, s.pitch_y);
     if (s.macro)
         out += format_text("  macro-pixels              %d x %d Design III cells, %.2f mm x %.2f mm apart\n",
-            s.macro->count_x, s.macro->count_y, s.macro->pitch_x, s.macro->pitch_y);
+                           s.macro->count_x, s.macro->count_y, s.macro->pitch_x, s.macro->pitch_y);
     out += format_text("  focal length              %.4f mm paraxial (maker: %.4g mm)\n", s.focal_length_paraxial,
-        s.focal_length_nominal);
+                       s.focal_length_nominal);
     out += format_text("  printer                   %.0f x %.0f dpi\n", s.dpi_x, s.dpi_y);
     if (observer_variant) {
         out += format_text("  print pixels per meso-pixel %.0f (output directions)\n", s.directions_per_lenslet);
         out += format_text("  incident angle per meso-pixel %.3f deg (x), %.3f deg (y)\n", s.angular_step_x_deg,
-            s.angular_step_y_deg);
+                           s.angular_step_y_deg);
     } else {
         out += format_text("  directions per lenslet    %.0f (print pixels under one cell)\n",
                            s.directions_per_lenslet);
         out += format_text("  angular step (on axis)    %.4f deg per pixel in x, %.4f deg in y\n",
-            s.angular_step_x_deg, s.angular_step_y_deg);
+                           s.angular_step_x_deg, s.angular_step_y_deg);
     }
     out += format_text("  %s (paraxial / exact chief ray):\n",
-        observer_variant ? "edge of the meso-pixel array" : "wrap-over angle");
+                       observer_variant ? "edge of the meso-pixel array" : "wrap-over angle");
     // An angle, or where nothing happened up to the searched limit.
     auto angle_text = [](const std::optional<double>& angle) {
-        char text[32];
-        if (angle) std::snprintf(text, sizeof text, "%6.2f deg", *angle);
-        else std::snprintf(text, sizeof text, "none up to %.0f deg", optics::kWrapOverSearchLimitDeg);
-        return std::string(text);
+        return angle ? format_text("%6.2f deg", *angle)
+                     : format_text("none up to %.0f deg", optics::kWrapOverSearchLimitDeg);
     };
     for (std::size_t k = 0; k < s.wrap_over_exact_deg.size(); ++k)
         out += format_text("    along %-12s          %s / %s\n", s.wrap_over_exact_deg[k].first.c_str(),
@@ -121,15 +119,15 @@ std::string summary_text(const optics::DesignSummary& s, bool observer_variant) 
         out += format_text("  field of view             no wrap-over up to %.0f deg from the axis\n",
                            optics::kWrapOverSearchLimitDeg);
     out += format_text("  light efficiency          %.1f %% on axis, %.1f %% at half the field of view\n",
-        100 * s.efficiency_on_axis, 100 * s.efficiency_at_half_fov);
+                       100 * s.efficiency_on_axis, 100 * s.efficiency_at_half_fov);
     out += "                            (rays reaching the last surface of the optics)\n";
     out += format_text("    with Fresnel reflections  %.1f %% on axis, %.1f %% at half the field of view (uncoated)\n",
-        100 * s.efficiency_fresnel_on_axis, 100 * s.efficiency_fresnel_at_half_fov);
+                       100 * s.efficiency_fresnel_on_axis, 100 * s.efficiency_fresnel_at_half_fov);
     for (const auto& loss : s.losses)
         out += format_text("    at %5.2f deg: %5.1f %% lost at '%s' (%s)\n", loss.angle_deg, 100 * loss.fraction,
-            loss.surface.c_str(), std::string(optics::to_string(loss.status)).c_str());
+                           loss.surface.c_str(), std::string(optics::to_string(loss.status)).c_str());
     out += format_text("  RMS spot on encoding plane %.2f um on axis, %.2f um at half the field of view\n",
-        s.spot_rms_on_axis_um, s.spot_rms_at_half_fov_um);
+                       s.spot_rms_on_axis_um, s.spot_rms_at_half_fov_um);
     out += format_text("  encoding plane vs focus   %+.4f mm\n", s.focus_error_mm);
     for (const auto& check : s.conjugates) {
         out += format_text("  %s\n      plane at z = %.4f mm, optics want z = %.4f mm (%+.4f mm)",

@@ -70,30 +70,36 @@ double squared_error(const Image& a, const Image& b, const std::vector<std::uint
 
 TEST(ImagePriors, BasisIsOrthonormalAndIgnoresIntensity) {
     const Image source = texture();
-    const PatchBasis basis = PatchBasis::fit({&source}, 2, 6);
-    EXPECT_EQ(basis.radius(), 2);
-    EXPECT_EQ(basis.components(), 6);
-    // Project the unit vectors: the coordinates are the axes' entries, so the Gram matrix of
-    // the 25 projections (components x 25) times its transpose is the identity.
-    Eigen::MatrixXf axes(6, 25);
-    for (int i = 0; i < 25; ++i) {
-        std::vector<float> unit(25, 0.0f), out(6);
-        unit[static_cast<std::size_t>(i)] = 1.0f;
-        basis.project(unit.data(), out.data());
-        for (int k = 0; k < 6; ++k) axes(k, i) = out[static_cast<std::size_t>(k)];
+    // The usual window and the largest one, whose unit window fills project's stack buffer.
+    for (const int radius : {2, PatchBasis::kMaxRadius}) {
+        SCOPED_TRACE(radius);
+        const int size = (2 * radius + 1) * (2 * radius + 1);
+        const auto n = static_cast<std::size_t>(size);
+        const PatchBasis basis = PatchBasis::fit({&source}, radius, 6);
+        EXPECT_EQ(basis.radius(), radius);
+        EXPECT_EQ(basis.components(), 6);
+        // Project the unit vectors: the coordinates are the axes' entries, so the Gram matrix
+        // of the projections (components x window size) times its transpose is the identity.
+        Eigen::MatrixXf axes(6, size);
+        for (int i = 0; i < size; ++i) {
+            std::vector<float> unit(n, 0.0f), out(6);
+            unit[static_cast<std::size_t>(i)] = 1.0f;
+            basis.project(unit.data(), out.data());
+            for (int k = 0; k < 6; ++k) axes(k, i) = out[static_cast<std::size_t>(k)];
+        }
+        EXPECT_TRUE((axes * axes.transpose()).isIdentity(1e-5f)) << axes * axes.transpose();
+        std::vector<float> window(n), bright(n), a(6), b(6);
+        for (std::size_t i = 0; i < n; ++i) {
+            window[i] = 0.1f + 0.03f * static_cast<float>(i % 7);
+            bright[i] = 40.0f * window[i];
+        }
+        basis.project(window.data(), a.data());
+        basis.project(bright.data(), b.data());
+        for (int k = 0; k < 6; ++k) EXPECT_NEAR(a[static_cast<std::size_t>(k)], b[static_cast<std::size_t>(k)], 1e-5f);
+        const std::vector<float> black(n, 0.0f);
+        basis.project(black.data(), a.data());
+        for (float v : a) EXPECT_EQ(v, 0.0f);
     }
-    EXPECT_TRUE((axes * axes.transpose()).isIdentity(1e-5f)) << axes * axes.transpose();
-    std::vector<float> window(25), bright(25), a(6), b(6);
-    for (int i = 0; i < 25; ++i) {
-        window[static_cast<std::size_t>(i)] = 0.1f + 0.03f * static_cast<float>(i % 7);
-        bright[static_cast<std::size_t>(i)] = 40.0f * window[static_cast<std::size_t>(i)];
-    }
-    basis.project(window.data(), a.data());
-    basis.project(bright.data(), b.data());
-    for (int k = 0; k < 6; ++k) EXPECT_NEAR(a[static_cast<std::size_t>(k)], b[static_cast<std::size_t>(k)], 1e-5f);
-    const std::vector<float> black(25, 0.0f);
-    basis.project(black.data(), a.data());
-    for (float v : a) EXPECT_EQ(v, 0.0f);
 }
 
 TEST(ImagePriors, NoisyPixelsReturnToTheScaledTexture) {
@@ -177,6 +183,7 @@ TEST(ImagePriorsDeathTest, MismatchedSourcesAreABug) {
     EXPECT_DEATH(regularise_with_priors(source, {1, 0}, {&source}, basis, PriorOptions{}), "check failed");
     EXPECT_DEATH(PatchBasis::fit({}, 2, 6), "check failed");
     EXPECT_DEATH(PatchBasis::fit({&source}, 0, 1), "check failed");
+    EXPECT_DEATH(PatchBasis::fit({&source}, PatchBasis::kMaxRadius + 1, 1), "check failed");
     EXPECT_DEATH(PatchBasis::fit({&source}, 2, 26), "check failed");
 }
 
