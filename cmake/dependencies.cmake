@@ -6,6 +6,8 @@ find_package(nlohmann_json 3 REQUIRED)
 find_package(TBB REQUIRED)
 find_package(Threads REQUIRED)
 find_package(OpenImageIO 2.4 REQUIRED CONFIG)
+# OpenEXR itself: rfd's common EXR files without loading OpenImageIO (core/exr_file.hpp).
+find_package(OpenEXR 3.1 REQUIRED CONFIG)
 # Cairo: PDF print sheets (print/) and the glyphs of procedural letter fields (patterns/).
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(Cairo REQUIRED IMPORTED_TARGET cairo)

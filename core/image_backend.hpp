@@ -39,4 +39,8 @@ public:
                                                              std::string& error) = 0;
 };
 
+/// OpenImageIO's backend, librfd_imageio.so, loaded on the first call. ImageFileReader and
+/// ImageFileWriter use it for every file that core/exr_file.hpp leaves to it.
+ImageBackend& imageio_backend();
+
 }  // namespace rfd

@@ -3,24 +3,26 @@
 #include <system_error>
 
 #include "core/error.hpp"
+#include "core/exr_file.hpp"
 #include "core/exr_header.hpp"
 #include "core/files.hpp"
 #include "core/image_backend.hpp"
+#include "core/image_io.hpp"
 #include "core/module.hpp"
 
 namespace rfd {
 namespace {
-
-ImageBackend& backend() {
-    static ImageBackend& loaded = load_module<ImageBackend>("imageio", "rfd_imageio_backend");
-    return loaded;
-}
 
 std::size_t row_samples(const ImageFileSpec& spec) {
     return static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec.channels);
 }
 
 }  // namespace
+
+ImageBackend& imageio_backend() {
+    static ImageBackend& loaded = load_module<ImageBackend>("imageio", "rfd_imageio_backend");
+    return loaded;
+}
 
 std::size_t sample_size(SampleType type) {
     switch (type) {
@@ -50,7 +52,8 @@ ImageFileReader::ImageFileReader(const std::filesystem::path& path, const std::s
     if (const auto problem = exr_header_problem(path))
         throw InputError(SourceLocation{path.string()}, what + " file is damaged: " + *problem);
     std::string error;
-    backend_ = backend().open(path.string(), error);
+    backend_ = open_exr_file(path.string());
+    if (!backend_) backend_ = imageio_backend().open(path.string(), error);
     if (!backend_) throw IoError(SourceLocation{path.string()}, "cannot read " + what + ": " + error);
     spec_ = backend_->spec();
 }
@@ -81,7 +84,10 @@ ImageFileWriter::ImageFileWriter(const std::filesystem::path& path, const ImageF
     : path_(path), temporary_(temporary_sibling(path)), what_(what), spec_(spec) {
     RFD_CHECK(spec.width > 0 && spec.height > 0 && spec.channels > 0);
     std::string error;
-    backend_ = backend().create(temporary_.string(), spec, error);
+    if (lower_extension(path) == ".exr" && exr_file_covers(spec))
+        backend_ = create_exr_file(temporary_.string(), spec, error);
+    else
+        backend_ = imageio_backend().create(temporary_.string(), spec, error);
     if (!backend_) {
         remove_temporary(temporary_);
         throw IoError(SourceLocation{path.string()}, "cannot write " + what + ": " + error);

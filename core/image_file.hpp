@@ -4,9 +4,10 @@
 // This is the one door to image files in rfd: whole images (core/image_io.hpp), pattern
 // rasters of hundreds of millions of dots, print sheets and camera photographs all pass
 // through it. Samples are interleaved (channel fastest), rows top to bottom, and converted
-// between the caller's type and the file's by OpenImageIO; no colour encoding happens
-// here (core/image_io.hpp decodes sRGB). OpenImageIO itself lives in the module
-// librfd_imageio.so (core/module.hpp), loaded when the first file is opened.
+// between the caller's type and the file's as OpenImageIO converts them; no colour encoding
+// happens here (core/image_io.hpp decodes sRGB). OpenImageIO itself lives in the module
+// librfd_imageio.so (core/module.hpp), loaded when the first file it is needed for is
+// opened; common EXR files are read and written with OpenEXR directly (core/exr_file.hpp).
 //
 // Example: ImageFileWriter out("a.exr", {.width = 4, .height = 2, .channels = 3});
 //          out.write_rows(0, 2, samples); out.finish();

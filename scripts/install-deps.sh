@@ -10,6 +10,9 @@ packages=(
   clang libclang-rt-dev
   libeigen3-dev libcgal-dev libtbb-dev
   libopenimageio-dev openimageio-tools libcairo2-dev
+  # OpenEXR's own library: the EXR files most commands read and write, without loading
+  # OpenImageIO's 260 libraries (core/exr_file.hpp).
+  libopenexr-dev
   # The font of procedural letter fields and sheet labels (patterns/glyphs.cpp).
   fonts-dejavu-core
   # OpenCV's photo module: HDR assembly (Robertson et al. 2003). Its headers also satisfy
