@@ -4,7 +4,7 @@
 # rfd cannot start faster than), and two with OpenImageIO: one that only loads it, and one
 # that does through it the file work of rfd relight render, reading a 4-light 16x12 field and
 # writing a PNG (what any program doing that pays; rfd loads OpenImageIO on first use,
-# core/module.hpp). Times from hyperfine (mean of RUNS runs after warm-up), memory from GNU time (peak resident set, the largest of 3 runs).
+# core/module.hpp, and reads and writes common EXR files without it, core/exr_file.hpp). Times from hyperfine (mean of RUNS runs after warm-up), memory from GNU time (peak resident set, the largest of 3 runs).
 # Usage: bench/startup.sh [BUILD_DIR] [RUNS]     (make demo or make test builds BUILD_DIR/bin/rfd)
 set -euo pipefail
 build="${1:-build}"
@@ -50,10 +50,12 @@ field_images=("$work"/field/*.exr)
 
 names=("baseline: trivial, rfd's libraries" "rfd --version" "rfd --help" "rfd design show designs/design1.toml"
        "rfd optics trace (a lens, 5 deg)" "rfd holder designs/design2.toml (.scad)"
+       "rfd relight render (16x12 field, to EXR)"
        "baseline: trivial, OpenImageIO" "baseline: OIIO reads 4 EXRs, writes a PNG" "rfd relight render (16x12 field)")
 commands=("$work/trivial_as_rfd" "$rfd --version" "$rfd --help" "$rfd design show designs/design1.toml"
           "$rfd optics trace designs/lenses/edmund_pcx_25x50.toml --angle 5"
           "$rfd holder designs/design2.toml --out $work/holder.scad"
+          "$rfd relight render $work/field --light 30,0 --out $work/relit.exr"
           "$work/trivial_oiio" "$work/read_image_oiio $work/copy.png ${field_images[*]}"
           "$rfd relight render $work/field --light 30,0 --out $work/relit.png")
 

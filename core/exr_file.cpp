@@ -91,13 +91,13 @@ bool starts_as_exr(const std::string& path) {
 }
 
 // OpenImageIO's conversion of a float to an integer sample (its scaled_conversion): scaled,
-// rounded half away from zero, clamped.
+// rounded half away from zero, clamped; NaN, which it leaves undefined, to 0.
 template <typename Int>
 Int to_integer_sample(float value) {
     constexpr float scale = static_cast<float>(std::numeric_limits<Int>::max());
     float s = value * scale;
     s += s < 0.0f ? -0.5f : 0.5f;
-    return static_cast<Int>(std::clamp(s, 0.0f, scale));
+    return static_cast<Int>(std::isnan(s) ? 0.0f : std::clamp(s, 0.0f, scale));
 }
 
 class ExrReader final : public ImageFileReader::Backend {
@@ -156,7 +156,10 @@ std::optional<ImageFileSpec> covered_spec(const Imf::InputFile& file, std::vecto
     if (Imf::isTiled(version) || Imf::isMultiPart(version) || Imf::isNonImage(version)) return std::nullopt;
     const Imf::Header& header = file.header();
     const Imath::Box2i window = header.dataWindow();
-    if (window.min != Imath::V2i(0, 0) || window.max.x < 0 || window.max.y < 0) return std::nullopt;
+    constexpr int kLargest = 1 << 30;  // beyond, width and height would overflow an int
+    if (window.min != Imath::V2i(0, 0) || window.max.x < 0 || window.max.y < 0 || window.max.x >= kLargest ||
+        window.max.y >= kLargest)
+        return std::nullopt;
     const char* compression = compression_name(header.compression());
     if (compression == nullptr) return std::nullopt;
 
