@@ -29,15 +29,11 @@
 #include <utility>
 #include <vector>
 
+#include "core/error.hpp"
 #include "core/half.hpp"
 
 namespace rfd {
 namespace {
-
-constexpr const char* kAttributePrefix = "rfd:";
-// OpenImageIO's writers stamp the current time unless given one; rfd gives this one, so
-// that identical images make identical files (core/imageio_module.cpp).
-constexpr const char* kFixedDate = "1970:01:01 00:00:00";
 
 // The lossless compressions, by OpenImageIO's names; the lossy ones (pxr24, b44, dwa) are
 // left to OpenImageIO, which names their levels.
@@ -100,6 +96,20 @@ Int to_integer_sample(float value) {
     return static_cast<Int>(std::isnan(s) ? 0.0f : std::clamp(s, 0.0f, scale));
 }
 
+// The frame buffer of rows [y0, y1) of interleaved samples at `rows`, one slice per channel.
+Imf::FrameBuffer interleaved_rows(const std::vector<std::string>& channels, SampleType type, const void* rows,
+                                  int width, int y0, int y1) {
+    const Imf::PixelType pixel = type == SampleType::Half ? Imf::HALF : Imf::FLOAT;
+    const std::size_t sample = sample_size(type);
+    const std::size_t x_stride = sample * channels.size();
+    const std::size_t y_stride = x_stride * static_cast<std::size_t>(width);
+    Imf::FrameBuffer frame;
+    for (std::size_t c = 0; c < channels.size(); ++c)
+        frame.insert(channels[c], Imf::Slice::Make(pixel, static_cast<const char*>(rows) + c * sample,
+                                                   Imath::V2i(0, y0), width, y1 - y0, x_stride, y_stride));
+    return frame;
+}
+
 class ExrReader final : public ImageFileReader::Backend {
 public:
     ExrReader(std::unique_ptr<Imf::InputFile> file, ImageFileSpec spec, std::vector<std::string> channels)
@@ -131,15 +141,7 @@ public:
 
 private:
     void read(int y0, int y1, SampleType type, void* out) {
-        const Imf::PixelType pixel = type == SampleType::Half ? Imf::HALF : Imf::FLOAT;
-        const std::size_t sample = sample_size(type);
-        const std::size_t x_stride = sample * channels_.size();
-        const std::size_t y_stride = x_stride * static_cast<std::size_t>(spec_.width);
-        Imf::FrameBuffer frame;
-        for (std::size_t c = 0; c < channels_.size(); ++c)
-            frame.insert(channels_[c], Imf::Slice::Make(pixel, static_cast<char*>(out) + c * sample,
-                                                        Imath::V2i(0, y0), spec_.width, y1 - y0, x_stride, y_stride));
-        file_->setFrameBuffer(frame);
+        file_->setFrameBuffer(interleaved_rows(channels_, type, out, spec_.width, y0, y1));
         file_->readPixels(y0, y1 - 1);
     }
 
@@ -273,15 +275,7 @@ public:
                 }
                 rows = converted_.data();
             }
-            const Imf::PixelType pixel = type_ == SampleType::Half ? Imf::HALF : Imf::FLOAT;
-            const std::size_t sample = sample_size(type_);
-            const std::size_t x_stride = sample * names_.size();
-            const std::size_t y_stride = x_stride * static_cast<std::size_t>(width_);
-            Imf::FrameBuffer frame;
-            for (std::size_t c = 0; c < names_.size(); ++c)
-                frame.insert(names_[c], Imf::Slice::Make(pixel, static_cast<const char*>(rows) + c * sample,
-                                                         Imath::V2i(0, y0), width_, y1 - y0, x_stride, y_stride));
-            output_->setFrameBuffer(frame);
+            output_->setFrameBuffer(interleaved_rows(names_, type_, rows, width_, y0, y1));
             output_->writePixels(y1 - y0);
             return true;
         } catch (const std::exception& e) {
@@ -338,10 +332,7 @@ bool exr_file_covers(const ImageFileSpec& spec) {
 
 std::unique_ptr<ImageFileWriter::Backend> create_exr_file(const std::string& path, const ImageFileSpec& spec,
                                                           std::string& error) {
-    if (!exr_file_covers(spec)) {
-        error = "not an EXR file rfd writes itself";
-        return nullptr;
-    }
+    RFD_CHECK(exr_file_covers(spec));
     start_threads();
     // The header OpenImageIO writes for the same spec (core/imageio_module.cpp: oiio_spec):
     // zip unless told, the fixed date, the print resolution as a density per inch and a
@@ -352,7 +343,7 @@ std::unique_ptr<ImageFileWriter::Backend> create_exr_file(const std::string& pat
     Imf::Header header(spec.width, spec.height, aspect, Imath::V2f(0.0f, 0.0f), 1.0f, Imf::INCREASING_Y, compression);
     const Imf::PixelType pixel = spec.type == SampleType::Half ? Imf::HALF : Imf::FLOAT;
     for (const std::string& name : channel_names(spec.channels)) header.channels().insert(name, Imf::Channel(pixel));
-    header.insert("capDate", Imf::StringAttribute(kFixedDate));
+    header.insert("capDate", Imf::StringAttribute(kFixedImageDate));
     if (has_dpi) {
         header.insert("ResolutionUnit", Imf::StringAttribute("in"));
         header.insert("xDensity", Imf::FloatAttribute(static_cast<float>(spec.dpi_x)));

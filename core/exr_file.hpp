@@ -30,8 +30,8 @@ std::unique_ptr<ImageFileReader::Backend> open_exr_file(const std::string& path)
 /// True when create_exr_file() writes a file of `spec`.
 bool exr_file_covers(const ImageFileSpec& spec);
 
-/// A writer of a new OpenEXR file at `path` (any extension); `spec` must be covered. Null
-/// with `error` set when the file cannot be created.
+/// A writer of a new OpenEXR file at `path` (any extension). Precondition:
+/// exr_file_covers(spec). Null with `error` set when the file cannot be created.
 std::unique_ptr<ImageFileWriter::Backend> create_exr_file(const std::string& path, const ImageFileSpec& spec,
                                                           std::string& error);
 

@@ -11,6 +11,12 @@
 
 namespace rfd {
 
+/// The prefix of rfd's own attributes in an EXR header ("rfd:field"), both backends.
+inline constexpr const char* kAttributePrefix = "rfd:";
+/// The date every image file is stamped with (writers stamp the current time unless given
+/// one), so that identical samples give identical files.
+inline constexpr const char* kFixedImageDate = "1970:01:01 00:00:00";
+
 class ImageFileReader::Backend {
 public:
     virtual ~Backend() = default;

@@ -20,7 +20,6 @@
 namespace rfd {
 namespace {
 
-constexpr const char* kAttributePrefix = "rfd:";
 constexpr double kCentimetresPerInch = 2.54;
 
 OIIO::TypeDesc type_desc(SampleType type) {
@@ -75,7 +74,7 @@ OIIO::ImageSpec oiio_spec(const ImageFileSpec& spec) {
     }
     // Identical images must give identical files: OpenImageIO's writers stamp the current
     // time (EXR's capDate, TIFF's DateTime) unless DateTime is set.
-    out.attribute("DateTime", "1970:01:01 00:00:00");
+    out.attribute("DateTime", kFixedImageDate);
     if (!spec.compression.empty()) out.attribute("compression", spec.compression);
     if (!spec.description.empty()) out.attribute("ImageDescription", spec.description);
     if (spec.exposure_seconds) out.attribute("ExposureTime", static_cast<float>(*spec.exposure_seconds));
