@@ -403,6 +403,23 @@ std::vector<double> ConfigTable::numbers(const std::string& key, std::size_t cou
     return result;
 }
 
+std::vector<double> ConfigTable::number_list(const std::string& key, std::size_t min_count, std::size_t max_count,
+                                              double min, double max) {
+    const toml::array* array = require(key).as_array();
+    const std::string expected = "expected an array of " + std::to_string(min_count) + " to " +
+                                 std::to_string(max_count) + " numbers from " + format_number(min) + " to " +
+                                 format_number(max);
+    if (!array || array->size() < min_count || array->size() > max_count) fail(key, expected);
+    std::vector<double> result;
+    for (const toml::node& element : *array) {
+        const auto value = as_number(element);
+        if (!value || !std::isfinite(*value) || *value < min || *value > max)
+            fail(key, expected + ", found " + (value ? format_number(*value) : type_name(element)));
+        result.push_back(*value);
+    }
+    return result;
+}
+
 std::vector<std::string> ConfigTable::strings(const std::string& key) {
     const toml::array* array = require(key).as_array();
     if (!array) fail(key, "expected an array of strings");

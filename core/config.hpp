@@ -83,6 +83,11 @@ public:
     std::vector<double> numbers(const std::string& key, std::size_t count, double min,
                                 double max);
 
+    /// Required array of `min_count` to `max_count` numbers, each within [min, max]
+    /// (measured curves: `transmittance = [1, 0.82, 0.61]`).
+    std::vector<double> number_list(const std::string& key, std::size_t min_count, std::size_t max_count,
+                                    double min, double max);
+
     /// Required array of strings, possibly empty (`formats = ["pdf", "tif"]`).
     std::vector<std::string> strings(const std::string& key);
 

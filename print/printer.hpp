@@ -14,6 +14,11 @@
 // measure it by printing a step wedge. black_level is the transmittance a sheet's darkest
 // dot aims for (>= T_ink, a little above it for head room against ink variation).
 //
+// A measured curve (`rfd calibrate tone`) replaces the power law: a [tone] table of
+// transmittances at increasing ink values from 0 to 1, read piecewise linearly in density
+// (log T) between them, so that dark steps keep their relative precision. T(0) = 1 by
+// definition, and T(1) = T_ink.
+//
 // Tone mapping of a pattern value p (linear, rfd:white = the value meant as full
 // transmittance) for a stack of n sheets printed identically (n = 2: the front sheet and
 // its mirror, mounted back to back, so the stack transmits the product):
@@ -28,6 +33,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "core/units.hpp"
 
@@ -52,6 +58,9 @@ struct PrinterProfile {
     int sheets = 1;              ///< sheets stacked back to back by default (1 or 2)
     double film = 0.1;           ///< mm, thickness of one printed transparency (the holder's pockets)
     Paper paper;
+    /// The measured curve, when the profile has one: ink values 0 = v_0 < ... < v_n = 1 and
+    /// their transmittances 1 = T_0 > ... > T_n = T_ink. Empty: the power law.
+    std::vector<double> tone_ink, tone_transmittance;
 
     /// Transmittance of full ink, 10^-max_density.
     double ink_transmittance() const;

@@ -29,6 +29,7 @@
 namespace rfd::print {
 namespace {
 
+using ::testing::AllOf;
 using ::testing::HasSubstr;
 using rfd::testing::bundled_design;
 using ::testing::MatchesRegex;
@@ -203,6 +204,49 @@ TEST(PrinterProfile, ForwardModelInvertsExactly) {
     // Out of range asks for the nearest printable value.
     EXPECT_DOUBLE_EQ(p.printer_value(0.0), 1.0);
     EXPECT_DOUBLE_EQ(p.printer_value(1.5), 0.0);
+}
+
+TEST(PrinterProfile, MeasuredCurveIsReadInDensityAndInvertsExactly) {
+    // max_density 2: full ink transmits 0.01, the table's last entry.
+    const std::string table = "[tone]\nink = [0, 0.25, 0.5, 1]\ntransmittance = [1, 0.6, 0.2, 0.01]\n";
+    const PrinterProfile p = parse_printer(small_printer_toml(720, 720) + table, "measured.toml");
+    const double ink[] = {0, 0.25, 0.5, 1}, t[] = {1, 0.6, 0.2, 0.01};
+    for (int k = 0; k < 4; ++k) {
+        EXPECT_NEAR(p.transmittance(ink[k]), t[k], 1e-15) << k;
+        EXPECT_NEAR(p.printer_value(t[k]), ink[k], 1e-12) << k;
+    }
+    // Between entries, straight in density: halfway from 0.5 to 1 is the geometric mean.
+    EXPECT_NEAR(p.transmittance(0.75), std::sqrt(0.2 * 0.01), 1e-15);
+    EXPECT_NEAR(p.transmittance(0.125), std::sqrt(1.0 * 0.6), 1e-15);
+    int checked = 0;
+    for (int k = 0; k <= 200; ++k) {
+        const double v = k / 200.0;
+        EXPECT_NEAR(p.printer_value(p.transmittance(v)), v, 1e-12) << v;
+        if (k > 0) {
+            EXPECT_LT(p.transmittance(v), p.transmittance((k - 1) / 200.0)) << v;
+        }
+        ++checked;
+    }
+    EXPECT_EQ(checked, 201);
+    EXPECT_DOUBLE_EQ(p.printer_value(0.001), 1.0);  // darker than full ink: full ink
+    // Written and read back: the same profile, the same text.
+    EXPECT_EQ(printer_toml(parse_printer(printer_toml(p), "again.toml")), printer_toml(p));
+    EXPECT_THAT(printer_toml(p), HasSubstr("[tone]"));
+}
+
+TEST(PrinterProfile, RefusesMeasuredCurvesItCannotInvert) {
+    const auto error_for = [](const std::string& table) {
+        return error_of([&] { parse_printer(small_printer_toml(720, 720) + "[tone]\n" + table, "bad.toml"); });
+    };
+    EXPECT_THAT(error_for("ink = [0, 0.5, 0.4, 1]\ntransmittance = [1, 0.5, 0.2, 0.01]\n"),
+                AllOf(HasSubstr("tone.ink"), HasSubstr("increasing")));
+    EXPECT_THAT(error_for("ink = [0, 0.5, 1]\ntransmittance = [1, 0.5, 0.6]\n"),
+                AllOf(HasSubstr("tone.transmittance"), HasSubstr("fall")));
+    EXPECT_THAT(error_for("ink = [0, 0.5, 1]\ntransmittance = [1, 0.01]\n"), HasSubstr("one transmittance per ink"));
+    EXPECT_THAT(error_for("ink = [0.1, 0.5, 1]\ntransmittance = [1, 0.5, 0.01]\n"), HasSubstr("from 0"));
+    EXPECT_THAT(error_for("ink = [0, 0.5, 1]\ntransmittance = [0.9, 0.5, 0.01]\n"), HasSubstr("1 (bare film)"));
+    EXPECT_THAT(error_for("ink = [0, 0.5, 1]\ntransmittance = [1, 0.5, 0.05]\n"), HasSubstr("max_density"));
+    EXPECT_THAT(error_for("ink = [0, 0.5, 1]\ntransmittance = [1, \"a\", 0.01]\n"), HasSubstr("numbers"));
 }
 
 TEST(ToneMap, TwoSheetsMultiplyToTheBlackCorrectedTarget) {
