@@ -147,13 +147,12 @@ void add_wedge_command(CLI::App& print_cmd) {
                  "for its profile");
     struct Options {
         std::string printer = "epson_stylus_pro_4800", out, preview;
-        int steps = 21;
+        int steps = static_cast<int>(print::kWedgeStepsOption.fallback);
         bool json = false;
     };
     auto opt = std::make_shared<Options>();
     cmd->add_option("--printer", opt->printer, "Printer profile: a TOML file or a bundled name");
-    cmd->add_option("--steps", opt->steps, "Patches from code 255 (no ink) to 0 (full ink)")
-        ->check(CLI::Range(2, 256));
+    add_option(*cmd, print::kWedgeStepsOption, opt->steps);
     cmd->add_option("--out", opt->out, "Output PDF")->required();
     cmd->add_option("--preview", opt->preview, "Also a PNG of the first page (800 pixels along its longer side)");
     cmd->add_flag("--json", opt->json, "Machine-readable list of patches");

@@ -62,10 +62,11 @@ Image read_image(const std::filesystem::path& path) {
     return image;
 }
 
-void write_image(const std::filesystem::path& path, const Image& image) {
+void write_image(const std::filesystem::path& path, const Image& image, const std::string& compression) {
     RFD_CHECK(!image.empty());
     const std::string ext = lower_extension(path);
     ImageFileSpec spec{.width = image.width(), .height = image.height(), .channels = image.channels()};
+    spec.compression = compression;
     bool srgb = false;
     if (ext == ".png" || ext == ".jpg" || ext == ".jpeg") {
         spec.type = SampleType::UInt8;
@@ -74,7 +75,7 @@ void write_image(const std::filesystem::path& path, const Image& image) {
         spec.type = SampleType::UInt16;
         srgb = true;
     } else if (ext == ".exr") {
-        spec.compression = "zip";
+        if (spec.compression.empty()) spec.compression = "zip";
     } else if (ext != ".hdr") {
         throw InputError(SourceLocation{path.string()},
                          "unknown image extension '" + ext +

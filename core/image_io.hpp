@@ -29,9 +29,10 @@ struct ImageSize {
 Image read_image(const std::filesystem::path& path);
 ImageSize read_image_size(const std::filesystem::path& path);
 
-/// Writes `image` to `path` in the encoding its extension selects. Throws InputError for a
+/// Writes `image` to `path` in the encoding its extension selects, with the format's
+/// `compression` when given ("jpeg:80": a JPEG of quality 80). Throws InputError for a
 /// non-finite sample (nothing is written) and IoError when writing fails.
-void write_image(const std::filesystem::path& path, const Image& image);
+void write_image(const std::filesystem::path& path, const Image& image, const std::string& compression = "");
 
 /// The extension of `path` in lower case, with its dot (".exr"), as writers choose formats.
 std::string lower_extension(const std::filesystem::path& path);

@@ -10,6 +10,7 @@
 
 #include "core/error.hpp"
 #include "core/files.hpp"
+#include "print/marks.hpp"
 #include "print/pdf_file.hpp"
 #include "core/text.hpp"
 
@@ -84,7 +85,8 @@ std::vector<MoireBand> write_moire_pdf(const std::filesystem::path& out, const o
     const double band_left = paper.margin + kLabelColumn;
     const double band_width = std::min(2.0 * lattice.half_extent().x(), paper.width - paper.margin - band_left);
     const double band_height = std::max({options.band_height, 4.0 * options.x.to, 4.0 * y_range.to * row_factor});
-    const double usable = paper.height - 2 * paper.margin - kMoireHeader;
+    const SheetMarks marks = sheet_marks(paper);
+    const double usable = paper.height - 2 * paper.margin - kMoireHeader - marks.strip;
     const int per_page = static_cast<int>(std::floor((usable + kBandGap) / (band_height + kBandGap)));
     if (per_page < 1 || band_width < 4.0 * options.x.to)
         throw InputError(SourceLocation{printer.file, 0, 0, "paper"},
@@ -113,9 +115,10 @@ std::vector<MoireBand> write_moire_pdf(const std::filesystem::path& out, const o
                 "rows: spacing of the rows. Design: pitch " + format_fixed(lattice.pitch_x(), 4) + " mm, rows " +
                     format_fixed(lattice.pitch_y(), 4) + " mm apart. " + printer.name + "."};
             for (std::size_t k = 0; k < std::size(header); ++k) {
-                cairo_move_to(cr, paper.margin, paper.margin + 3.0 + 3.2 * static_cast<double>(k));
+                cairo_move_to(cr, paper.margin + marks.indent, paper.margin + 3.0 + 3.2 * static_cast<double>(k));
                 cairo_show_text(cr, header[k].c_str());
             }
+            draw_marks(cr, marks);
             for (const MoireBand& band : bands) {
                 if (band.page != page) continue;
                 // Label: the hypothesis, and which spacing it tests.

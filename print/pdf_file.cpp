@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <memory>
 #include <utility>
 
@@ -50,13 +51,16 @@ void PdfFile::finish() {
     temporary_.release();
 }
 
-void write_page_png(const std::filesystem::path& png, double paper_width_mm, double paper_height_mm, int pixels,
-                    const std::function<void(cairo_t*)>& draw) {
-    const double px_per_mm = pixels / std::max(paper_width_mm, paper_height_mm);
+namespace {
+
+using Surface = std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)>;
+
+// The page painted over white into an RGB24 surface, `px_per_mm` pixels per mm.
+Surface paint_page(double paper_width_mm, double paper_height_mm, double px_per_mm,
+                   const std::function<void(cairo_t*)>& draw) {
     const int width = std::max(1, static_cast<int>(std::lround(paper_width_mm * px_per_mm)));
     const int height = std::max(1, static_cast<int>(std::lround(paper_height_mm * px_per_mm)));
-    std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> page(
-        cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height), &cairo_surface_destroy);
+    Surface page(cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height), &cairo_surface_destroy);
     {
         std::unique_ptr<cairo_t, decltype(&cairo_destroy)> cr(cairo_create(page.get()), &cairo_destroy);
         cairo_set_source_rgb(cr.get(), 1, 1, 1);
@@ -65,6 +69,30 @@ void write_page_png(const std::filesystem::path& png, double paper_width_mm, dou
         draw(cr.get());
     }
     cairo_surface_flush(page.get());
+    return page;
+}
+
+}  // namespace
+
+Image page_codes(double paper_width_mm, double paper_height_mm, double px_per_mm,
+                 const std::function<void(cairo_t*)>& draw) {
+    RFD_CHECK(px_per_mm > 0.0);
+    const Surface page = paint_page(paper_width_mm, paper_height_mm, px_per_mm, draw);
+    const int width = cairo_image_surface_get_width(page.get()), height = cairo_image_surface_get_height(page.get());
+    const int stride = cairo_image_surface_get_stride(page.get());
+    const unsigned char* data = cairo_image_surface_get_data(page.get());
+    Image codes(width, height, 1);
+    for (int y = 0; y < height; ++y) {
+        const auto* row = reinterpret_cast<const std::uint32_t*>(data + static_cast<std::ptrdiff_t>(y) * stride);
+        for (int x = 0; x < width; ++x) codes.at(x, y, 0) = static_cast<float>((row[x] >> 8) & 0xffu) / 255.0f;
+    }
+    return codes;
+}
+
+void write_page_png(const std::filesystem::path& png, double paper_width_mm, double paper_height_mm, int pixels,
+                    const std::function<void(cairo_t*)>& draw) {
+    const double px_per_mm = pixels / std::max(paper_width_mm, paper_height_mm);
+    const Surface page = paint_page(paper_width_mm, paper_height_mm, px_per_mm, draw);
     const std::filesystem::path temporary = temporary_sibling(png);
     if (cairo_surface_write_to_png(page.get(), temporary.c_str()) != CAIRO_STATUS_SUCCESS) {
         remove_temporary(temporary);

@@ -19,6 +19,7 @@
 #include <cairo.h>
 
 #include "core/files.hpp"
+#include "core/image.hpp"
 #include "print/layout.hpp"
 #include "print/printer.hpp"
 
@@ -49,6 +50,11 @@ private:
 /// naming `png` when it cannot be written.
 void write_page_png(const std::filesystem::path& png, double paper_width_mm, double paper_height_mm, int pixels,
                     const std::function<void(cairo_t*)>& draw);
+
+/// A page as the printer receives it: `draw` paints it over white at `px_per_mm`, and each
+/// pixel holds its code / 255 (1: no ink), one channel (the green one: sheets are grey).
+Image page_codes(double paper_width_mm, double paper_height_mm, double px_per_mm,
+                 const std::function<void(cairo_t*)>& draw);
 
 /// A PDF of `pages` pages of `paper`, each drawn by `draw(cr, page)` in page-frame mm
 /// (`what` names it in messages), and, when `preview` is given, its first page as write_page_png.

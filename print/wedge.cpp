@@ -58,56 +58,72 @@ std::vector<WedgePatch> wedge_patches(const PrinterProfile& printer, int steps) 
     return patches;
 }
 
-std::vector<WedgePatch> write_wedge_pdf(const std::filesystem::path& out, const PrinterProfile& printer, int steps,
-                                        const std::filesystem::path& preview) {
-    std::vector<WedgePatch> patches = wedge_patches(printer, steps);
+WedgeSheet wedge_sheet(const PrinterProfile& printer, int steps) {
+    WedgeSheet sheet;
+    sheet.patches = wedge_patches(printer, steps);
+    sheet.patch_size = kPatch;
     const Paper& paper = printer.paper;
+    sheet.marks = sheet_marks(paper);
     const int columns = static_cast<int>(std::floor((paper.width - 2 * paper.margin + kGap) / (kPatch + kGap)));
-    const int rows = static_cast<int>(std::floor((paper.height - 2 * paper.margin - kWedgeHeader) / (kPatch + kLabel)));
+    const int rows = static_cast<int>(
+        std::floor((paper.height - 2 * paper.margin - kWedgeHeader - sheet.marks.strip) / (kPatch + kLabel)));
     if (columns < 1 || rows < 1)
         throw InputError(SourceLocation{printer.file, 0, 0, "paper"},
                          "a wedge patch (" + format_number(kPatch) + " mm and its label) does not fit the printable "
                          "area of " + paper.name + " paper");
-    for (std::size_t k = 0; k < patches.size(); ++k) {
+    for (std::size_t k = 0; k < sheet.patches.size(); ++k) {
         const int slot = static_cast<int>(k);
-        patches[k].page = slot / (columns * rows);
-        patches[k].left = paper.margin + (slot % columns) * (kPatch + kGap);
-        patches[k].top = paper.margin + kWedgeHeader + ((slot / columns) % rows) * (kPatch + kLabel);
+        sheet.patches[k].page = slot / (columns * rows);
+        sheet.patches[k].left = paper.margin + (slot % columns) * (kPatch + kGap);
+        sheet.patches[k].top = paper.margin + kWedgeHeader + ((slot / columns) % rows) * (kPatch + kLabel);
     }
+    sheet.pages = sheet.patches.back().page + 1;
+    return sheet;
+}
 
-    const int pages = patches.back().page + 1;
-    // One page, user units page-frame mm.
-    const auto draw_page = [&](cairo_t* cr, int page) {
-        cairo_select_font_face(cr, "DejaVu Sans", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+void draw_wedge_page(cairo_t* cr, const WedgeSheet& sheet, const PrinterProfile& printer, int page) {
+    const Paper& paper = printer.paper;
+    cairo_select_font_face(cr, "DejaVu Sans", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+    cairo_set_source_rgb(cr, 0, 0, 0);
+    cairo_set_font_size(cr, 2.6);
+    const std::string header[] = {
+        "Step wedge - " + printer.name + " - " + format_number(printer.dpi_x.value) + " x " +
+            format_number(printer.dpi_y.value) + " dpi - page " + std::to_string(page + 1) + " of " +
+            std::to_string(sheet.pages),
+        "Print on your film at 100 %, colour management off, as you print patterns. Scan or photograph it",
+        "with the four corner discs in view, then: rfd calibrate tone PRINTER SCAN (docs/usage.md). Under",
+        "each patch: code, ink v, and the transmittance T the profile predicts (against bare film)."};
+    for (std::size_t k = 0; k < std::size(header); ++k) {
+        cairo_move_to(cr, paper.margin + sheet.marks.indent, paper.margin + 3.0 + 3.2 * static_cast<double>(k));
+        cairo_show_text(cr, header[k].c_str());
+    }
+    draw_marks(cr, sheet.marks);
+    for (const WedgePatch& patch : sheet.patches) {
+        if (patch.page != page) continue;
         cairo_set_source_rgb(cr, 0, 0, 0);
-        cairo_set_font_size(cr, 2.6);
-        const std::string header[] = {
-            "Step wedge - " + printer.name + " - " + format_number(printer.dpi_x.value) + " x " +
-                format_number(printer.dpi_y.value) + " dpi - page " + std::to_string(page + 1) + " of " +
-                std::to_string(pages),
-            "Print on your film at 100 %, colour management off, as you print patterns. Measure each patch's",
-            "transmittance against bare film (code 255). max_density = -log10(T of code 0); fit gamma to",
-            "T(v) = T_ink + (1 - T_ink)(1 - v)^gamma. Under each patch: code, ink v, and T the profile predicts."};
-        for (std::size_t k = 0; k < std::size(header); ++k) {
-            cairo_move_to(cr, paper.margin, paper.margin + 3.0 + 3.2 * static_cast<double>(k));
-            cairo_show_text(cr, header[k].c_str());
-        }
-        for (const WedgePatch& patch : patches) {
-            if (patch.page != page) continue;
-            cairo_set_source_rgb(cr, 0, 0, 0);
-            draw_patch(cr, patch.code, patch.left, patch.top);
-            cairo_set_source_rgb(cr, 0, 0, 0);
-            cairo_set_font_size(cr, 2.2);
-            cairo_move_to(cr, patch.left, patch.top + kPatch + 2.8);
-            cairo_show_text(cr, ("code " + std::to_string(patch.code)).c_str());
-            cairo_move_to(cr, patch.left, patch.top + kPatch + 5.2);
-            cairo_show_text(cr, ("v " + format_fixed(patch.ink, 3)).c_str());
-            cairo_move_to(cr, patch.left, patch.top + kPatch + 7.6);
-            cairo_show_text(cr, ("T " + format_fixed(patch.transmittance, 4)).c_str());
-        }
-    };
-    write_pages(out, paper, pages, "step wedge", draw_page, preview);
-    return patches;
+        draw_patch(cr, patch.code, patch.left, patch.top);
+        cairo_set_source_rgb(cr, 0, 0, 0);
+        cairo_set_font_size(cr, 2.2);
+        cairo_move_to(cr, patch.left, patch.top + kPatch + 2.8);
+        cairo_show_text(cr, ("code " + std::to_string(patch.code)).c_str());
+        cairo_move_to(cr, patch.left, patch.top + kPatch + 5.2);
+        cairo_show_text(cr, ("v " + format_fixed(patch.ink, 3)).c_str());
+        cairo_move_to(cr, patch.left, patch.top + kPatch + 7.6);
+        cairo_show_text(cr, ("T " + format_fixed(patch.transmittance, 4)).c_str());
+    }
+}
+
+Image wedge_page_codes(const WedgeSheet& sheet, const PrinterProfile& printer, int page, double px_per_mm) {
+    return page_codes(printer.paper.width, printer.paper.height, px_per_mm,
+                      [&](cairo_t* cr) { draw_wedge_page(cr, sheet, printer, page); });
+}
+
+std::vector<WedgePatch> write_wedge_pdf(const std::filesystem::path& out, const PrinterProfile& printer, int steps,
+                                        const std::filesystem::path& preview) {
+    const WedgeSheet sheet = wedge_sheet(printer, steps);
+    write_pages(out, printer.paper, sheet.pages, "step wedge",
+                [&](cairo_t* cr, int page) { draw_wedge_page(cr, sheet, printer, page); }, preview);
+    return sheet.patches;
 }
 
 }  // namespace rfd::print

@@ -11,9 +11,17 @@
 #include <filesystem>
 #include <vector>
 
+
+#include "core/image.hpp"
+#include "core/options.hpp"
+#include "print/marks.hpp"
 #include "print/printer.hpp"
 
 namespace rfd::print {
+
+/// Patches of a wedge, the same for printing it and for reading it back.
+inline constexpr IntegerOption kWedgeStepsOption{"--steps", "", "", 2, 256, 21,
+                                                 "Patches of the step wedge, from code 255 (no ink) to 0 (full ink)"};
 
 struct WedgePatch {
     int code = 255;               ///< what the sheet file holds, 0..255 (255: no ink)
@@ -26,6 +34,25 @@ struct WedgePatch {
 /// The `steps` codes (2..256) from 255 down to 0, rounded to whole codes, with what the
 /// profile predicts for each.
 std::vector<WedgePatch> wedge_patches(const PrinterProfile& printer, int steps);
+
+/// The wedge laid out on the profile's paper: its patches placed page by page, the
+/// registration marks every page carries (print/marks.hpp), the patches' side.
+struct WedgeSheet {
+    std::vector<WedgePatch> patches;
+    SheetMarks marks;
+    int pages = 1;
+    double patch_size = 16.0;  ///< mm
+};
+
+/// wedge_patches placed on the paper. InputError when the paper cannot hold one patch.
+WedgeSheet wedge_sheet(const PrinterProfile& printer, int steps);
+
+/// Paints page `page` of the wedge (user units: page-frame mm) over white.
+void draw_wedge_page(cairo_t* cr, const WedgeSheet& sheet, const PrinterProfile& printer, int page);
+
+/// Page `page` of the wedge as the printer receives it (print/pdf_file.hpp page_codes), at
+/// `px_per_mm`: what a simulated print of the sheet starts from.
+Image wedge_page_codes(const WedgeSheet& sheet, const PrinterProfile& printer, int page, double px_per_mm);
 
 /// Writes the wedge as a PDF on the profile's paper (temporary file + rename), and its first
 /// page as a PNG at `preview` when given, and returns its patches. InputError when the
