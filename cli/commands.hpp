@@ -29,6 +29,8 @@ void add_capture_tool_commands(CLI::App& capture);
 void add_pattern_commands(CLI::App& app);
 /// The `print` group: sheet (pattern sheets for a printer), moire (pitch calibration).
 void add_print_commands(CLI::App& app);
+/// rfd calibrate tone (calibrate_commands.cpp).
+void add_calibrate_commands(CLI::App& app);
 /// `pattern encode-angular` (Designs III/IV), added to the `pattern` group.
 void add_pattern_angular_command(CLI::App& pattern);
 /// `pattern optimize` (Designs I/II): a pattern chosen through the simulator.

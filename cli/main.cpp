@@ -51,6 +51,7 @@ int main(int argc, char** argv) {
     rfd::cli::add_capture_tool_commands(*capture);
     rfd::cli::add_pattern_commands(app);
     rfd::cli::add_print_commands(app);
+    rfd::cli::add_calibrate_commands(app);
     rfd::cli::add_simulate_commands(app);
     rfd::cli::add_holder_commands(app);
     rfd::cli::add_make_command(app);

@@ -1,0 +1,119 @@
+#include "calibrate/camera.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include <Eigen/Geometry>
+
+#include "core/error.hpp"
+#include "core/image_io.hpp"
+#include "core/parallel.hpp"
+#include "core/units.hpp"
+#include "relight/vision.hpp"
+
+namespace rfd::calibrate {
+namespace {
+
+constexpr int kSupersampling = 2;  // samples per pixel along each axis
+
+// Bilinear sample of a one-channel raster at page point (x, y) mm; `outside` beyond it.
+float sample_page(const Image& page, double px_per_mm, double x, double y, float outside) {
+    const double u = x * px_per_mm - 0.5, v = y * px_per_mm - 0.5;
+    if (!(u >= -0.5 && v >= -0.5 && u <= page.width() - 0.5 && v <= page.height() - 0.5)) return outside;
+    const int x0 = std::clamp(static_cast<int>(std::floor(u)), 0, page.width() - 1);
+    const int y0 = std::clamp(static_cast<int>(std::floor(v)), 0, page.height() - 1);
+    const int x1 = std::min(x0 + 1, page.width() - 1), y1 = std::min(y0 + 1, page.height() - 1);
+    const double fx = std::clamp(u - x0, 0.0, 1.0), fy = std::clamp(v - y0, 0.0, 1.0);
+    const double top = (1 - fx) * page.at(x0, y0, 0) + fx * page.at(x1, y0, 0);
+    const double bottom = (1 - fx) * page.at(x0, y1, 0) + fx * page.at(x1, y1, 0);
+    return static_cast<float>((1 - fy) * top + fy * bottom);
+}
+
+}  // namespace
+
+Eigen::Matrix3d page_to_pixels(const Camera& camera) {
+    const CameraPose& pose = camera.pose;
+    const double tilt = degrees_to_radians(pose.tilt_deg), turn = degrees_to_radians(pose.turn_deg);
+    const Eigen::Vector3d aim(pose.aim.x(), pose.aim.y(), 0.0);
+    // From the aim point back to the camera: the page's normal toward the viewer (-z), leaned
+    // by the tilt toward the turn azimuth.
+    const Eigen::Vector3d back(std::sin(tilt) * std::cos(turn), std::sin(tilt) * std::sin(turn), -std::cos(tilt));
+    const Eigen::Vector3d centre = aim + pose.distance * back;
+    const Eigen::Vector3d forward = -back;
+    // The image's right: the page's x made perpendicular to the line of sight, then rolled.
+    Eigen::Vector3d right = Eigen::Vector3d::UnitX() - Eigen::Vector3d::UnitX().dot(forward) * forward;
+    if (right.norm() < 1e-9) right = Eigen::Vector3d::UnitY().cross(forward);
+    right = Eigen::AngleAxisd(degrees_to_radians(pose.roll_deg), forward) * right.normalized();
+    const Eigen::Vector3d down = forward.cross(right);
+    Eigen::Matrix3d rotation;
+    rotation.row(0) = right;
+    rotation.row(1) = down;
+    rotation.row(2) = forward;
+    Eigen::Matrix3d intrinsics;
+    intrinsics << camera.focal, 0, 0.5 * (camera.width - 1), 0, camera.focal, 0.5 * (camera.height - 1), 0, 0, 1;
+    Eigen::Matrix3d extrinsics;
+    extrinsics.col(0) = rotation.col(0);
+    extrinsics.col(1) = rotation.col(1);
+    extrinsics.col(2) = -rotation * centre;
+    return intrinsics * extrinsics;
+}
+
+Eigen::Vector2d apply(const Eigen::Matrix3d& homography, const Eigen::Vector2d& page) {
+    const Eigen::Vector3d p = homography * page.homogeneous();
+    return p.hnormalized();
+}
+
+Image photograph(const Image& transmittance, double px_per_mm, const Camera& camera) {
+    RFD_CHECK(transmittance.channels() == 1 && px_per_mm > 0.0);
+    RFD_CHECK(camera.width > 0 && camera.height > 0 && camera.focal > 0.0);
+    const Eigen::Matrix3d to_page = page_to_pixels(camera).inverse();
+    const double page_width = transmittance.width() / px_per_mm;
+    const double cx = 0.5 * (camera.width - 1), cy = 0.5 * (camera.height - 1);
+    const double corner2 = cx * cx + cy * cy;
+    Image photo(camera.width, camera.height, 1);
+    // Rows are independent: each is traced alone, so the picture is the same on any number
+    // of threads.
+    parallel_for_chunks(static_cast<std::size_t>(camera.height), 16, [&](std::size_t begin, std::size_t end) {
+        for (auto y = static_cast<int>(begin); y < static_cast<int>(end); ++y)
+            for (int x = 0; x < camera.width; ++x) {
+                double sum = 0.0;
+                for (int sy = 0; sy < kSupersampling; ++sy)
+                    for (int sx = 0; sx < kSupersampling; ++sx) {
+                        const Eigen::Vector2d pixel(x + (sx + 0.5) / kSupersampling - 0.5,
+                                                    y + (sy + 0.5) / kSupersampling - 0.5);
+                        Eigen::Vector2d page = apply(to_page, pixel);
+                        if (camera.pose.from_back) page.x() = page_width - page.x();
+                        const float t = sample_page(transmittance, px_per_mm, page.x(), page.y(), -1.0f);
+                        const double light =
+                            1.0 - camera.light_gradient * std::clamp(page.x() / page_width, 0.0, 1.0);
+                        sum += t < 0.0f ? camera.background : camera.exposure * light * t;
+                    }
+                const double r2 = (x - cx) * (x - cx) + (y - cy) * (y - cy);
+                photo.at(x, y, 0) = static_cast<float>(sum / (kSupersampling * kSupersampling) *
+                                                       (1.0 - camera.vignetting * r2 / corner2));
+            }
+    });
+    const relight::PlaneSize size{camera.width, camera.height};
+    if (camera.blur > 0.0)
+        relight::vision().gaussian_blur(size, photo.plane(0), photo.plane(0), 0, camera.blur, camera.blur,
+                                        relight::Border::Replicate);
+    if (camera.photons > 0.0 || camera.read_noise > 0.0) {
+        std::mt19937_64 generator(camera.seed);
+        std::normal_distribution<double> normal;
+        for (float& value : photo.plane(0)) {
+            const double variance = (camera.photons > 0.0 ? std::max(0.0f, value) / camera.photons : 0.0) +
+                                    camera.read_noise * camera.read_noise;
+            value = static_cast<float>(value + std::sqrt(variance) * normal(generator));
+        }
+    }
+    return photo;
+}
+
+void write_photograph(const std::filesystem::path& path, const Image& photo, int jpeg_quality) {
+    RFD_CHECK(jpeg_quality >= 1 && jpeg_quality <= 100);
+    const std::string ext = lower_extension(path);
+    write_image(path, photo, ext == ".jpg" || ext == ".jpeg" ? "jpeg:" + std::to_string(jpeg_quality) : "");
+}
+
+}  // namespace rfd::calibrate

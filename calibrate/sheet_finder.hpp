@@ -1,0 +1,49 @@
+#pragma once
+// Finding a printed calibration sheet in a photograph or scan by its registration marks
+// (print/marks.hpp): four black discs in the corners and a small one below the top-left disc.
+// Any side up, any perspective short of grazing, and the film seen from its back (the map is
+// then mirrored).
+//
+// Dark blobs are found against the local brightness (each pixel against the mean around it),
+// kept when they are filled ellipses (the Mahalanobis radius of their boundary varies little: a
+// square's varies by 35 %), and the four corner discs chosen as the set whose homography puts a
+// blob of the small disc's size where the small disc must be. The homography maps the disc
+// centres; each blob's centroid is corrected for perspective (a disc's image centroid is not
+// the image of its centre) and the map solved again.
+//
+// Example: SheetLocation where = find_sheet(photo, print::sheet_marks(paper), "scan.jpg");
+
+#include <string>
+
+#include <Eigen/Core>
+
+#include "core/image.hpp"
+#include "print/marks.hpp"
+
+namespace rfd::calibrate {
+
+struct SheetLocation {
+    Eigen::Matrix3d page_to_photo;   ///< homography from page mm to the photo's pixels
+    bool mirrored = false;           ///< the sheet is seen from its back
+    double mm_per_pixel = 0.0;       ///< page mm per photo pixel at the sheet's centre (geometric mean)
+    double orientation_error = 0.0;  ///< pixels between the small disc and where the corners put it
+};
+
+/// Locates the sheet. `photo` is linear (any channels: their mean is used); `name` names it in
+/// messages. InputError when the marks are not all in view (saying how many round marks were
+/// seen).
+SheetLocation find_sheet(const Image& photo, const print::SheetMarks& marks, const std::string& name);
+
+/// The homography taking four points exactly to four others.
+Eigen::Matrix3d homography_from_points(const std::array<Eigen::Vector2d, 4>& from,
+                                       const std::array<Eigen::Vector2d, 4>& to);
+
+/// The mean of one photo plane over a page rectangle [x0, x1] x [y0, y1] mm, sampled bilinearly
+/// about once per photo pixel; NaN when the rectangle leaves the photo.
+double mean_over_page_rect(const Image& plane, const Eigen::Matrix3d& page_to_photo, double x0, double y0, double x1,
+                           double y1);
+
+/// The luminance of a linear photo: the mean of its channels, one channel.
+Image photo_luminance(const Image& photo);
+
+}  // namespace rfd::calibrate
