@@ -26,11 +26,7 @@ foreach(file light_00.png light_06_prediction.exr light_06_reference.exr light_0
   endif()
 endforeach()
 foreach(file light_03_prediction.exr light_03_reference.exr directions.csv)
-  file(SHA256 ${OUT}/a/${file} hash_a)
-  file(SHA256 ${OUT}/b/${file} hash_b)
-  if(NOT hash_a STREQUAL hash_b)
-    message(FATAL_ERROR "comparing twice gave a different ${file}")
-  endif()
+  expect_same_file(${OUT}/a/${file} ${OUT}/b/${file} "comparing twice gave a different ${file}")
 endforeach()
 
 run(0 simulate compare ${DESIGN} ${OUT}/diamonds.exr ${OUT}/diamonds --sweep 3 --chart-accuracy --accuracy-rays 2,4
