@@ -157,6 +157,17 @@ DiscImage disc_image(const Eigen::Matrix3d& h, const Eigen::Vector2d& centre, do
     return {std::abs(0.5 * area2), weighted / (3.0 * area2) - apply(h, centre)};
 }
 
+// The area of a small disc's image, from the map's local stretch: pi r^2 |det J|, with J
+// the homography's Jacobian at the centre. Within a few per cent of disc_image's for the
+// marks, at a hundredth of its cost: what the search over candidate corners uses.
+double disc_image_area(const Eigen::Matrix3d& h, const Eigen::Vector2d& centre, double diameter) {
+    const double w = h(2, 0) * centre.x() + h(2, 1) * centre.y() + h(2, 2);
+    const Eigen::Vector2d image = apply(h, centre);
+    Eigen::Matrix2d jacobian = h.topLeftCorner<2, 2>() - image * h.block<1, 2>(2, 0);
+    jacobian /= w;
+    return std::numbers::pi * 0.25 * diameter * diameter * std::abs(jacobian.determinant());
+}
+
 }  // namespace
 
 Eigen::Matrix3d homography_from_points(const std::array<Eigen::Vector2d, 4>& from,
@@ -256,16 +267,16 @@ SheetLocation find_sheet(const Image& photo, const print::SheetMarks& marks, con
                             // Each corner blob the size its disc's image would be.
                             bool sizes_agree = true;
                             for (std::size_t k = 0; k < 4 && sizes_agree; ++k) {
-                                const double expected = disc_image(h, page[k], marks.corner_diameter).area;
+                                const double expected = disc_image_area(h, page[k], marks.corner_diameter);
                                 sizes_agree = areas[k] > 0.5 * expected && areas[k] < 2.0 * expected;
                             }
                             if (!sizes_agree) continue;
                             const Eigen::Vector2d where = apply(h, marks.orientation);
-                            const DiscImage small = disc_image(h, marks.orientation, marks.orientation_diameter);
-                            const double radius = std::sqrt(small.area / std::numbers::pi);
+                            const double small = disc_image_area(h, marks.orientation, marks.orientation_diameter);
+                            const double radius = std::sqrt(small / std::numbers::pi);
                             for (const Blob& blob : blobs) {
                                 const double distance = (blob.centre - where).norm() / radius;
-                                if (distance > 0.5 || blob.area < 0.25 * small.area || blob.area > 2.5 * small.area)
+                                if (distance > 0.5 || blob.area < 0.25 * small || blob.area > 2.5 * small)
                                     continue;
                                 if (distance < best.score)
                                     best = {distance, to, blob.centre, (signed_area(to) > 0) != (page_area > 0)};

@@ -59,10 +59,18 @@ std::vector<Section> instructions(const Project& project, const fs::path& out) {
                  "vanish or are widest has the array's true pitch. If it is not the design's, put it into the "
                  "design's lattice and run rfd make again.",
              {"print/moire.pdf", "print/moire.png"}});
-    if (made(out, "print/wedge.pdf"))
+    if (made(out, "calibration/printer.toml"))
         print_first.items.push_back(
-            {"Print wedge.pdf the same way and measure its steps (docs/formats.md, printer profiles): the "
-             "printer profile's gamma, max_density and black_level come from it.",
+            {"The printer's tone curve, measured from " + std::to_string(project.calibration.wedge_photos.size()) +
+                 " photograph(s) of the printed wedge: the pattern, the sheets and the predictions here use it "
+                 "(calibration/printer.toml; the patches and curves in calibration/tone).",
+             {"calibration/tone/tone_chart.png", "calibration/printer.toml"}});
+    else if (made(out, "print/wedge.pdf"))
+        print_first.items.push_back(
+            {"Print wedge.pdf the same way, photograph or scan it lit from behind with its four corner discs in view "
+             "(docs/usage.md, \"Calibrating from photographs\"), and name the photographs in the project's "
+             "[calibration] wedge_photos: rfd make then measures the printer's tone curve and prints and predicts "
+             "everything with it.",
              {"print/wedge.pdf", "print/wedge.png"}});
     print_first.items.push_back(
         {"If you do not know your 3D printer's clearance, print the fit-test coupon first: "

@@ -78,6 +78,29 @@ std::vector<Step> plan(const Project& p) {
     const std::string printer_name = fs::path(p.printer).has_parent_path() ? printer.string() : p.printer;
     std::vector<Step> steps;
 
+    // With photographs of the printed wedge, the printer's tone curve is measured first and
+    // everything after is printed and predicted with the measured profile; the wedge itself is
+    // the profile's own (its codes do not depend on it).
+    fs::path film_printer = printer;
+    std::string film_printer_name = printer_name;
+    if (const Calibration& c = p.calibration; !c.wedge_photos.empty()) {
+        Step tone{"calibrate_tone",
+                  "the printer's tone curve measured from the photographs of its wedge (calibration/printer.toml; the "
+                  "patches and curves in calibration/tone)",
+                  {"calibrate", "tone", printer_name},
+                  {printer},
+                  {"calibration/printer.toml", "calibration/tone"}};
+        for (const fs::path& photo : c.wedge_photos) {
+            tone.arguments.push_back(outside(photo).string());
+            tone.inputs.push_back(outside(photo));
+        }
+        tone.arguments.insert(tone.arguments.end(), {"--light", c.light, "--out", "calibration/printer.toml",
+                                                     "--report", "calibration/tone"});
+        steps.push_back(std::move(tone));
+        film_printer = "calibration/printer.toml";
+        film_printer_name = film_printer.string();
+    }
+
     fs::path field;
     std::vector<fs::path> field_inputs;
     if (p.source.scene) {
@@ -109,14 +132,14 @@ std::vector<Step> plan(const Project& p) {
 
     const Encoding& e = p.encoding;
     Step encode{"pattern", "the pattern at the printer's resolution (pattern.exr; pattern.png to look at)",
-                {"pattern", "encode", design, field.string(), "--printer", printer_name, "--tilt",
+                {"pattern", "encode", design, field.string(), "--printer", film_printer_name, "--tilt",
                  format_number(e.tilt_deg, 17), "--turn", format_number(e.turn_deg, 17), "--angle-scale",
                  format_number(e.angle_scale, 17), "--model", e.model, "--interpolation", e.interpolation, "--fit",
                  e.fit, "--margin", format_number(e.margin_mm, 17), "--out", "pattern.exr", "--preview",
                  "pattern.png"},
                 field_inputs,
                 {"pattern.exr", "pattern.png"}};
-    encode.inputs.insert(encode.inputs.begin(), {design_file, printer});
+    encode.inputs.insert(encode.inputs.begin(), {design_file, film_printer});
     if (const auto& r = p.source.region)
         encode.arguments.insert(encode.arguments.end(), {"--region", std::to_string((*r)[0]) + "," +
                                                                          std::to_string((*r)[1]) + "," +
@@ -164,9 +187,9 @@ std::vector<Step> plan(const Project& p) {
         }
     if (p.outputs.moire)
         steps.push_back({"moire", "the pitch calibration sheet (moire.pdf)",
-                         {"print", "moire", design, "--printer", printer_name, "--out", "print/moire.pdf",
+                         {"print", "moire", design, "--printer", film_printer_name, "--out", "print/moire.pdf",
                           "--preview", "print/moire.png"},
-                         {design_file, printer},
+                         {design_file, film_printer},
                          {"print/moire.pdf", "print/moire.png"}});
     if (p.outputs.wedge)
         steps.push_back({"wedge", "the step wedge that measures the printer's tone curve (wedge.pdf)",
@@ -176,9 +199,9 @@ std::vector<Step> plan(const Project& p) {
                          {"print/wedge.pdf", "print/wedge.png"}});
     if (p.outputs.holder)
         steps.push_back({"holder", "the lens holder: OpenSCAD source, STLs to 3D-print, and their checks",
-                         {"holder", design, "--3d-printer", outside(p.printer_3d).string(), "--printer", printer_name,
+                         {"holder", design, "--3d-printer", outside(p.printer_3d).string(), "--printer", film_printer_name,
                           "--out", "holder/holder.scad", "--stl", "holder/holder.stl"},
-                         {design_file, outside(p.printer_3d), printer},
+                         {design_file, outside(p.printer_3d), film_printer},
                          {"holder"}});
     if (p.outputs.compare_sweep > 0)
         steps.push_back({"compare",

@@ -134,6 +134,21 @@ Outputs read_outputs(ConfigTable& table) {
     return o;
 }
 
+Calibration read_calibration(ConfigTable& table, const fs::path& folder) {
+    Calibration c;
+    // Each photograph checked like every other source: a regular file, before anything reads it.
+    for (const std::string& photo : table.strings("wedge_photos")) {
+        const fs::path path = (folder / photo).lexically_normal();
+        std::error_code ec;
+        if (photo.empty() || !fs::is_regular_file(path, ec))
+            table.fail("wedge_photos", "cannot open '" + path.string() + "': expected a photograph (a regular file)");
+        c.wedge_photos.push_back(path);
+    }
+    if (c.wedge_photos.empty()) table.fail("wedge_photos", "expected at least one photograph of the printed wedge");
+    if (table.has("light")) c.light = table.choice("light", {"back", "reflected"});
+    return c;
+}
+
 }  // namespace
 
 const std::vector<DeclaredKey>& declared_keys() {
@@ -204,6 +219,10 @@ Project load_project(const fs::path& file) {
     if (auto make = root.optional_table("make")) {
         project.outputs = read_outputs(*make);
         make->finish();
+    }
+    if (auto calibration = root.optional_table("calibration")) {
+        project.calibration = read_calibration(*calibration, folder);
+        calibration->finish();
     }
     root.finish();
     return project;

@@ -10,6 +10,9 @@
 //   [optimize] enabled, iterations, spacing_mm, core_weight: the pattern is optimised through
 //              the simulator (rfd pattern optimize) and the sheets print that one, unless
 //              enabled = false
+//   [calibration] wedge_photos, light: photographs of the printed step wedge; the printer's
+//              tone curve is measured from them (rfd calibrate tone) and everything is
+//              printed and predicted with the measured profile
 //
 // Paths are relative to the project file. Every key is checked like every other input
 // file: an unknown key or a value out of range is an error naming file, line and key.
@@ -68,6 +71,12 @@ struct Optimization {
     double core_weight = predict::kCoreWeightOption.fallback;
 };
 
+/// What the maker measured on the printed test sheets.
+struct Calibration {
+    std::vector<std::filesystem::path> wedge_photos;  ///< scans or photographs of print/wedge.pdf
+    std::string light = "back";                       ///< how they were lit: "back" or "reflected"
+};
+
 struct Project {
     std::filesystem::path file;      ///< the project file itself
     std::string name;
@@ -78,6 +87,7 @@ struct Project {
     Encoding encoding;
     Outputs outputs;
     std::optional<Optimization> optimization;  ///< nullopt: [optimize] enabled = false, the direct encoding
+    Calibration calibration;
 };
 
 /// A project-file key declared as an option (core/options.hpp) in the library that owns

@@ -328,6 +328,38 @@ TEST(ProjectPlan, AnOptimisedPatternIsWhatIsPrintedAndPredicted) {
     EXPECT_THAT(error_of([&] { load_project(dir / "p.toml"); }), HasSubstr("optimize.spacing_mm"));
 }
 
+// Photographs of the printed wedge: the printer's curve is measured first, and the pattern,
+// the sheets and the holder use the measured profile; the wedge keeps the profile named.
+TEST(ProjectPlan, WedgePhotographsCalibrateThePrinterFirst) {
+    TempDir dir;
+    write_small_field(dir / "field", 0.5f);
+    write(dir / "wedge 1.jpg", "a photograph");
+    write(dir / "p.toml", kProject + "\n[calibration]\nwedge_photos = [\"wedge 1.jpg\"]\nlight = \"reflected\"\n");
+    const Project project = load_project(dir / "p.toml");
+    ASSERT_EQ(project.calibration.wedge_photos.size(), 1u);
+    const std::vector<Step> steps = plan(project);
+    ASSERT_FALSE(steps.empty());
+    EXPECT_EQ(steps.front().name, "calibrate_tone");
+    EXPECT_THAT(command_line(steps.front()),
+                AllOf(HasSubstr("calibrate tone inkjet_720 "), HasSubstr("wedge 1.jpg"), HasSubstr("--light reflected"),
+                      HasSubstr("--out calibration/printer.toml")));
+    std::map<std::string, std::string> lines;
+    for (const Step& step : steps) lines[step.name] = command_line(step);
+    for (const char* step : {"pattern", "moire", "holder"})
+        EXPECT_THAT(lines[step], HasSubstr("--printer calibration/printer.toml")) << step;
+    EXPECT_THAT(lines["wedge"], HasSubstr("--printer inkjet_720"));
+    // What the project names must be there, and be photographs.
+    const auto error_for = [&](const std::string& table) {
+        write(dir / "p.toml", kProject + "\n[calibration]\n" + table);
+        return error_of([&] { load_project(dir / "p.toml"); });
+    };
+    EXPECT_THAT(error_for("wedge_photos = [\"missing.jpg\"]\n"),
+                AllOf(HasSubstr("calibration.wedge_photos"), HasSubstr("missing.jpg")));
+    EXPECT_THAT(error_for("wedge_photos = [\"field\"]\n"), HasSubstr("regular file"));
+    EXPECT_THAT(error_for("wedge_photos = []\n"), HasSubstr("at least one photograph"));
+    EXPECT_THAT(error_for("wedge_photos = [\"wedge 1.jpg\"]\nlight = \"side\"\n"), HasSubstr("calibration.light"));
+}
+
 // Optimisation is the default; `enabled = false` prints the direct encoding.
 TEST(ProjectPlan, PatternsAreOptimisedUnlessTheProjectSaysNot) {
     TempDir dir;
