@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # make studies: the research reproductions behind docs/results.md, on the bundled scenes:
-# the sampling study (thesis chapters 4-5), implicit relighting's eta trade-off (chapter 7)
-# and feature-guided upsampling against linear blending (chapter 6). About 8 minutes on
-# two cores. Writes OUTPUT_DIR/INDEX.md.
+# the sampling study (thesis chapters 4-5), implicit relighting's eta trade-off (chapter 7),
+# feature-guided upsampling against linear blending (chapter 6) and the tone calibration's
+# limits (rfd calibrate). About 9 minutes on two cores. Writes OUTPUT_DIR/INDEX.md.
 # Usage: scripts/studies.sh RFD_BINARY OUTPUT_DIR
 set -euo pipefail
 rfd="$1"
@@ -89,11 +89,45 @@ for method in linear upsampled; do
   done
 done | tee "$upsample/summary.txt"
 
+# The printer's tone curve from simulated photographs of the step wedge (rfd calibrate): a
+# printer of density 1.6 and gamma 1.7 behind the Epson profile (2.0, 2.2), photographed
+# under one condition at a time pushed toward where it fails; per condition the curve's RMS
+# error at the patches against the truth, or the refusal. About 1 minute.
+index_section tone "Tone calibration: where it stops"
+tone="$out/tone"
+mkdir -p "$tone"
+printf '[printer]\nname = "true"\ndpi_x = 2880\ndpi_y = 1440\ngamma = 1.7\nmax_density = 1.6\nblack_level = 0.03\n' \
+  > "$tone/true.toml"
+tone_case() {  # NAME "CALIBRATE ARGS" SIMULATE ARGS...
+  local name="$1" calibrate_args="$2"
+  shift 2
+  "$rfd" --quiet calibrate simulate-photo wedge epson_stylus_pro_4800 --true-printer "$tone/true.toml" "$@" \
+    --out "$tone/$name.jpg" > /dev/null
+  # shellcheck disable=SC2086  # the calibration's options, split on purpose
+  if message=$("$rfd" --quiet calibrate tone epson_stylus_pro_4800 "$tone/$name.jpg" $calibrate_args \
+      --out "$tone/$name.toml" --report "$tone/$name" 2>&1); then
+    awk -F, -v name="$name" 'NR > 1 { ink = 10 ^ -1.6; t = ink + (1 - ink) * (1 - $2) ^ 1.7; d = $8 - t; s += d * d; n++ }
+      END { printf "%-14s curve RMS %.4f\n", name, sqrt(s / n) }' "$tone/$name/tone.csv"
+  else
+    printf '%-14s refused: %s\n' "$name" "$(echo "$message" | tail -1 | sed 's/^rfd: error: [^:]*: //')"
+  fi
+}
+{
+  for tilt in 0 30 45 60 70; do tone_case "tilt_$tilt" "" --camera-tilt "$tilt" --camera-turn 30 --blur 1 --photons 3000 --frame-fill 0.6; done
+  for blur in 2 4 8; do tone_case "blur_$blur" "" --blur "$blur" --photons 3000; done
+  for photons in 30 100 300; do tone_case "photons_$photons" "" --photons "$photons"; done
+  tone_case vignetting_0.8 "" --vignetting 0.8 --photons 3000
+  tone_case from_back "" --from-back --camera-tilt 30 --camera-roll 180 --frame-fill 0.7 --photons 3000
+  tone_case reflected "--light reflected" --light reflected --photons 3000
+  tone_case small "" --frame-fill 0.1
+} | tee "$tone/summary.txt"
+
 index_entry capture/study/error_vs_images.png "the bottle's sampling study: error against image count for fixed patterns of 256 to 1025 directions and adaptive sampling (figure 5.5's analogue; study.txt: the table, study/: per-direction error maps)"
 index_entry capture/pattern_256.lp "a near-uniform pattern of 256 light directions for a real light stage (pattern.txt: how even)"
 index_entry implicit/eta/eta_psnr.png "implicit relighting on the snooker scene: PSNR of the held-out lights against eta (figure 7.3's trade-off; eta_sweep.txt: the numbers, eta/light_*.png: truth | eta 0 | best | largest)"
 index_entry implicit/designed_light.png "the scene relit from the trained model under a designed 8-degree light (designed_light_probe.png: the synthetic probe)"
 index_entry upsample/summary.txt "upsampling 256 stage lights of the spheres one level against linear blending: PSNR at 512 other directions, four point lights and four area lights"
+index_entry tone/summary.txt "the printer's tone curve from simulated photographs of its wedge: the curve's RMS error (or the refusal) as tilt, blur, noise, vignetting, the film's side and the light push toward failure"
 index_entry upsample/upsampled/point_lights "pictures per point light, the upsampled field relit | the stage's truth (linear/: the same for linear blending; area_lights/ under area lights)"
 
 index_end
