@@ -190,6 +190,35 @@ TEST(ToneCalibration, RecoversTheTrueCurveFromScansAndPhotographs) {
     }
 }
 
+// What the calibration is for: the sheet printed through the true curve transmits what the
+// tone mapping meant. With the nominal profile it cannot (its ink is darker and its curve
+// another); with the measured one it does, for one sheet and for two back to back.
+TEST(ToneCalibration, TheMeasuredProfilePrintsWhatTheToneMappingMeans) {
+    const Fixture& f = fixture();
+    const Image photo = stored(simulated_wedge_photo(f.sheet, f.nominal, f.truth, phone(), ScanLight::Back), "w.jpg");
+    const print::PrinterProfile measured =
+        calibrate_tone(f.nominal, {measure_wedge(photo, "w.jpg", f.sheet, f.nominal, ScanLight::Back)}).profile;
+    // PSNR (peak 1) of the stack the true printer makes against the one the tone map asks for.
+    const auto psnr = [&](const print::PrinterProfile& profile, int sheets) {
+        const print::ToneMap tone{profile, 1.0, 1.0, sheets};
+        double sum = 0.0;
+        constexpr int kValues = 256;
+        for (int k = 0; k < kValues; ++k) {
+            const double value = k / (kValues - 1.0);
+            const double sheet = f.truth.transmittance(tone.printer_value(value));
+            sum += std::pow(std::pow(sheet, sheets) - tone.stack_transmittance(value), 2);
+        }
+        return 10.0 * std::log10(kValues / sum);
+    };
+    for (const int sheets : {1, 2}) {
+        const double before = psnr(f.nominal, sheets), after = psnr(measured, sheets);
+        EXPECT_LT(before, 30.0) << sheets;
+        EXPECT_GT(after, 45.0) << sheets;
+        std::printf("%d sheet(s): printed against meant, PSNR %.1f dB with the nominal profile, %.1f dB measured\n",
+                    sheets, before, after);
+    }
+}
+
 TEST(ToneCalibration, RefusesPhotographsItCannotRead) {
     const Fixture& f = fixture();
     const auto error_for = [&](Camera camera) {
