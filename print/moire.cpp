@@ -19,7 +19,8 @@ namespace {
 
 constexpr double kLabelColumn = 36.0;  // mm left of the bands for their labels
 constexpr double kBandGap = 3.0;       // mm
-constexpr double kMoireHeader = 16.0;       // mm for the instructions at the top of each page
+constexpr double kMoireHeader = 16.0;  // mm for the instructions at the top of each page
+constexpr double kLineFraction = 0.25;  // a line's width, of its period
 
 const optics::Lattice& array_lattice(const optics::Design& design) {
     const optics::Plane& pattern = design.pattern_plane();
@@ -70,8 +71,14 @@ PitchRange default_pitch_range(const optics::Design& design) {
     return {pitch * (1.0 - kRelativeSpread), pitch * (1.0 + kRelativeSpread), 9};
 }
 
-std::vector<MoireBand> write_moire_pdf(const std::filesystem::path& out, const optics::Design& design,
-                                       const PrinterProfile& printer, const MoireOptions& options) {
+bool MoireBand::inked(double x, double y) const {
+    if (x < left || x > left + width || y < top || y > top + height) return false;
+    // Across the lines, from the centred one's middle, in periods.
+    const double across = along_x ? (x - (left + 0.5 * width)) / period : (y - (top + 0.5 * height)) / period;
+    return std::abs(across - std::round(across)) <= 0.5 * kLineFraction;
+}
+
+MoireSheet moire_sheet(const optics::Design& design, const PrinterProfile& printer, const MoireOptions& options) {
     const optics::Lattice& lattice = array_lattice(design);
     const bool hex = lattice.kind() == optics::LatticeKind::Hexagonal;
     const double row_factor = hex ? std::sqrt(3.0) / 2.0 : 1.0;
@@ -82,26 +89,41 @@ std::vector<MoireBand> write_moire_pdf(const std::filesystem::path& out, const o
         y_range.to *= scale;
     }
     const Paper& paper = printer.paper;
+    MoireSheet sheet;
+    sheet.marks = sheet_marks(paper);
     const double band_left = paper.margin + kLabelColumn;
     const double band_width = std::min(2.0 * lattice.half_extent().x(), paper.width - paper.margin - band_left);
     const double band_height = std::max({options.band_height, 4.0 * options.x.to, 4.0 * y_range.to * row_factor});
-    const SheetMarks marks = sheet_marks(paper);
-    const double usable = paper.height - 2 * paper.margin - kMoireHeader - marks.strip;
+    const double usable = paper.height - 2 * paper.margin - kMoireHeader - sheet.marks.strip;
     const int per_page = static_cast<int>(std::floor((usable + kBandGap) / (band_height + kBandGap)));
     if (per_page < 1 || band_width < 4.0 * options.x.to)
         throw InputError(SourceLocation{printer.file, 0, 0, "paper"},
                          "a calibration band (" + format_fixed(band_width, 1) + " x " + format_fixed(band_height, 1) +
                              " mm) does not fit the printable area of " + paper.name + " paper");
-
-    std::vector<MoireBand> bands;
-    for (const double p : options.x.values()) bands.push_back({true, p, p, 0, 0.0});
-    for (const double p : y_range.values()) bands.push_back({false, p, p * row_factor, 0, 0.0});
-    for (std::size_t k = 0; k < bands.size(); ++k) {
-        bands[k].page = static_cast<int>(k) / per_page;
-        bands[k].top = paper.margin + kMoireHeader + (static_cast<int>(k) % per_page) * (band_height + kBandGap);
+    for (const double p : options.x.values()) sheet.bands.push_back({true, p, p, 0, 0.0});
+    for (const double p : y_range.values()) sheet.bands.push_back({false, p, p * row_factor, 0, 0.0});
+    for (std::size_t k = 0; k < sheet.bands.size(); ++k) {
+        MoireBand& band = sheet.bands[k];
+        band.page = static_cast<int>(k) / per_page;
+        band.top = paper.margin + kMoireHeader + (static_cast<int>(k) % per_page) * (band_height + kBandGap);
+        band.left = band_left;
+        band.width = band_width;
+        band.height = band_height;
     }
+    sheet.pages = sheet.bands.back().page + 1;
+    return sheet;
+}
 
-    const int pages = bands.back().page + 1;
+std::vector<MoireBand> write_moire_pdf(const std::filesystem::path& out, const optics::Design& design,
+                                       const PrinterProfile& printer, const MoireOptions& options) {
+    const optics::Lattice& lattice = array_lattice(design);
+    const bool hex = lattice.kind() == optics::LatticeKind::Hexagonal;
+    const MoireSheet sheet = moire_sheet(design, printer, options);
+    const std::vector<MoireBand>& bands = sheet.bands;
+    const SheetMarks& marks = sheet.marks;
+    const Paper& paper = printer.paper;
+
+    const int pages = sheet.pages;
     // One page, user units page-frame mm.
     const auto draw_page = [&](cairo_t* cr, int page) {
             cairo_select_font_face(cr, "DejaVu Sans", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
@@ -126,28 +148,29 @@ std::vector<MoireBand> write_moire_pdf(const std::filesystem::path& out, const o
                 const std::string name = band.along_x ? "x " + format_fixed(band.pitch, 4) + " mm"
                                          : hex ? "rows " + format_fixed(band.period, 4) + " mm"
                                                : "rows " + format_fixed(band.pitch, 4) + " mm";
-                cairo_move_to(cr, paper.margin, band.top + 0.5 * band_height);
+                cairo_move_to(cr, paper.margin, band.top + 0.5 * band.height);
                 cairo_show_text(cr, name.c_str());
                 if (!band.along_x && hex) {
                     cairo_set_font_size(cr, 2.0);
-                    cairo_move_to(cr, paper.margin, band.top + 0.5 * band_height + 3.0);
+                    cairo_move_to(cr, paper.margin, band.top + 0.5 * band.height + 3.0);
                     cairo_show_text(cr, ("(pitch " + format_fixed(band.pitch, 4) + " mm)").c_str());
                 }
-                // Lines of period `period`, a quarter period wide, one centred in the band.
+                // Lines of period `period`, a quarter period wide, one centred in the band
+                // (MoireBand::inked says the same).
                 cairo_save(cr);
-                cairo_rectangle(cr, band_left, band.top, band_width, band_height);
+                cairo_rectangle(cr, band.left, band.top, band.width, band.height);
                 cairo_clip(cr);
-                const double width = 0.25 * band.period;
+                const double width = kLineFraction * band.period;
                 if (band.along_x) {
-                    const double centre = band_left + 0.5 * band_width;
-                    const int n = static_cast<int>(std::ceil(0.5 * band_width / band.period)) + 1;
+                    const double centre = band.left + 0.5 * band.width;
+                    const int n = static_cast<int>(std::ceil(0.5 * band.width / band.period)) + 1;
                     for (int k = -n; k <= n; ++k)
-                        cairo_rectangle(cr, centre + k * band.period - 0.5 * width, band.top, width, band_height);
+                        cairo_rectangle(cr, centre + k * band.period - 0.5 * width, band.top, width, band.height);
                 } else {
-                    const double centre = band.top + 0.5 * band_height;
-                    const int n = static_cast<int>(std::ceil(0.5 * band_height / band.period)) + 1;
+                    const double centre = band.top + 0.5 * band.height;
+                    const int n = static_cast<int>(std::ceil(0.5 * band.height / band.period)) + 1;
                     for (int k = -n; k <= n; ++k)
-                        cairo_rectangle(cr, band_left, centre + k * band.period - 0.5 * width, band_width, width);
+                        cairo_rectangle(cr, band.left, centre + k * band.period - 0.5 * width, band.width, width);
                 }
                 cairo_fill(cr);
                 cairo_restore(cr);

@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "optics/design.hpp"
+#include "print/marks.hpp"
 #include "print/printer.hpp"
 
 namespace rfd::print {
@@ -53,14 +54,30 @@ struct MoireOptions {
     std::filesystem::path preview; ///< also a PNG of the first page here, when not empty
 };
 
-/// One band of the sheet, for the report and the tests.
+/// One band of the sheet.
 struct MoireBand {
     bool along_x = true;   ///< vertical lines (x pitch) or horizontal lines (row spacing)
     double pitch = 0.0;    ///< the hypothesis, mm
     double period = 0.0;   ///< line period printed, mm (row spacing for y bands)
     int page = 0;          ///< 0-based
     double top = 0.0;      ///< band's top edge, page frame mm
+    double left = 0.0, width = 0.0, height = 0.0;  ///< the rest of its rectangle, mm
+
+    /// Whether page point (x, y) mm lies on one of the band's lines (a quarter period wide,
+    /// one centred in the band across the lines).
+    bool inked(double x, double y) const;
 };
+
+/// The sheet laid out: its bands page by page and the registration marks every page carries.
+struct MoireSheet {
+    std::vector<MoireBand> bands;
+    SheetMarks marks;
+    int pages = 1;
+};
+
+/// The bands for `options` on the printer's paper. InputError when the design has no lenslet
+/// array or a band does not fit the printable area.
+MoireSheet moire_sheet(const optics::Design& design, const PrinterProfile& printer, const MoireOptions& options);
 
 /// Writes the calibration PDF (temporary file + rename) and returns its bands.
 /// Throws InputError when the design has no lenslet array, IoError when it cannot write.

@@ -834,6 +834,36 @@ TEST(Moire, DefaultHypothesesAreCentredOnTheDesignsPitch) {
     EXPECT_NEAR(r.to / r.from, 1.004 / 0.996, 1e-12);
 }
 
+// The lines a calibration reads from a photograph are the lines drawn: one centred in each
+// band across its lines, a quarter period wide, none outside the band.
+TEST(Moire, InkedIsWhereTheLinesAre) {
+    const optics::Design design = bundled_design(1);
+    MoireOptions options;
+    options.x = parse_pitch_range("2.33:2.39:3", "--pitch");
+    const MoireSheet sheet = moire_sheet(design, load_printer("epson_stylus_pro_4800"), options);
+    ASSERT_EQ(sheet.bands.size(), 6u);
+    int checked = 0;
+    for (const MoireBand& band : sheet.bands) {
+        const double cx = band.left + 0.5 * band.width, cy = band.top + 0.5 * band.height;
+        // Across the lines: k periods from the centre line, plus an offset in periods.
+        const auto at = [&](double periods) {
+            return band.along_x ? band.inked(cx + periods * band.period, cy) : band.inked(cx, cy + periods * band.period);
+        };
+        for (const int k : {-1, 0, 1}) {
+            EXPECT_TRUE(at(k)) << k;
+            EXPECT_TRUE(at(k + 0.12)) << k;
+            EXPECT_FALSE(at(k + 0.13)) << k;
+            EXPECT_FALSE(at(k + 0.5)) << k;
+            ++checked;
+        }
+        EXPECT_FALSE(band.inked(band.left - 0.01, cy));
+        EXPECT_FALSE(band.inked(cx, band.top + band.height + 0.01));
+        EXPECT_GE(band.left, 3.0);
+        EXPECT_LE(band.left + band.width, 210.0 - 3.0);
+    }
+    EXPECT_EQ(checked, 18);
+}
+
 TEST(Moire, BandsForEveryHypothesisOnPaperSizedPages) {
     TempDir dir;
     const optics::Design design = bundled_design(1);
