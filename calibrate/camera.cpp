@@ -32,6 +32,17 @@ float sample_page(const Image& page, double px_per_mm, double x, double y, float
 
 }  // namespace
 
+Camera framing_camera(const print::Paper& paper, double distance, double fill) {
+    Camera camera;
+    const bool portrait = paper.height >= paper.width;
+    camera.width = portrait ? 1200 : 1600;
+    camera.height = portrait ? 1600 : 1200;
+    camera.pose.aim = {0.5 * paper.width, 0.5 * paper.height};
+    camera.pose.distance = distance;
+    camera.focal = fill * std::min(camera.height / paper.height, camera.width / paper.width) * distance;
+    return camera;
+}
+
 Eigen::Matrix3d page_to_pixels(const Camera& camera) {
     const CameraPose& pose = camera.pose;
     const double tilt = degrees_to_radians(pose.tilt_deg), turn = degrees_to_radians(pose.turn_deg);

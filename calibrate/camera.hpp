@@ -19,6 +19,7 @@
 
 #include "core/image.hpp"
 #include "core/options.hpp"
+#include "print/printer.hpp"
 
 namespace rfd::calibrate {
 
@@ -64,6 +65,11 @@ struct Camera {
     double read_noise = 0.0;      ///< standard deviation added to every pixel
     std::uint64_t seed = 1;       ///< of the noise
 };
+
+/// A camera that frames `paper` whole, upright, from `distance` mm, the sheet filling `fill`
+/// of the frame's height (or width): the start of a simulated photograph.
+Camera framing_camera(const print::Paper& paper, double distance = kCameraDistanceOption.fallback,
+                      double fill = kFrameFillOption.fallback);
 
 /// The 3 x 3 homography from page mm to the camera's pixels (pixel centres at integers).
 Eigen::Matrix3d page_to_pixels(const Camera& camera);

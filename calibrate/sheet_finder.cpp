@@ -225,8 +225,9 @@ double mean_over_page_rect(const Image& plane, const Eigen::Matrix3d& page_to_ph
 }
 
 SheetLocation find_sheet(const Image& photo, const print::SheetMarks& marks, const std::string& name) {
-    const Image luminance = photo_luminance(photo);
-    std::vector<Blob> blobs = round_dark_blobs(luminance);
+    // A one-channel photo is its own luminance (measure_wedge passes the one it made).
+    const Image mixed = photo.channels() == 1 ? Image() : photo_luminance(photo);
+    std::vector<Blob> blobs = round_dark_blobs(photo.channels() == 1 ? photo : mixed);
     const std::size_t tried = std::min(blobs.size(), kCandidates);
     const std::array<Eigen::Vector2d, 4>& page = marks.corners;
     const double page_area = signed_area(page);

@@ -112,22 +112,11 @@ Image simulated_wedge_photo(const print::WedgeSheet& sheet, const print::Printer
     return photograph(transmittance, kPixelsPerMm, camera);
 }
 
-Camera framing_camera(const print::Paper& paper, double distance, double fill) {
-    Camera camera;
-    const bool portrait = paper.height >= paper.width;
-    camera.width = portrait ? 1200 : 1600;
-    camera.height = portrait ? 1600 : 1200;
-    camera.pose.aim = {0.5 * paper.width, 0.5 * paper.height};
-    camera.pose.distance = distance;
-    camera.focal = fill * std::min(camera.height / paper.height, camera.width / paper.width) * distance;
-    return camera;
-}
-
 WedgeReading measure_wedge(const Image& photo, const std::string& name, const print::WedgeSheet& sheet,
                            const print::PrinterProfile& printer, ScanLight light, int page) {
     RFD_CHECK(page >= 0 && page < sheet.pages);
-    const SheetLocation where = find_sheet(photo, sheet.marks, name);
     const Image luminance = photo_luminance(photo);
+    const SheetLocation where = find_sheet(luminance, sheet.marks, name);
     WedgeReading reading;
     reading.name = name;
     reading.mirrored = where.mirrored;
@@ -228,6 +217,13 @@ WedgeReading measure_wedge(const Image& photo, const std::string& name, const pr
     return reading;
 }
 
+print::PrinterProfile ToneCalibration::power_law() const {
+    print::PrinterProfile power = profile;
+    power.tone_ink.clear();
+    power.tone_transmittance.clear();
+    return power;
+}
+
 ToneCalibration calibrate_tone(const print::PrinterProfile& printer, const std::vector<WedgeReading>& readings) {
     RFD_CHECK(!readings.empty());
     const std::size_t count = readings.front().patches.size();
@@ -300,11 +296,8 @@ ToneCalibration calibrate_tone(const print::PrinterProfile& printer, const std::
         sxx += x * x;
     }
     out.power_law_gamma = sxx > 0.0 ? std::clamp(sxy / sxx, 0.1, 10.0) : printer.gamma;
-    print::PrinterProfile power = profile;
-    power.tone_ink.clear();
-    power.tone_transmittance.clear();
-    power.gamma = out.power_law_gamma;
     profile.gamma = out.power_law_gamma;
+    const print::PrinterProfile power = out.power_law();
     double power_sum = 0.0, nominal_sum = 0.0;
     for (const PatchReading& p : out.patches) {
         power_sum += std::pow(power.transmittance(p.ink) - p.transmittance, 2);

@@ -39,11 +39,6 @@ enum class ScanLight {
 Image simulated_wedge_photo(const print::WedgeSheet& sheet, const print::PrinterProfile& printer,
                             const print::PrinterProfile& truth, const Camera& camera, ScanLight light, int page = 0);
 
-/// A camera that frames `paper` whole, upright, from `distance` mm, the sheet filling `fill`
-/// of the frame's height (or width): the start of a simulated photograph.
-Camera framing_camera(const print::Paper& paper, double distance = kCameraDistanceOption.fallback,
-                      double fill = kFrameFillOption.fallback);
-
 struct PatchReading {
     int code = 255;               ///< printer code of the patch
     double ink = 0.0;             ///< printer value 1 - code / 255
@@ -77,6 +72,9 @@ struct ToneCalibration {
     double power_law_rms = 0.0;         ///< its RMS departure from the readings, transmittance
     double nominal_rms = 0.0;           ///< the input profile's RMS departure from the
                                         ///< readings, transmittance
+
+    /// The measured profile with the fitted power law in place of its table.
+    print::PrinterProfile power_law() const;
 };
 
 /// Combines the readings of one or more scans of the same wedge into a profile: the measured

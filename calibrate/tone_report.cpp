@@ -8,17 +8,6 @@
 #include "core/text.hpp"
 
 namespace rfd::calibrate {
-namespace {
-
-print::PrinterProfile power_law_of(const ToneCalibration& calibration) {
-    print::PrinterProfile power = calibration.profile;
-    power.tone_ink.clear();
-    power.tone_transmittance.clear();
-    return power;
-}
-
-}  // namespace
-
 std::string tone_text(const ToneCalibration& calibration, const std::vector<WedgeReading>& readings,
                       const print::PrinterProfile& nominal) {
     std::string out;
@@ -32,7 +21,7 @@ std::string tone_text(const ToneCalibration& calibration, const std::vector<Wedg
     out +=
         "  code    ink   measured T (+-)        density   profile T   power "
         "law T\n";
-    const print::PrinterProfile power = power_law_of(calibration);
+    const print::PrinterProfile power = calibration.power_law();
     for (const PatchReading& p : calibration.patches)
         out += format_text("  %4d  %.3f   %.4f (%.4f)   %7.3f   %9.4f   %11.4f\n", p.code, p.ink, p.transmittance,
                            p.standard_error, -std::log10(std::max(p.transmittance, 1e-6)), nominal.transmittance(p.ink),
@@ -50,7 +39,7 @@ std::string tone_text(const ToneCalibration& calibration, const std::vector<Wedg
 void write_tone_report(const ToneCalibration& calibration, const print::PrinterProfile& nominal,
                        const std::filesystem::path& folder) {
     ensure_directory(folder);
-    const print::PrinterProfile power = power_law_of(calibration);
+    const print::PrinterProfile power = calibration.power_law();
     CsvTable table({"code", "ink", "measured_transmittance", "standard_error", "density", "profile_transmittance",
                     "power_law_transmittance", "calibrated_transmittance"});
     LineChart chart;
