@@ -32,26 +32,38 @@ float sample_page(const Image& page, double px_per_mm, double x, double y, float
 
 }  // namespace
 
-Camera framing_camera(const print::Paper& paper, double distance, double fill) {
+Camera framing_camera(const print::Paper& paper, double distance, double fill, int long_side) {
+    RFD_CHECK(long_side >= 4);
     Camera camera;
     const bool portrait = paper.height >= paper.width;
-    camera.width = portrait ? 1200 : 1600;
-    camera.height = portrait ? 1600 : 1200;
+    const int short_side = long_side * 3 / 4;
+    camera.width = portrait ? short_side : long_side;
+    camera.height = portrait ? long_side : short_side;
     camera.pose.aim = {0.5 * paper.width, 0.5 * paper.height};
     camera.pose.distance = distance;
     camera.focal = fill * std::min(camera.height / paper.height, camera.width / paper.width) * distance;
     return camera;
 }
 
+namespace {
+
+// From the aim point back to the camera: the page's normal toward the viewer (-z), leaned by
+// the tilt toward the turn azimuth.
+Eigen::Vector3d toward_camera(const CameraPose& pose) {
+    const double tilt = degrees_to_radians(pose.tilt_deg), turn = degrees_to_radians(pose.turn_deg);
+    return {std::sin(tilt) * std::cos(turn), std::sin(tilt) * std::sin(turn), -std::cos(tilt)};
+}
+
+}  // namespace
+
+Eigen::Vector3d camera_centre(const CameraPose& pose) {
+    return Eigen::Vector3d(pose.aim.x(), pose.aim.y(), 0.0) + pose.distance * toward_camera(pose);
+}
+
 Eigen::Matrix3d page_to_pixels(const Camera& camera) {
     const CameraPose& pose = camera.pose;
-    const double tilt = degrees_to_radians(pose.tilt_deg), turn = degrees_to_radians(pose.turn_deg);
-    const Eigen::Vector3d aim(pose.aim.x(), pose.aim.y(), 0.0);
-    // From the aim point back to the camera: the page's normal toward the viewer (-z), leaned
-    // by the tilt toward the turn azimuth.
-    const Eigen::Vector3d back(std::sin(tilt) * std::cos(turn), std::sin(tilt) * std::sin(turn), -std::cos(tilt));
-    const Eigen::Vector3d centre = aim + pose.distance * back;
-    const Eigen::Vector3d forward = -back;
+    const Eigen::Vector3d centre = camera_centre(pose);
+    const Eigen::Vector3d forward = -toward_camera(pose);
     // The image's right: the page's x made perpendicular to the line of sight, then rolled.
     Eigen::Vector3d right = Eigen::Vector3d::UnitX() - Eigen::Vector3d::UnitX().dot(forward) * forward;
     if (right.norm() < 1e-9) right = Eigen::Vector3d::UnitY().cross(forward);

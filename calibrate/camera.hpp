@@ -66,10 +66,14 @@ struct Camera {
     std::uint64_t seed = 1;       ///< of the noise
 };
 
-/// A camera that frames `paper` whole, upright, from `distance` mm, the sheet filling `fill`
-/// of the frame's height (or width): the start of a simulated photograph.
+/// A camera of `long_side` x 3/4 `long_side` pixels that frames `paper` whole, upright, from
+/// `distance` mm, the sheet filling `fill` of the frame's height (or width): the start of a
+/// simulated photograph.
 Camera framing_camera(const print::Paper& paper, double distance = kCameraDistanceOption.fallback,
-                      double fill = kFrameFillOption.fallback);
+                      double fill = kFrameFillOption.fallback, int long_side = 1600);
+
+/// Where the camera's centre of projection is, in the page's frame (z < 0: in front).
+Eigen::Vector3d camera_centre(const CameraPose& pose);
 
 /// The 3 x 3 homography from page mm to the camera's pixels (pixel centres at integers).
 Eigen::Matrix3d page_to_pixels(const Camera& camera);

@@ -100,6 +100,13 @@ print::PrinterProfile printer_for(const optics::Design& design, const std::strin
     return print::default_printer(design.printer.dpi_x, design.printer.dpi_y);
 }
 
+print::MoireOptions moire_options(const optics::Design& design, const std::string& pitch, const std::string& pitch_y) {
+    print::MoireOptions options;
+    options.x = pitch.empty() ? print::default_pitch_range(design) : print::parse_pitch_range(pitch, "--pitch");
+    if (!pitch_y.empty()) options.y = print::parse_pitch_range(pitch_y, "--pitch-y");
+    return options;
+}
+
 namespace {
 
 CLI::Validator lower_bound(const char* name, bool allow_zero) {

@@ -21,6 +21,7 @@
 #include "patterns/encode.hpp"
 #include "print/printed.hpp"
 #include "relight/field.hpp"
+#include "print/moire.hpp"
 #include "print/printer.hpp"
 #include "relight/interpolation.hpp"
 #include "relight/render.hpp"
@@ -88,6 +89,10 @@ CLI::Option* add_model_option(CLI::App& command, optics::ModelChoice& target);
 /// The --printer profile (a file or a bundled name); without one, the thesis's printer's
 /// tone values at the design's own [printer] resolution.
 print::PrinterProfile printer_for(const optics::Design& design, const std::string& option);
+
+/// The moire sheet's bands from --pitch and --pitch-y (empty: the defaults), as `rfd print
+/// moire` lays them out.
+print::MoireOptions moire_options(const optics::Design& design, const std::string& pitch, const std::string& pitch_y);
 
 
 /// How a pattern is printed, for `rfd simulate` and its subcommands: --printer,

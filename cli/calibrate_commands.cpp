@@ -1,6 +1,7 @@
 // rfd calibrate: measurements of the printed test sheets that the rest of rfd then uses
 // (calibrate/): the printer's tone curve from its step wedge.
 
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
@@ -9,6 +10,9 @@
 #include <vector>
 
 #include "calibrate/camera.hpp"
+#include "calibrate/moire_photo.hpp"
+#include "calibrate/pitch.hpp"
+#include "calibrate/pitch_report.hpp"
 #include "calibrate/tone.hpp"
 #include "calibrate/tone_report.hpp"
 #include "cli/arguments.hpp"
@@ -16,6 +20,9 @@
 #include "core/error.hpp"
 #include "core/files.hpp"
 #include "core/image_io.hpp"
+#include "core/units.hpp"
+#include "optics/design_optics.hpp"
+#include "print/moire.hpp"
 #include "print/printer.hpp"
 #include "print/wedge.hpp"
 
@@ -71,7 +78,10 @@ void add_simulate_photo_command(CLI::App& calibrate) {
                           "printer or to see what a good photograph looks like: the step wedge printed with a "
                           "printer's true tone curve, photographed from a pose with blur, vignetting and noise");
     struct Options {
-        std::string sheet, printer, truth, out, light = "back";
+        std::string sheet, printer, truth, out, light = "back", design, pitch, pitch_y, array_on = "both";
+        std::vector<double> shift{0.0, 0.0};
+        double pitch_error = 0, pitch_error_y = NAN, rotation = 0, light_tilt = 0, light_turn = 0;
+        int pixels = 0;
         int steps = static_cast<int>(print::kWedgeStepsOption.fallback);
         int quality = static_cast<int>(calibrate::kJpegQualityOption.fallback);
         double tilt = 0, turn = 0, roll = 0, distance = calibrate::kCameraDistanceOption.fallback;
@@ -81,7 +91,11 @@ void add_simulate_photo_command(CLI::App& calibrate) {
         std::uint64_t seed = 1;
     };
     auto opt = std::make_shared<Options>();
-    cmd->add_option("SHEET", opt->sheet, "The sheet: wedge")->required()->check(CLI::IsMember({"wedge"}));
+    cmd->add_option("SHEET", opt->sheet,
+                    "The sheet: wedge (the step wedge on a light box), or moire (the pitch-calibration sheet mounted "
+                    "in the display of --design in place of its pattern, lit from behind by the sun)")
+        ->required()
+        ->check(CLI::IsMember({"wedge", "moire"}));
     cmd->add_option("PRINTER", opt->printer, "The profile the sheet is printed with: a TOML file or a bundled name")
         ->required();
     cmd->add_option("--true-printer", opt->truth,
@@ -98,14 +112,35 @@ void add_simulate_photo_command(CLI::App& calibrate) {
     add_option(*cmd, calibrate::kVignettingOption, opt->camera.vignetting);
     add_option(*cmd, calibrate::kPhotonsOption, opt->camera.photons);
     add_option(*cmd, calibrate::kJpegQualityOption, opt->quality);
-    cmd->add_flag("--from-back", opt->from_back, "Photographed through the film from its back (mirrored)");
+    cmd->add_flag("--from-back", opt->from_back, "Photographed through the film from its back (mirrored; wedge only)");
+    cmd->add_option("--design", opt->design, "moire: the display whose array lies on the sheet");
+    cmd->add_option("--pitch", opt->pitch, "moire: the sheet's x bands, as rfd print moire --pitch");
+    cmd->add_option("--pitch-y", opt->pitch_y, "moire: the sheet's row bands, as rfd print moire --pitch-y");
+    cmd->add_option("--pitch-error", opt->pitch_error,
+                    "moire: the array's true pitch along a row over the design's, minus 1 (0.001: 0.1 % larger)");
+    cmd->add_option("--pitch-error-y", opt->pitch_error_y,
+                    "moire: the same across the rows (default: --pitch-error)");
+    cmd->add_option("--array-rotation", opt->rotation,
+                    "moire: the array's rows turned against the bands, degrees counter-clockwise");
+    cmd->add_option("--array-on", opt->array_on,
+                    "moire: the measuring bands the array is centred on: both, or x or rows (an array shorter than "
+                    "the two bands is photographed on each in turn)")
+        ->check(CLI::IsMember({"both", "x", "rows"}));
+    cmd->add_option("--array-shift", opt->shift, "moire: the array's centre from there, X,Y mm")
+        ->delimiter(',')
+        ->expected(2);
+    cmd->add_option("--light-tilt", opt->light_tilt, "moire: the sun's angle from the display's axis, degrees");
+    cmd->add_option("--light-turn", opt->light_turn, "moire: the azimuth of that tilt, degrees");
+    cmd->add_option("--camera-pixels", opt->pixels,
+                    "Pixels along the picture's longer side (default: 1600 for the wedge, 4000 for the moire)");
     cmd->add_option("--seed", opt->seed, "Seed of the noise");
     cmd->add_option("--out", opt->out, "The photograph: .jpg (8-bit sRGB), .png or .exr (linear)")->required();
     cmd->callback([opt] {
         const print::PrinterProfile printer = print::load_printer(opt->printer);
         const print::PrinterProfile truth = opt->truth.empty() ? printer : print::load_printer(opt->truth);
-        const print::WedgeSheet sheet = print::wedge_sheet(printer, opt->steps);
-        calibrate::Camera camera = calibrate::framing_camera(printer.paper, opt->distance, opt->fill);
+        const bool moire = opt->sheet == "moire";
+        const int pixels = opt->pixels > 0 ? opt->pixels : moire ? 4000 : 1600;
+        calibrate::Camera camera = calibrate::framing_camera(printer.paper, opt->distance, opt->fill, pixels);
         camera.pose.tilt_deg = opt->tilt;
         camera.pose.turn_deg = opt->turn;
         camera.pose.roll_deg = opt->roll;
@@ -114,10 +149,84 @@ void add_simulate_photo_command(CLI::App& calibrate) {
         camera.vignetting = opt->camera.vignetting;
         camera.photons = opt->camera.photons;
         camera.seed = opt->seed;
-        const auto light = opt->light == "reflected" ? calibrate::ScanLight::Reflected : calibrate::ScanLight::Back;
-        calibrate::write_photograph(opt->out, calibrate::simulated_wedge_photo(sheet, printer, truth, camera, light),
-                                    opt->quality);
+        if (moire) {
+            if (opt->design.empty()) throw InputError(SourceLocation{"--design"}, "the moire sheet needs a design");
+            if (opt->from_back) throw InputError(SourceLocation{"--from-back"}, "the moire is photographed from the front");
+            const optics::Design design = optics::load_design(opt->design);
+            const print::MoireSheet sheet =
+                print::moire_sheet(design, printer, moire_options(design, opt->pitch, opt->pitch_y));
+            calibrate::MoireScene scene;
+            const auto on = opt->array_on == "x"      ? calibrate::MeasuringBands::X
+                            : opt->array_on == "rows" ? calibrate::MeasuringBands::Rows
+                                                      : calibrate::MeasuringBands::Both;
+            scene.mounting.centre =
+                calibrate::measuring_centre(sheet, on) + Eigen::Vector2d(opt->shift[0], opt->shift[1]);
+            scene.mounting.rotation_deg = opt->rotation;
+            scene.mounting.pitch_error_x = opt->pitch_error;
+            scene.mounting.pitch_error_y = std::isnan(opt->pitch_error_y) ? opt->pitch_error : opt->pitch_error_y;
+            scene.light = optics::incident_direction(degrees_to_radians(opt->light_tilt),
+                                                     degrees_to_radians(opt->light_turn));
+            calibrate::write_photograph(opt->out, calibrate::simulated_moire_photo(design, sheet, truth, scene, camera),
+                                        opt->quality);
+        } else {
+            const print::WedgeSheet sheet = print::wedge_sheet(printer, opt->steps);
+            const auto light =
+                opt->light == "reflected" ? calibrate::ScanLight::Reflected : calibrate::ScanLight::Back;
+            calibrate::write_photograph(opt->out,
+                                        calibrate::simulated_wedge_photo(sheet, printer, truth, camera, light),
+                                        opt->quality);
+        }
         std::printf("wrote %s\n", opt->out.c_str());
+    });
+}
+
+
+void add_pitch_command(CLI::App& calibrate) {
+    auto* cmd = calibrate.add_subcommand(
+        "pitch", "The lens array's true pitch (along a row and across the rows) and its rotation from photographs "
+                 "of the moire sheet (rfd print moire) mounted in the display in its pattern's place, lit from "
+                 "behind; writes the design with the measured pitch");
+    struct Options {
+        std::string design, printer, pitch, pitch_y, out, report;
+        std::vector<std::string> photos;
+        std::vector<double> sheet_scale{1.0, 1.0};
+        int page = 1;
+    };
+    auto opt = std::make_shared<Options>();
+    cmd->add_option("DESIGN", opt->design, "The design the sheet was printed for")->required();
+    cmd->add_option("PHOTO", opt->photos, "Photographs of the mounted sheet, lit from behind")->required();
+    cmd->add_option("--printer", opt->printer, "The profile the sheet was printed with (its paper), as rfd print moire");
+    cmd->add_option("--pitch", opt->pitch, "The sheet's x bands, as given to rfd print moire --pitch");
+    cmd->add_option("--pitch-y", opt->pitch_y, "The sheet's row bands, as given to rfd print moire --pitch-y");
+    cmd->add_option("--page", opt->page, "The sheet's page in the photographs (1-based)");
+    cmd->add_option("--sheet-scale", opt->sheet_scale,
+                    "The sheet's true size over its nominal size along x and y, X,Y (from a ruler: the distance "
+                    "between the corner marks' centres over the nominal)")
+        ->delimiter(',')
+        ->expected(2);
+    cmd->add_option("--out", opt->out, "The design with the measured pitch to write (TOML)");
+    cmd->add_option("--report", opt->report,
+                    "Also a folder with every lenslet's reading (CSV) and the fitted line profiles as charts");
+    cmd->callback([opt] {
+        if (!opt->out.empty() && std::filesystem::path(opt->out).extension() != ".toml")
+            throw InputError(SourceLocation{opt->out, 0, 0, "--out"}, "expected a .toml file");
+        const optics::Design design = optics::load_design(opt->design);
+        const print::PrinterProfile printer = printer_for(design, opt->printer);
+        const print::MoireSheet sheet =
+            print::moire_sheet(design, printer, moire_options(design, opt->pitch, opt->pitch_y));
+        if (opt->page < 1 || opt->page > sheet.pages)
+            throw InputError(SourceLocation{"--page"}, "the sheet has " + std::to_string(sheet.pages) + " page(s)");
+        std::vector<calibrate::PitchReading> readings;
+        for (const std::string& photo : opt->photos)
+            readings.push_back(calibrate::read_pitch_photo(read_image(photo), photo, design, sheet, opt->page - 1));
+        const calibrate::PitchCalibration calibration =
+            calibrate::calibrate_pitch(design, readings, {opt->sheet_scale[0], opt->sheet_scale[1]});
+        std::fputs(calibrate::pitch_text(calibration, readings).c_str(), stdout);
+        if (!opt->report.empty()) calibrate::write_pitch_report(readings, opt->report);
+        if (!opt->out.empty()) {
+            write_text_file(opt->out, calibrate::calibrated_design_text(design, calibration, readings));
+            std::printf("wrote %s\n", opt->out.c_str());
+        }
     });
 }
 
@@ -125,9 +234,11 @@ void add_simulate_photo_command(CLI::App& calibrate) {
 
 void add_calibrate_commands(CLI::App& app) {
     auto* calibrate = app.add_subcommand(
-        "calibrate", "Measure the printed test sheets: the printer's tone curve; simulated photographs to try it");
+        "calibrate", "Measure the printed test sheets: the printer's tone curve, the lens array's pitch; simulated photographs to "
+        "try them");
     calibrate->require_subcommand(1);
     add_tone_command(*calibrate);
+    add_pitch_command(*calibrate);
     add_simulate_photo_command(*calibrate);
 }
 

@@ -117,10 +117,7 @@ void add_moire_command(CLI::App& print_cmd) {
         if (!opt->preview.empty() && std::filesystem::path(opt->preview).extension() != ".png")
             throw InputError(SourceLocation{opt->preview, 0, 0, "--preview"}, "expected a .png file");
         const optics::Design design = optics::load_design(opt->design);
-        print::MoireOptions options;
-        options.x = opt->pitch.empty() ? print::default_pitch_range(design)
-                                       : print::parse_pitch_range(opt->pitch, "--pitch");
-        if (!opt->pitch_y.empty()) options.y = print::parse_pitch_range(opt->pitch_y, "--pitch-y");
+        print::MoireOptions options = moire_options(design, opt->pitch, opt->pitch_y);
         options.preview = opt->preview;
         const print::PrinterProfile printer = printer_for(design, opt->printer);
         const auto bands = print::write_moire_pdf(out, design, printer, options);

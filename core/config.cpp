@@ -1,4 +1,6 @@
 #include "core/config.hpp"
+
+#include "core/files.hpp"
 #include "core/text.hpp"
 
 #include <algorithm>
@@ -166,18 +168,7 @@ ConfigTable& ConfigTable::operator=(ConfigTable&&) noexcept = default;
 ConfigTable::~ConfigTable() = default;
 
 ConfigTable ConfigTable::parse_file(const std::filesystem::path& path) {
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec))
-        throw IoError(SourceLocation{path.string()}, "cannot open: no such file");
-    // rfd's input files are a few kilobytes; a large one is not one of them.
-    constexpr std::uintmax_t kMaxBytes = 16 << 20;
-    if (std::filesystem::file_size(path, ec) > kMaxBytes)
-        throw InputError(SourceLocation{path.string()}, "larger than 16 MB: not an rfd input file");
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream text;
-    text << in.rdbuf();
-    if (!in) throw IoError(SourceLocation{path.string()}, "cannot read");
-    return parse_string(text.str(), path.string());
+    return parse_string(read_text_file(path), path.string());
 }
 
 ConfigTable ConfigTable::parse_string(std::string_view text, const std::string& name) {

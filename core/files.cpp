@@ -13,6 +13,7 @@
 #include <cstring>
 #include <fstream>
 #include <random>
+#include <sstream>
 
 #include "core/error.hpp"
 
@@ -181,5 +182,24 @@ ExclusiveLock::~ExclusiveLock() {
 }
 
 SourceLocation line_in(const std::filesystem::path& path, int line) { return SourceLocation{path.string(), line, 0, ""}; }
+
+}  // namespace rfd
+
+namespace rfd {
+
+std::string read_text_file(const std::filesystem::path& path) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec))
+        throw IoError(SourceLocation{path.string()}, "cannot open: no such file");
+    // rfd's input files are a few kilobytes; a large one is not one of them.
+    constexpr std::uintmax_t kMaxBytes = 16 << 20;
+    if (std::filesystem::file_size(path, ec) > kMaxBytes)
+        throw InputError(SourceLocation{path.string()}, "larger than 16 MB: not an rfd input file");
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream text;
+    text << in.rdbuf();
+    if (!in) throw IoError(SourceLocation{path.string()}, "cannot read");
+    return text.str();
+}
 
 }  // namespace rfd

@@ -41,6 +41,10 @@ void remove_temporaries_on_signals();
 /// Convenience for whole text contents.
 void write_text_file(const std::filesystem::path& path, const std::string& text);
 
+/// The whole of a small text file (rfd's input files: at most 16 MB). IoError when it is
+/// missing or unreadable, InputError when larger.
+std::string read_text_file(const std::filesystem::path& path);
+
 /// Creates `dir` (and parents) or throws IoError naming it.
 void ensure_directory(const std::filesystem::path& dir);
 

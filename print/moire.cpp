@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <numbers>
 
 #include <cairo-pdf.h>
 #include <cairo.h>
@@ -13,6 +14,7 @@
 #include "print/marks.hpp"
 #include "print/pdf_file.hpp"
 #include "core/text.hpp"
+#include "optics/display.hpp"
 
 namespace rfd::print {
 namespace {
@@ -20,9 +22,31 @@ namespace {
 constexpr double kLabelColumn = 36.0;  // mm left of the bands for their labels
 constexpr double kBandGap = 3.0;       // mm
 constexpr double kMoireHeader = 16.0;  // mm for the instructions at the top of each page
-constexpr double kLineFraction = 0.25;  // a line's width, of its period
+constexpr double kMeasuringHeight = 25.0;  // mm, at least 4 rows of lenslets
+constexpr double kMeasuringLineFraction = 0.5;
+// A measuring band's lines: about this many spot widths (standard deviations) apart, so that
+// the spot blurs them into a smooth profile every lenslet reads a phase from, but at least
+// this many printer dots; the lenslets drift across the lines by this many fringes over the
+// array, so that they read every phase...
+constexpr double kMeasuringSpots = 5.0;
+constexpr double kMeasuringDots = 12.0;
+constexpr double kMeasuringFringes = 2.0;
+// ...on top of a fifth of a period from one lenslet to the next: the moire then modulates the
+// lenslets' brightness at a fifth of the lattice's frequency away from it, where the search
+// for the lattice of lenslet images (calibrate/pitch.cpp) does not look.
+constexpr double kBaseDrift = 0.2;
+// A measuring band's slant: enough to cross this many lines over the band's length, but at
+// most 3 deg: the slant mixes the band's short direction, which it measures poorly, into the
+// scale it measures (by the slant's tangent).
+constexpr double kSlantPeriods = 2.0;
+constexpr double kMaxSlant = 0.0524;
+constexpr double kMaxDrift = 0.45;
+constexpr int kMaxMeasuringPeriods = 40;  // lines per lenslet: keeps the phase unambiguous over +-1 %
+constexpr double kFallbackSpot = 0.02;    // mm, for designs the display simulator does not model
 
-const optics::Lattice& array_lattice(const optics::Design& design) {
+}  // namespace
+
+const optics::Lattice& moire_lattice(const optics::Design& design) {
     const optics::Plane& pattern = design.pattern_plane();
     if (pattern.part)
         if (const auto* array = std::get_if<optics::LensletArrayPart>(&*pattern.part)) return array->lattice;
@@ -31,8 +55,6 @@ const optics::Lattice& array_lattice(const optics::Design& design) {
             if (const auto* array = std::get_if<optics::LensletArrayPart>(&*plane.part)) return array->lattice;
     throw InputError(SourceLocation{design.file}, "design has no lenslet array to calibrate");
 }
-
-}  // namespace
 
 std::vector<double> PitchRange::values() const {
     RFD_CHECK(steps >= 2);
@@ -67,19 +89,60 @@ PitchRange parse_pitch_range(const std::string& text, const std::string& option)
 
 PitchRange default_pitch_range(const optics::Design& design) {
     constexpr double kRelativeSpread = 0.004;
-    const double pitch = array_lattice(design).pitch_x();
+    const double pitch = moire_lattice(design).pitch_x();
     return {pitch * (1.0 - kRelativeSpread), pitch * (1.0 + kRelativeSpread), 9};
 }
 
+Eigen::Vector2d MoireBand::normal() const {
+    const double angle = (along_x ? 0.0 : 0.5 * std::numbers::pi) + slant_rad;
+    return {std::cos(angle), std::sin(angle)};
+}
+
+bool MoireBand::inside(double x, double y) const {
+    const auto in = [&](const std::array<double, 4>& r) {
+        return x >= r[0] && x <= r[0] + r[2] && y >= r[1] && y <= r[1] + r[3];
+    };
+    return in({left, top, width, height}) && !(hole[2] > 0.0 && in(hole));
+}
+
 bool MoireBand::inked(double x, double y) const {
-    if (x < left || x > left + width || y < top || y > top + height) return false;
+    if (!inside(x, y)) return false;
     // Across the lines, from the centred one's middle, in periods.
-    const double across = along_x ? (x - (left + 0.5 * width)) / period : (y - (top + 0.5 * height)) / period;
-    return std::abs(across - std::round(across)) <= 0.5 * kLineFraction;
+    const double across = normal().dot(Eigen::Vector2d(x - (left + 0.5 * width), y - (top + 0.5 * height))) / period;
+    return std::abs(across - std::round(across)) <= 0.5 * line_fraction;
+}
+
+Eigen::Vector2d lenslet_spot(const optics::Design& design) {
+    constexpr double kSunRadius = 0.00465;  // rad: the sun's disc, the calibration's light
+    if (design.kind != optics::DesignKind::I && design.kind != optics::DesignKind::II)
+        return Eigen::Vector2d::Constant(kFallbackSpot);
+    const optics::DisplaySimulator simulator(design);
+    optics::SimulationOptions options;
+    options.model = optics::Model::Exact;
+    options.rays_per_side = 16;
+    const optics::RepeatedRays rays =
+        simulator.trace_lenslet({{Eigen::Vector3d::UnitZ(), {1.0, 1.0, 1.0}, kSunRadius}}, options);
+    Eigen::Vector2d sum = Eigen::Vector2d::Zero(), sum2 = sum;
+    double weight = 0.0;
+    for (const optics::LensletRay& ray : rays.rays) {
+        sum += ray.reaching * ray.on_pattern;
+        sum2 += ray.reaching * ray.on_pattern.cwiseProduct(ray.on_pattern);
+        weight += ray.reaching;
+    }
+    if (!(weight > 0.0)) return Eigen::Vector2d::Constant(kFallbackSpot);
+    const Eigen::Vector2d mean = sum / weight;
+    return (sum2 / weight - mean.cwiseProduct(mean)).cwiseMax(0.0).cwiseSqrt();
+}
+
+double measuring_period(double spacing, int count, double spot, double dot) {
+    const double target = std::max(kMeasuringSpots * spot, kMeasuringDots * dot);
+    const int whole = std::clamp(static_cast<int>(std::floor(spacing / target)), 1, kMaxMeasuringPeriods);
+    const double drift = std::min(kMaxDrift, kBaseDrift + kMeasuringFringes / count);
+    return spacing / (whole + drift);
 }
 
 MoireSheet moire_sheet(const optics::Design& design, const PrinterProfile& printer, const MoireOptions& options) {
-    const optics::Lattice& lattice = array_lattice(design);
+    const optics::Lattice& lattice = moire_lattice(design);
     const bool hex = lattice.kind() == optics::LatticeKind::Hexagonal;
     const double row_factor = hex ? std::sqrt(3.0) / 2.0 : 1.0;
     PitchRange y_range = options.y.value_or(options.x);
@@ -94,90 +157,154 @@ MoireSheet moire_sheet(const optics::Design& design, const PrinterProfile& print
     const double band_left = paper.margin + kLabelColumn;
     const double band_width = std::min(2.0 * lattice.half_extent().x(), paper.width - paper.margin - band_left);
     const double band_height = std::max({options.band_height, 4.0 * options.x.to, 4.0 * y_range.to * row_factor});
-    const double usable = paper.height - 2 * paper.margin - kMoireHeader - sheet.marks.strip;
-    const int per_page = static_cast<int>(std::floor((usable + kBandGap) / (band_height + kBandGap)));
-    if (per_page < 1 || band_width < 4.0 * options.x.to)
+    const double measuring_height = std::max(kMeasuringHeight, 4.0 * lattice.pitch_y());
+    const double first = paper.margin + kMoireHeader;
+    const double last = paper.height - paper.margin - sheet.marks.strip;
+    if (band_width < 4.0 * options.x.to || first + measuring_height > last || first + band_height > last)
         throw InputError(SourceLocation{printer.file, 0, 0, "paper"},
-                         "a calibration band (" + format_fixed(band_width, 1) + " x " + format_fixed(band_height, 1) +
+                         "a calibration band (" + format_fixed(band_width, 1) + " x " +
+                             format_fixed(std::max(band_height, measuring_height), 1) +
                              " mm) does not fit the printable area of " + paper.name + " paper");
-    for (const double p : options.x.values()) sheet.bands.push_back({true, p, p, 0, 0.0});
-    for (const double p : y_range.values()) sheet.bands.push_back({false, p, p * row_factor, 0, 0.0});
-    for (std::size_t k = 0; k < sheet.bands.size(); ++k) {
-        MoireBand& band = sheet.bands[k];
-        band.page = static_cast<int>(k) / per_page;
-        band.top = paper.margin + kMoireHeader + (static_cast<int>(k) % per_page) * (band_height + kBandGap);
+    // The measuring block at the top of page 1, the array's size. The x band's lenslets must
+    // span the array's width (the x scale), the rows band's its height (the row spacing), and
+    // both keep off the array's edge (its outer lenslets lack neighbours): a cross, the x band
+    // across the block's middle and the rows band down it, the square where they meet left
+    // bare, as are the four corners. An array too small for a cross gets the two bands one
+    // above the other, to be photographed on each in turn.
+    const double block_height = std::min(last - first, std::max(2.0 * measuring_height + kBandGap,
+                                                                2.0 * lattice.half_extent().y()));
+    const double rows_width = std::min(measuring_height, band_width);
+    const bool cross = band_width >= 3.0 * rows_width && block_height >= 3.0 * measuring_height;
+    const Eigen::Vector2d spot = options.spot_mm.value_or(lenslet_spot(design));
+    MoireBand x_measure{true, lattice.pitch_x(),
+                        measuring_period(lattice.pitch_x(), lattice.count_x(), spot.x(), printer.dpi_x.dot_mm()), 0,
+                        cross ? first + 0.5 * (block_height - measuring_height) : first, band_left, band_width,
+                        measuring_height};
+    MoireBand y_measure{false, lattice.pitch_y(),
+                        measuring_period(lattice.pitch_y(), lattice.count_y(), spot.y(), printer.dpi_y.dot_mm()), 0,
+                        cross ? first : first + measuring_height + kBandGap,
+                        cross ? band_left + 0.5 * (band_width - rows_width) : band_left, rows_width,
+                        cross ? block_height : measuring_height};
+    if (cross) {
+        x_measure.hole = {y_measure.left, x_measure.top, y_measure.width, x_measure.height};
+        y_measure.hole = x_measure.hole;
+    }
+    for (MoireBand* band : {&x_measure, &y_measure}) {
+        band->line_fraction = kMeasuringLineFraction;
+        band->measuring = true;
+        // Slanted so that the lenslets of one column (x) or one row (rows) cross several
+        // lines too, whatever the array's own small turn.
+        const double length = band->along_x ? band->height : band->width;
+        band->slant_rad = std::min(kMaxSlant, std::atan(kSlantPeriods * band->period / length));
+    }
+    sheet.measuring = {x_measure, y_measure};
+    // Then the hypotheses, page by page.
+    int page = 0;
+    double top = first + block_height + kBandGap;
+    const auto place = [&](MoireBand band) {
+        if (top + band_height > last) ++page, top = first;
+        band.page = page;
+        band.top = top;
         band.left = band_left;
         band.width = band_width;
         band.height = band_height;
-    }
-    sheet.pages = sheet.bands.back().page + 1;
+        top += band_height + kBandGap;
+        return band;
+    };
+    for (const double p : options.x.values()) sheet.bands.push_back(place({true, p, p}));
+    for (const double p : y_range.values()) sheet.bands.push_back(place({false, p, p * row_factor}));
+    sheet.pages = page + 1;
     return sheet;
+}
+
+void draw_moire_page(cairo_t* cr, const MoireSheet& sheet, const optics::Design& design,
+                     const PrinterProfile& printer, int page) {
+    const optics::Lattice& lattice = moire_lattice(design);
+    const bool hex = lattice.kind() == optics::LatticeKind::Hexagonal;
+    const SheetMarks& marks = sheet.marks;
+    const Paper& paper = printer.paper;
+    cairo_select_font_face(cr, "DejaVu Sans", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+    cairo_set_source_rgb(cr, 0, 0, 0);
+    cairo_set_font_size(cr, 2.6);
+    const std::string header[] = {
+        "Pitch calibration (moire) - " + design.name + " - page " + std::to_string(page + 1) + " of " +
+            std::to_string(sheet.pages),
+        "Lay the array on a band, curved side up, its rows parallel to the band's long edge; the band whose",
+        "fringes are widest or vanish (the band looks even) has the array's true pitch. x: spacing within a row,",
+        "rows: spacing of the rows. Design: pitch " + format_fixed(lattice.pitch_x(), 4) + " mm, rows " +
+            format_fixed(lattice.pitch_y(), 4) + " mm apart. " + printer.name + "."};
+    for (std::size_t k = 0; k < std::size(header); ++k) {
+        cairo_move_to(cr, paper.margin + marks.indent, paper.margin + 3.0 + 3.2 * static_cast<double>(k));
+        cairo_show_text(cr, header[k].c_str());
+    }
+    draw_marks(cr, marks);
+    std::vector<MoireBand> all = sheet.measuring;
+    all.insert(all.end(), sheet.bands.begin(), sheet.bands.end());
+    for (const MoireBand& band : all) {
+        if (band.page != page) continue;
+        // Label: the hypothesis, and which spacing it tests; or what a measuring band measures.
+        cairo_set_font_size(cr, 2.8);
+        const std::string name = band.measuring ? std::string(band.along_x ? "measure x" : "measure rows")
+                                 : band.along_x ? "x " + format_fixed(band.pitch, 4) + " mm"
+                                 : hex          ? "rows " + format_fixed(band.period, 4) + " mm"
+                                                : "rows " + format_fixed(band.pitch, 4) + " mm";
+        cairo_move_to(cr, paper.margin, band.top + 0.5 * band.height);
+        cairo_show_text(cr, name.c_str());
+        if (band.measuring) {
+            cairo_set_font_size(cr, 2.0);
+            cairo_move_to(cr, paper.margin, band.top + 0.5 * band.height + 3.0);
+            cairo_show_text(cr, ("(lines " + format_fixed(band.period, 5) + " mm)").c_str());
+        } else if (!band.along_x && hex) {
+            cairo_set_font_size(cr, 2.0);
+            cairo_move_to(cr, paper.margin, band.top + 0.5 * band.height + 3.0);
+            cairo_show_text(cr, ("(pitch " + format_fixed(band.pitch, 4) + " mm)").c_str());
+        }
+        // Lines of period `period`, a quarter period wide, one centred in the band
+        // (MoireBand::inked says the same).
+        cairo_save(cr);
+        cairo_rectangle(cr, band.left, band.top, band.width, band.height);
+        if (band.hole[2] > 0.0) {
+            cairo_rectangle(cr, band.hole[0], band.hole[1], band.hole[2], band.hole[3]);
+            cairo_set_fill_rule(cr, CAIRO_FILL_RULE_EVEN_ODD);
+        }
+        cairo_clip(cr);
+        cairo_set_fill_rule(cr, CAIRO_FILL_RULE_WINDING);
+        const double width = band.line_fraction * band.period;
+        if (band.slant_rad != 0.0) {
+            // Slanted lines: drawn in a frame turned to the band's normal, about its centre.
+            cairo_translate(cr, band.left + 0.5 * band.width, band.top + 0.5 * band.height);
+            cairo_rotate(cr, std::atan2(band.normal().y(), band.normal().x()));
+            const double reach = std::hypot(band.width, band.height);
+            const int n = static_cast<int>(std::ceil(0.5 * reach / band.period)) + 1;
+            for (int k = -n; k <= n; ++k) cairo_rectangle(cr, k * band.period - 0.5 * width, -reach, width, 2 * reach);
+        } else if (band.along_x) {
+            const double centre = band.left + 0.5 * band.width;
+            const int n = static_cast<int>(std::ceil(0.5 * band.width / band.period)) + 1;
+            for (int k = -n; k <= n; ++k)
+                cairo_rectangle(cr, centre + k * band.period - 0.5 * width, band.top, width, band.height);
+        } else {
+            const double centre = band.top + 0.5 * band.height;
+            const int n = static_cast<int>(std::ceil(0.5 * band.height / band.period)) + 1;
+            for (int k = -n; k <= n; ++k)
+                cairo_rectangle(cr, band.left, centre + k * band.period - 0.5 * width, band.width, width);
+        }
+        cairo_fill(cr);
+        cairo_restore(cr);
+    }
+}
+
+Image moire_page_codes(const MoireSheet& sheet, const optics::Design& design, const PrinterProfile& printer, int page,
+                       double px_per_mm) {
+    return page_codes(printer.paper.width, printer.paper.height, px_per_mm,
+                      [&](cairo_t* cr) { draw_moire_page(cr, sheet, design, printer, page); });
 }
 
 std::vector<MoireBand> write_moire_pdf(const std::filesystem::path& out, const optics::Design& design,
                                        const PrinterProfile& printer, const MoireOptions& options) {
-    const optics::Lattice& lattice = array_lattice(design);
-    const bool hex = lattice.kind() == optics::LatticeKind::Hexagonal;
     const MoireSheet sheet = moire_sheet(design, printer, options);
-    const std::vector<MoireBand>& bands = sheet.bands;
-    const SheetMarks& marks = sheet.marks;
-    const Paper& paper = printer.paper;
-
-    const int pages = sheet.pages;
-    // One page, user units page-frame mm.
-    const auto draw_page = [&](cairo_t* cr, int page) {
-            cairo_select_font_face(cr, "DejaVu Sans", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
-            cairo_set_source_rgb(cr, 0, 0, 0);
-            cairo_set_font_size(cr, 2.6);
-            const std::string header[] = {
-                "Pitch calibration (moire) - " + design.name + " - page " + std::to_string(page + 1) + " of " +
-                    std::to_string(pages),
-                "Lay the array on a band, curved side up, its rows parallel to the band's long edge; the band whose",
-                "fringes are widest or vanish (the band looks even) has the array's true pitch. x: spacing within a row,",
-                "rows: spacing of the rows. Design: pitch " + format_fixed(lattice.pitch_x(), 4) + " mm, rows " +
-                    format_fixed(lattice.pitch_y(), 4) + " mm apart. " + printer.name + "."};
-            for (std::size_t k = 0; k < std::size(header); ++k) {
-                cairo_move_to(cr, paper.margin + marks.indent, paper.margin + 3.0 + 3.2 * static_cast<double>(k));
-                cairo_show_text(cr, header[k].c_str());
-            }
-            draw_marks(cr, marks);
-            for (const MoireBand& band : bands) {
-                if (band.page != page) continue;
-                // Label: the hypothesis, and which spacing it tests.
-                cairo_set_font_size(cr, 2.8);
-                const std::string name = band.along_x ? "x " + format_fixed(band.pitch, 4) + " mm"
-                                         : hex ? "rows " + format_fixed(band.period, 4) + " mm"
-                                               : "rows " + format_fixed(band.pitch, 4) + " mm";
-                cairo_move_to(cr, paper.margin, band.top + 0.5 * band.height);
-                cairo_show_text(cr, name.c_str());
-                if (!band.along_x && hex) {
-                    cairo_set_font_size(cr, 2.0);
-                    cairo_move_to(cr, paper.margin, band.top + 0.5 * band.height + 3.0);
-                    cairo_show_text(cr, ("(pitch " + format_fixed(band.pitch, 4) + " mm)").c_str());
-                }
-                // Lines of period `period`, a quarter period wide, one centred in the band
-                // (MoireBand::inked says the same).
-                cairo_save(cr);
-                cairo_rectangle(cr, band.left, band.top, band.width, band.height);
-                cairo_clip(cr);
-                const double width = kLineFraction * band.period;
-                if (band.along_x) {
-                    const double centre = band.left + 0.5 * band.width;
-                    const int n = static_cast<int>(std::ceil(0.5 * band.width / band.period)) + 1;
-                    for (int k = -n; k <= n; ++k)
-                        cairo_rectangle(cr, centre + k * band.period - 0.5 * width, band.top, width, band.height);
-                } else {
-                    const double centre = band.top + 0.5 * band.height;
-                    const int n = static_cast<int>(std::ceil(0.5 * band.height / band.period)) + 1;
-                    for (int k = -n; k <= n; ++k)
-                        cairo_rectangle(cr, band.left, centre + k * band.period - 0.5 * width, band.width, width);
-                }
-                cairo_fill(cr);
-                cairo_restore(cr);
-            }
-    };
-    write_pages(out, paper, pages, "calibration sheet", draw_page, options.preview);
-    return bands;
+    write_pages(out, printer.paper, sheet.pages, "calibration sheet",
+                [&](cairo_t* cr, int page) { draw_moire_page(cr, sheet, design, printer, page); }, options.preview);
+    return sheet.bands;
 }
 
 }  // namespace rfd::print

@@ -20,11 +20,15 @@
 //
 // Example: write_moire_pdf("calib.pdf", design, printer, {parse_pitch_range("2.34:2.38:9", "--pitch")});
 
+#include <array>
 #include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
+
+#include "core/image.hpp"
 #include "optics/design.hpp"
 #include "print/marks.hpp"
 #include "print/printer.hpp"
@@ -47,10 +51,20 @@ PitchRange parse_pitch_range(const std::string& text, const std::string& option)
 /// design has no lenslet array.
 PitchRange default_pitch_range(const optics::Design& design);
 
+/// A line's width, of its period (hypothesis bands).
+inline constexpr double kMoireLineFraction = 0.25;
+
+/// The lens array the sheet calibrates: the pattern plane's, else the first. InputError when
+/// the design has none.
+const optics::Lattice& moire_lattice(const optics::Design& design);
+
 struct MoireOptions {
     PitchRange x;                  ///< pitch along a row, mm
     std::optional<PitchRange> y;   ///< rectangular arrays: row spacing; default x scaled
     double band_height = 10.0;     ///< mm
+    /// Standard deviation of a lenslet's spot on the sheet along x and y, mm, for the measuring
+    /// bands' period; default: lenslet_spot(design).
+    std::optional<Eigen::Vector2d> spot_mm;
     std::filesystem::path preview; ///< also a PNG of the first page here, when not empty
 };
 
@@ -62,22 +76,59 @@ struct MoireBand {
     int page = 0;          ///< 0-based
     double top = 0.0;      ///< band's top edge, page frame mm
     double left = 0.0, width = 0.0, height = 0.0;  ///< the rest of its rectangle, mm
+    double line_fraction = kMoireLineFraction;     ///< a line's width, of the period
+    bool measuring = false;                        ///< a measuring band (see MoireSheet)
+    /// The lines' turn from square to the band, counter-clockwise on the page (y down),
+    /// radians: 0 but for measuring bands.
+    double slant_rad = 0.0;
+    /// A rectangle (left, top, width, height) inside it left bare: where the measuring
+    /// bands cross. Width 0: none.
+    std::array<double, 4> hole{};
 
-    /// Whether page point (x, y) mm lies on one of the band's lines (a quarter period wide,
-    /// one centred in the band across the lines).
+    /// Whether page point (x, y) lies in the band and not in its hole.
+    bool inside(double x, double y) const;
+    /// The unit normal to the lines, page frame: (1, 0) or (0, 1) turned by the slant.
+    Eigen::Vector2d normal() const;
+    /// Whether page point (x, y) mm lies on one of the band's lines (line_fraction of the
+    /// period wide, one centred in the band across the lines).
     bool inked(double x, double y) const;
 };
 
 /// The sheet laid out: its bands page by page and the registration marks every page carries.
+/// Above the hypotheses, two measuring bands (x, then rows) for `rfd calibrate pitch`: lines
+/// half a period wide whose period is not the pitch, so that across the array the lenslets
+/// read every phase of them (measuring_period), slanted a few degrees so that the lenslets of
+/// one column (x) or one row (rows) read different phases too.
 struct MoireSheet {
-    std::vector<MoireBand> bands;
+    std::vector<MoireBand> bands;      ///< the hypotheses, for the eye
+    std::vector<MoireBand> measuring;  ///< x, rows
     SheetMarks marks;
     int pages = 1;
 };
 
+/// The standard deviation of a lenslet's spot on the pattern plane along x and y, mm, under
+/// the sun (a disc 0.53 deg across) on the axis, traced exactly (Designs I and II; 0.02 mm
+/// for others).
+Eigen::Vector2d lenslet_spot(const optics::Design& design);
+
+/// A measuring band's line period for lenslets `spacing` mm apart, `count` of them across the
+/// band, a spot of `spot` mm and printer dots of `dot` mm: spacing / (n + drift), n lines per
+/// lenslet (about 5 spots or 12 dots a line, 1 to 40), drift 0.2 + 2 / count (at most 0.45):
+/// from one lenslet to the next the phase steps by a fifth of a period, and over the array it
+/// drifts by two more periods, so the lenslets read every phase.
+double measuring_period(double spacing, int count, double spot, double dot);
+
 /// The bands for `options` on the printer's paper. InputError when the design has no lenslet
 /// array or a band does not fit the printable area.
 MoireSheet moire_sheet(const optics::Design& design, const PrinterProfile& printer, const MoireOptions& options);
+
+/// Draws page `page` of the sheet (user units: page-frame mm): header, marks, labels, lines.
+void draw_moire_page(cairo_t* cr, const MoireSheet& sheet, const optics::Design& design,
+                     const PrinterProfile& printer, int page);
+
+/// Page `page` as the printer receives it, at `px_per_mm` (see page_codes: 1 is no ink).
+Image moire_page_codes(const MoireSheet& sheet, const optics::Design& design, const PrinterProfile& printer, int page,
+                       double px_per_mm);
 
 /// Writes the calibration PDF (temporary file + rename) and returns its bands.
 /// Throws InputError when the design has no lenslet array, IoError when it cannot write.

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # make studies: the research reproductions behind docs/results.md, on the bundled scenes:
 # the sampling study (thesis chapters 4-5), implicit relighting's eta trade-off (chapter 7),
-# feature-guided upsampling against linear blending (chapter 6) and the tone calibration's
-# limits (rfd calibrate). About 9 minutes on two cores. Writes OUTPUT_DIR/INDEX.md.
+# feature-guided upsampling against linear blending (chapter 6) and the tone and pitch
+# calibrations' limits (rfd calibrate). About 11 minutes on two cores. Writes
+# OUTPUT_DIR/INDEX.md.
 # Usage: scripts/studies.sh RFD_BINARY OUTPUT_DIR
 set -euo pipefail
 rfd="$1"
@@ -122,11 +123,46 @@ tone_case() {  # NAME "CALIBRATE ARGS" SIMULATE ARGS...
   tone_case small "" --frame-fill 0.1
 } | tee "$tone/summary.txt"
 
+# The lens array's pitch from simulated photographs of the moire sheet mounted in Design I
+# (rfd calibrate pitch): the array 0.1 % too large and turned 0.3 deg, one condition at a time
+# pushed toward where it fails, the rest a mild phone (blur 1 px, 3000 photons, JPEG 80); per
+# condition the pitch's and row spacing's error against the truth (%), with the stated
+# uncertainty, and the turn's (deg), or the refusal. About 2 minutes.
+index_section pitch "Pitch calibration: where it stops"
+pitch="$out/pitch"
+mkdir -p "$pitch"
+pitch_case() {  # NAME CAMERA_PIXELS SIMULATE ARGS...
+  local name="$1" pixels="$2"
+  shift 2
+  "$rfd" --quiet calibrate simulate-photo moire epson_stylus_pro_4800 --design designs/design1.toml \
+    --pitch-error 0.001 --array-rotation 0.3 --camera-pixels "$pixels" "$@" --out "$pitch/$name.jpg" > /dev/null
+  if message=$("$rfd" --quiet calibrate pitch designs/design1.toml "$pitch/$name.jpg" 2>&1); then
+    echo "$message" | awk -v name="$name" '
+      /rows turned/ { for (i = 1; i <= NF; i++) if ($i == "turned") turn = $(i + 1) - 0.3 }
+      /^pitch along a row/ { x = $(NF - 4) - 0.1; sx = $(NF - 1) }
+      /^row spacing/ { y = $(NF - 4) - 0.1; sy = $(NF - 1) }
+      END { printf "%-16s pitch %+.4f %% (+- %s), rows %+.4f %% (+- %s), turn %+.4f deg\n", name, x, sx, y, sy, turn }'
+  else
+    printf '%-16s refused: %s\n' "$name" "$(echo "$message" | tail -1 | sed 's/^rfd: error: [^:]*: //')"
+  fi
+}
+{
+  for tilt in 0 30 45 60; do pitch_case "tilt_$tilt" 3000 --camera-tilt "$tilt" --camera-turn 30 --frame-fill 0.7 --blur 1 --photons 3000; done
+  for blur in 2 4 8; do pitch_case "blur_$blur" 3000 --blur "$blur" --photons 3000; done
+  for photons in 30 100 300; do pitch_case "photons_$photons" 3000 --blur 1 --photons "$photons"; done
+  for sun in 10 20 25 30; do pitch_case "sun_$sun" 3000 --light-tilt "$sun" --light-turn 40 --blur 1 --photons 3000; done
+  for pixels in 2000 1500; do pitch_case "pixels_$pixels" "$pixels" --blur 1 --photons 3000; done
+  pitch_case shifted_20mm 3000 --array-shift 0,-20 --blur 1 --photons 3000
+  pitch_case turned_3deg 3000 --array-rotation 3 --blur 1 --photons 3000
+  pitch_case off_the_bands 3000 --array-shift 0,150 --blur 1 --photons 3000
+} | tee "$pitch/summary.txt"
+
 index_entry capture/study/error_vs_images.png "the bottle's sampling study: error against image count for fixed patterns of 256 to 1025 directions and adaptive sampling (figure 5.5's analogue; study.txt: the table, study/: per-direction error maps)"
 index_entry capture/pattern_256.lp "a near-uniform pattern of 256 light directions for a real light stage (pattern.txt: how even)"
 index_entry implicit/eta/eta_psnr.png "implicit relighting on the snooker scene: PSNR of the held-out lights against eta (figure 7.3's trade-off; eta_sweep.txt: the numbers, eta/light_*.png: truth | eta 0 | best | largest)"
 index_entry implicit/designed_light.png "the scene relit from the trained model under a designed 8-degree light (designed_light_probe.png: the synthetic probe)"
 index_entry upsample/summary.txt "upsampling 256 stage lights of the spheres one level against linear blending: PSNR at 512 other directions, four point lights and four area lights"
+index_entry pitch/summary.txt "the lens array's pitch from simulated photographs of the moire sheet in Design I: the pitch's, row spacing's and turn's errors (or the refusal) as tilt, blur, noise, the sun's slant, resolution and placement push toward failure"
 index_entry tone/summary.txt "the printer's tone curve from simulated photographs of its wedge: the curve's RMS error (or the refusal) as tilt, blur, noise, vignetting, the film's side and the light push toward failure"
 index_entry upsample/upsampled/point_lights "pictures per point light, the upsampled field relit | the stage's truth (linear/: the same for linear blending; area_lights/ under area lights)"
 

@@ -1,0 +1,775 @@
+#include "calibrate/pitch.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <numbers>
+
+#include <Eigen/Dense>
+#include <unsupported/Eigen/NonLinearOptimization>
+
+#include "calibrate/camera.hpp"
+#include "calibrate/sheet_finder.hpp"
+#include "core/error.hpp"
+#include "core/text.hpp"
+#include "core/units.hpp"
+#include "relight/vision.hpp"
+
+namespace rfd::calibrate {
+namespace {
+
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+constexpr double kCoarsePixelsPerMm = 4.0;  // the page resampled to find the array and its lattice
+constexpr double kMaxScaleOff = 0.05;       // lattice search: +-5 % of the design's pitch
+constexpr double kMaxTurnDeg = 12.0;        // and +-12 deg
+constexpr double kCoreFraction = 0.3;       // radius read of each lenslet image, of its smaller spacing
+constexpr int kMinLenslets = 12;            // per axis
+constexpr double kStartSpot = 0.03;         // the fit starts from this spot, periods
+constexpr int kJackknifeGroups = 8;
+constexpr double kMarginMm = 1.5;           // lenslets read this far inside a band, beyond a lenslet
+constexpr double kEdgeLenslets = 1.6;       // lenslets at the array's edge (fewer neighbours) left out
+constexpr int kPhaseBins = 20;              // the lenslets must read 16 of 20 phase bins
+constexpr int kMinPhaseBins = 16;
+constexpr double kPitchPrior = 0.01;        // the array's pitch within +-1 % of the design's
+constexpr double kTurnPrior = 0.003;        // its rows within +-0.17 deg of the lenslet images' rows
+constexpr double kReadableDepth = 4.0;      // the profile's depth, in noise standard deviations
+constexpr int kLightTerms = 5;              // E = 1 + u + v + u^2 + uv + v^2 terms
+constexpr double kOutlierSigmas = 5.0;
+
+// Bilinear sample of one plane at pixel (u, v) (centres at integers); NaN outside.
+double bilinear(const Image& image, double u, double v) {
+    if (!(u >= 0.0 && v >= 0.0 && u <= image.width() - 1 && v <= image.height() - 1)) return NAN;
+    const int x0 = std::min(static_cast<int>(u), image.width() - 2), y0 = std::min(static_cast<int>(v), image.height() - 2);
+    const double fx = u - x0, fy = v - y0;
+    const double top = (1 - fx) * image.at(x0, y0, 0) + fx * image.at(x0 + 1, y0, 0);
+    const double bottom = (1 - fx) * image.at(x0, y0 + 1, 0) + fx * image.at(x0 + 1, y0 + 1, 0);
+    return (1 - fy) * top + fy * bottom;
+}
+
+double photo_at_page(const Image& luminance, const Eigen::Matrix3d& page_to_photo, const Eigen::Vector2d& page) {
+    const Eigen::Vector2d pixel = apply(page_to_photo, page);
+    return bilinear(luminance, pixel.x(), pixel.y());
+}
+
+// The page resampled on a grid of `px_per_mm` over a rectangle.
+struct PageRaster {
+    Image image;
+    Eigen::Vector2d origin;  // page point of pixel (0, 0)'s corner
+    double px_per_mm = 1.0;
+    Eigen::Vector2d page(int x, int y) const { return origin + Eigen::Vector2d(x + 0.5, y + 0.5) / px_per_mm; }
+};
+
+PageRaster resample(const Image& luminance, const Eigen::Matrix3d& page_to_photo, const Eigen::Vector2d& from,
+                    const Eigen::Vector2d& to, double px_per_mm) {
+    PageRaster raster;
+    raster.origin = from;
+    raster.px_per_mm = px_per_mm;
+    raster.image = Image(static_cast<int>(std::ceil((to.x() - from.x()) * px_per_mm)),
+                         static_cast<int>(std::ceil((to.y() - from.y()) * px_per_mm)), 1);
+    for (int y = 0; y < raster.image.height(); ++y)
+        for (int x = 0; x < raster.image.width(); ++x)
+            raster.image.at(x, y, 0) = static_cast<float>(photo_at_page(luminance, page_to_photo, raster.page(x, y)));
+    return raster;
+}
+
+// Otsu's threshold of the finite values.
+double otsu_threshold(std::span<const float> values) {
+    constexpr int kBins = 256;
+    float lo = HUGE_VALF, hi = -HUGE_VALF;
+    for (const float v : values)
+        if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
+    if (!(hi > lo)) return lo;
+    std::vector<double> histogram(kBins, 0.0);
+    double count = 0.0, sum = 0.0;
+    for (const float v : values)
+        if (std::isfinite(v)) {
+            const int bin = std::min(kBins - 1, static_cast<int>((v - lo) / (hi - lo) * kBins));
+            histogram[static_cast<std::size_t>(bin)] += 1.0;
+            count += 1.0;
+            sum += bin;
+        }
+    double below = 0.0, below_sum = 0.0, best = -1.0;
+    int best_bin = 0;
+    for (int bin = 0; bin < kBins - 1; ++bin) {
+        below += histogram[static_cast<std::size_t>(bin)];
+        below_sum += bin * histogram[static_cast<std::size_t>(bin)];
+        if (below == 0.0 || below == count) continue;
+        const double mean_below = below_sum / below, mean_above = (sum - below_sum) / (count - below);
+        const double between = below * (count - below) * (mean_below - mean_above) * (mean_below - mean_above);
+        if (between > best) best = between, best_bin = bin;
+    }
+    return lo + (best_bin + 1.0) / kBins * (hi - lo);
+}
+
+// The diffuser: the largest dark region of the resampled page, shrunk by `inset_mm` so that
+// lenslet images near its edge are left out. Returns one byte per raster pixel.
+std::vector<std::uint8_t> diffuser_region(const PageRaster& raster, double smoothing_mm, double inset_mm,
+                                          const std::string& name) {
+    const relight::PlaneSize size{raster.image.width(), raster.image.height()};
+    Image smooth(size.width, size.height, 1);
+    std::vector<float> filled(raster.image.plane(0).begin(), raster.image.plane(0).end());
+    float brightest = 0.0f;
+    for (const float v : filled)
+        if (std::isfinite(v)) brightest = std::max(brightest, v);
+    for (float& v : filled)
+        if (!std::isfinite(v)) v = brightest;  // beyond the photo: not the diffuser
+    const double sigma = smoothing_mm * raster.px_per_mm;
+    relight::vision().gaussian_blur(size, filled, smooth.plane(0), 0, sigma, sigma, relight::Border::Replicate);
+    const double threshold = otsu_threshold(smooth.plane(0));
+    std::vector<std::uint8_t> dark(filled.size());
+    for (std::size_t k = 0; k < dark.size(); ++k) dark[k] = smooth.plane(0)[k] < threshold ? 1 : 0;
+    std::vector<int> labels(dark.size());
+    const int count = relight::vision().connected_components(size, dark, labels);
+    std::vector<std::size_t> area(static_cast<std::size_t>(count), 0);
+    for (const int label : labels) ++area[static_cast<std::size_t>(label)];
+    std::size_t largest = 0;
+    for (std::size_t label = 1; label < area.size(); ++label)
+        if (area[label] > (largest == 0 ? 0 : area[largest])) largest = label;
+    if (largest == 0) throw InputError(SourceLocation{name}, "no darker diffuser region over the bands");
+    for (std::size_t k = 0; k < dark.size(); ++k) dark[k] = labels[k] == static_cast<int>(largest) ? 1 : 0;
+    std::vector<float> distance(dark.size());
+    relight::vision().distance_transform(size, dark, distance);
+    for (std::size_t k = 0; k < dark.size(); ++k) dark[k] = distance[k] >= inset_mm * raster.px_per_mm ? 1 : 0;
+    return dark;
+}
+
+// The Fourier transform of the region's values (mean removed) at spatial frequencies g
+// (cycles per page mm): the strength of a lattice with that reciprocal vector.
+class RegionSpectrum {
+public:
+    /// `values`: one per raster pixel.
+    RegionSpectrum(const PageRaster& raster, std::span<const float> values, const std::vector<std::uint8_t>& region)
+        : raster_(raster) {
+        double sum = 0.0;
+        std::size_t n = 0;
+        for (std::size_t k = 0; k < region.size(); ++k)
+            if (region[k]) sum += values[k], ++n;
+        mean_ = n ? sum / static_cast<double>(n) : 0.0;
+        rows_.resize(static_cast<std::size_t>(raster.image.height()));
+        for (int y = 0; y < raster.image.height(); ++y)
+            for (int x = 0; x < raster.image.width(); ++x) {
+                const std::size_t k = static_cast<std::size_t>(y) * static_cast<std::size_t>(raster.image.width()) +
+                                      static_cast<std::size_t>(x);
+                if (region[k]) rows_[static_cast<std::size_t>(y)].push_back({x, values[k] - mean_});
+            }
+        pixels_ = n;
+    }
+    std::size_t pixels() const { return pixels_; }
+
+
+    std::complex<double> at(const Eigen::Vector2d& g) const {
+        const int width = raster_.image.width();
+        std::vector<std::complex<double>> column(static_cast<std::size_t>(width));
+        for (int x = 0; x < width; ++x) column[static_cast<std::size_t>(x)] = std::polar(1.0, -kTwoPi * g.x() * raster_.page(x, 0).x());
+        std::complex<double> total = 0.0;
+        for (std::size_t y = 0; y < rows_.size(); ++y) {
+            if (rows_[y].empty()) continue;
+            std::complex<double> row = 0.0;
+            for (const auto& [x, value] : rows_[y]) row += value * column[static_cast<std::size_t>(x)];
+            total += row * std::polar(1.0, -kTwoPi * g.y() * raster_.page(0, static_cast<int>(y)).y());
+        }
+        return total;
+    }
+
+private:
+    const PageRaster& raster_;
+    double mean_ = 0.0;
+    std::size_t pixels_ = 0;
+    std::vector<std::vector<std::pair<int, double>>> rows_;
+};
+
+// The reciprocal vector of the strongest lattice near `nominal`: a grid over +-kMaxScaleOff
+// in length and +-kMaxTurnDeg in angle, then a pattern search.
+Eigen::Vector2d strongest_frequency(const RegionSpectrum& spectrum, const Eigen::Vector2d& nominal, double extent_mm) {
+    const double step = 0.4 / extent_mm;
+    const double length = nominal.norm();
+    const Eigen::Vector2d along = nominal / length, across(-along.y(), along.x());
+    const int n_along = static_cast<int>(std::ceil(kMaxScaleOff * length / step));
+    const int n_across = static_cast<int>(std::ceil(std::tan(degrees_to_radians(kMaxTurnDeg)) * length / step));
+    Eigen::Vector2d best = nominal;
+    double best_power = -1.0;
+    for (int i = -n_along; i <= n_along; ++i)
+        for (int j = -n_across; j <= n_across; ++j) {
+            const Eigen::Vector2d g = nominal + i * step * along + j * step * across;
+            const double power = std::norm(spectrum.at(g));
+            if (power > best_power) best_power = power, best = g;
+        }
+    for (double s = 0.5 * step; s > 1e-4 / extent_mm; s *= 0.5) {
+        bool moved = true;
+        while (moved) {
+            moved = false;
+            for (const Eigen::Vector2d& d : {Eigen::Vector2d(s, 0), Eigen::Vector2d(-s, 0), Eigen::Vector2d(0, s),
+                                             Eigen::Vector2d(0, -s)}) {
+                const double power = std::norm(spectrum.at(best + d));
+                if (power > best_power) best_power = power, best += d, moved = true;
+            }
+        }
+    }
+    return best;
+}
+
+// The lattice of lenslet images on the page: page = origin + basis n for integer n.
+struct ImageLattice {
+    Eigen::Matrix2d basis;
+    Eigen::Vector2d origin;
+};
+
+// Mean and variance of the photo over a disc about a page point, sampled about once per
+// photo pixel; NaN mean when any sample leaves the photo.
+std::pair<double, double> disc_statistics(const Image& luminance, const Eigen::Matrix3d& page_to_photo,
+                                          const Eigen::Vector2d& centre, double radius, double step) {
+    double sum = 0.0, sum2 = 0.0;
+    int n = 0;
+    const int steps = std::max(1, static_cast<int>(std::ceil(radius / step)));
+    for (int j = -steps; j <= steps; ++j)
+        for (int i = -steps; i <= steps; ++i) {
+            const Eigen::Vector2d d(i * radius / steps, j * radius / steps);
+            if (d.squaredNorm() > radius * radius) continue;
+            const double v = photo_at_page(luminance, page_to_photo, centre + d);
+            if (!std::isfinite(v)) return {NAN, NAN};
+            sum += v;
+            sum2 += v * v;
+            ++n;
+        }
+    const double mean = sum / n;
+    return {mean, std::max(0.0, sum2 / n - mean * mean)};
+}
+
+// The lenslets one axis fits: position label in the design's array frame (relative to a
+// reference lenslet), the light falloff's terms where their light is seen, value, and the
+// band's line period and centre line.
+struct AxisData {
+    std::vector<Eigen::Vector2d> label;
+    std::vector<std::array<double, kLightTerms>> light;
+    std::vector<Eigen::Vector2d> where;  // page, where the lenslet's light is seen
+
+    // The light falloff's terms over the lenslets' own box (E = 1 in its middle).
+    void set_light_terms() {
+        Eigen::Vector2d low = Eigen::Vector2d::Constant(HUGE_VAL), high = -low;
+        for (const Eigen::Vector2d& w : where) low = low.cwiseMin(w), high = high.cwiseMax(w);
+        const Eigen::Vector2d middle = 0.5 * (low + high);
+        const Eigen::Vector2d half = (0.5 * (high - low)).cwiseMax(Eigen::Vector2d::Constant(1.0));
+        light.clear();
+        for (const Eigen::Vector2d& w : where) {
+            const double u = (w.x() - middle.x()) / half.x(), v = (w.y() - middle.y()) / half.y();
+            light.push_back({u, v, u * u, u * v, v * v});
+        }
+    }
+    std::vector<double> value, period, origin;
+    std::vector<std::size_t> lenslet;  // index into the reading's lenslets
+};
+
+// The lines as a lenslet's spot sees them: a line of width w (periods) centred on phase 0,
+// blurred by a Gaussian spot of standard deviation s (periods): the part of the spot on ink,
+// and its derivatives in the phase, w and log s.
+struct Coverage {
+    double value = 0.0, d_phase = 0.0, d_width = 0.0, d_log_spot = 0.0;
+};
+Coverage line_coverage(double phase, double width, double spot) {
+    constexpr double kInvSqrt2Pi = 0.3989422804014327;
+    const auto cdf = [](double x) { return 0.5 * std::erfc(-x / std::numbers::sqrt2); };
+    const auto pdf = [&](double x) { return kInvSqrt2Pi * std::exp(-0.5 * x * x); };
+    const double d = phase - std::round(phase);
+    Coverage c;
+    for (int n = -2; n <= 2; ++n) {  // the neighbouring lines reach a wide spot
+        const double a = (0.5 * width - (d + n)) / spot, b = (-0.5 * width - (d + n)) / spot;
+        c.value += cdf(a) - cdf(b);
+        c.d_phase += (pdf(b) - pdf(a)) / spot;
+        c.d_width += 0.5 * (pdf(a) + pdf(b)) / spot;
+        c.d_log_spot += b * pdf(b) - a * pdf(a);
+    }
+    return c;
+}
+
+// Parameters: c, m1, m2 (the phase), w, log s (the lines' width and the spot), B, D (the
+// readings off and on a line), e_1..e_5 (the light falloff E).
+constexpr int kWidth = 3, kLogSpot = 4, kBright = 5, kDark = 6, kLight = 7;
+constexpr int kParameters = kLight + kLightTerms;
+
+// The model of the header comment for Eigen's Levenberg-Marquardt: residuals over the used
+// lenslets and their Jacobian.
+struct AxisModel {
+    const AxisData* data;
+    std::vector<char> used;
+    std::vector<std::size_t> rows;  // the used lenslets
+    AxisModel(const AxisData& d, std::vector<char> use) : data(&d), used(std::move(use)) {
+        for (std::size_t k = 0; k < used.size(); ++k)
+            if (used[k]) rows.push_back(k);
+    }
+    int inputs() const { return kParameters; }
+    int values() const { return static_cast<int>(rows.size()); }
+    double phase(const Eigen::VectorXd& p, std::size_t k) const {
+        return (p(0) + p(1) * data->label[k].x() + p(2) * data->label[k].y() - data->origin[k]) / data->period[k];
+    }
+    double light(const Eigen::VectorXd& p, std::size_t k) const {
+        double e = 1.0;
+        for (int t = 0; t < kLightTerms; ++t) e += p(kLight + t) * data->light[k][static_cast<std::size_t>(t)];
+        return e;
+    }
+    static double profile(const Eigen::VectorXd& p, double phase) {
+        const double covered = line_coverage(phase, p(kWidth), std::exp(p(kLogSpot))).value;
+        return p(kBright) - (p(kBright) - p(kDark)) * covered;
+    }
+    double predict(const Eigen::VectorXd& p, std::size_t k) const { return light(p, k) * profile(p, phase(p, k)); }
+    int operator()(const Eigen::VectorXd& p, Eigen::VectorXd& residual) const {
+        for (std::size_t r = 0; r < rows.size(); ++r)
+            residual(static_cast<Eigen::Index>(r)) = predict(p, rows[r]) - data->value[rows[r]];
+        return 0;
+    }
+    int df(const Eigen::VectorXd& p, Eigen::MatrixXd& jacobian) const {
+        for (std::size_t r = 0; r < rows.size(); ++r) {
+            const std::size_t k = rows[r];
+            const auto row = static_cast<Eigen::Index>(r);
+            const double e = light(p, k);
+            const Coverage c = line_coverage(phase(p, k), p(kWidth), std::exp(p(kLogSpot)));
+            const double depth = p(kBright) - p(kDark), g = p(kBright) - depth * c.value;
+            const double d_phase = -e * depth * c.d_phase / data->period[k];
+            jacobian(row, 0) = d_phase;
+            jacobian(row, 1) = d_phase * data->label[k].x();
+            jacobian(row, 2) = d_phase * data->label[k].y();
+            jacobian(row, kWidth) = -e * depth * c.d_width;
+            jacobian(row, kLogSpot) = -e * depth * c.d_log_spot;
+            jacobian(row, kBright) = e * (1.0 - c.value);
+            jacobian(row, kDark) = e * c.value;
+            for (int t = 0; t < kLightTerms; ++t)
+                jacobian(row, kLight + t) = g * data->light[k][static_cast<std::size_t>(t)];
+        }
+        return 0;
+    }
+};
+
+// B and D that explain the readings best for the phases, width and spot of `p` (E = 1), by
+// least squares; returns the residual sum of squares.
+double fit_levels(const AxisModel& model, Eigen::VectorXd& p) {
+    Eigen::Matrix2d normal = Eigen::Matrix2d::Zero();
+    Eigen::Vector2d right = Eigen::Vector2d::Zero();
+    double values2 = 0.0;
+    for (const std::size_t k : model.rows) {
+        const double covered = line_coverage(model.phase(p, k), p(kWidth), std::exp(p(kLogSpot))).value;
+        const Eigen::Vector2d basis(1.0 - covered, covered);
+        normal += basis * basis.transpose();
+        right += basis * model.data->value[k];
+        values2 += model.data->value[k] * model.data->value[k];
+    }
+    const Eigen::Vector2d levels = normal.ldlt().solve(right);
+    p(kBright) = levels(0);
+    p(kDark) = levels(1);
+    return values2 - levels.dot(right);
+}
+
+// The row (m1, m2) with the most coherent readings near `guess`, c held at `offset`: along
+// the guess, its length within +-kPitchPrior; across it, within +-kTurnPrior; on a grid fine
+// enough that the phase moves by a tenth of a period between its points anywhere in the bands.
+Eigen::Vector2d coherent_row(const AxisData& data, double offset, const Eigen::Vector2d& guess, double scale) {
+    const Eigen::Vector2d along = guess.normalized(), across(-along.y(), along.x());
+    double span_along = 0.0, span_across = 0.0;
+    for (const Eigen::Vector2d& a : data.label) {
+        span_along = std::max(span_along, std::abs(a.dot(along)));
+        span_across = std::max(span_across, std::abs(a.dot(across)));
+    }
+    const double period = data.period.front();
+    const double step_along = 0.1 * period / std::max(span_along, period);
+    const double step_across = 0.1 * period / std::max(span_across, period);
+    const int n_along = static_cast<int>(std::ceil(kPitchPrior / step_along));
+    const int n_across = static_cast<int>(std::ceil(kTurnPrior / step_across));
+    double mean = 0.0;
+    for (const double v : data.value) mean += v;
+    mean /= static_cast<double>(data.value.size());
+    Eigen::Vector2d best = guess;
+    double best_power = -1.0;
+    for (int i = -n_along; i <= n_along; ++i)
+        for (int j = -n_across; j <= n_across; ++j) {
+            const Eigen::Vector2d row = (scale + i * step_along) * along + j * step_across * across;
+            std::complex<double> sum = 0.0;
+            for (std::size_t k = 0; k < data.value.size(); ++k) {
+                const double phi = (offset + row.dot(data.label[k]) - data.origin[k]) / data.period[k];
+                sum += (data.value[k] - mean) * std::polar(1.0, kTwoPi * phi);
+            }
+            if (std::norm(sum) > best_power) best_power = std::norm(sum), best = row;
+        }
+    return best;
+}
+
+// Fits one axis; fills `fit` and the lenslets' phases and fitted values. `guess` is the row
+// of the lattice of lenslet images, `scale` the design's expected length of it.
+void fit_axis(AxisData& data, double offset, const Eigen::Vector2d& guess, double scale, double line_fraction,
+              bool along_x, AxisFit& fit, std::vector<LensletReading>& lenslets, const std::string& name) {
+    fit.along_x = along_x;
+    if (static_cast<int>(data.value.size()) < kMinLenslets) return;  // this axis's band not under the array
+    data.set_light_terms();
+    Eigen::VectorXd p = Eigen::VectorXd::Zero(kParameters);
+    const Eigen::Vector2d row = coherent_row(data, offset, guess, scale);
+    p(1) = row.x();
+    p(2) = row.y();
+    p(kWidth) = line_fraction;
+    p(kLogSpot) = std::log(kStartSpot);
+    // Where the lines are: of offsets a hundredth of a period apart, the one whose lines,
+    // a little blurred, explain the readings best.
+    std::vector<char> used(data.value.size(), 1);
+    {
+        const AxisModel all(data, used);
+        double best_error = HUGE_VAL, best_offset = offset;
+        for (int step = 0; step < 100; ++step) {
+            p(0) = offset + step / 100.0 * data.period.front();
+            const double error = fit_levels(all, p);
+            if (error < best_error) best_error = error, best_offset = p(0);
+        }
+        p(0) = best_offset;
+        fit_levels(all, p);
+    }
+    double mean = 0.0;
+    for (const double v : data.value) mean += v;
+    mean /= static_cast<double>(data.value.size());
+
+    Eigen::VectorXd residual;
+    for (int pass = 0; pass < 2; ++pass) {
+        AxisModel model(data, used);
+        Eigen::LevenbergMarquardt<AxisModel> solver(model);
+        solver.parameters.maxfev = 400;
+        solver.minimize(p);
+        residual.resize(model.values());
+        model(p, residual);
+        if (pass == 1) break;
+        std::vector<double> magnitudes(static_cast<std::size_t>(residual.size()));
+        for (Eigen::Index r = 0; r < residual.size(); ++r)
+            magnitudes[static_cast<std::size_t>(r)] = std::abs(residual(r));
+        const auto middle = magnitudes.begin() + static_cast<std::ptrdiff_t>(magnitudes.size() / 2);
+        std::nth_element(magnitudes.begin(), middle, magnitudes.end());
+        const double sigma = 1.4826 * *middle;
+        for (std::size_t k = 0; k < data.value.size(); ++k)
+            if (std::abs(model.predict(p, k) - data.value[k]) > kOutlierSigmas * sigma) used[k] = 0;
+    }
+    AxisModel model(data, used);
+    model(p, residual);
+    Eigen::MatrixXd jacobian(model.values(), kParameters);
+    model.df(p, jacobian);
+    const auto n = static_cast<double>(model.values());
+    const double variance = residual.squaredNorm() / std::max(1.0, n - kParameters);
+    const Eigen::MatrixXd normal = jacobian.transpose() * jacobian;
+    const Eigen::MatrixXd covariance = variance * normal.completeOrthogonalDecomposition().pseudoInverse();
+
+    // The row's uncertainty: the fit's own (residual variance through the inverse normal
+    // matrix) understates it when the lines are sharp (a lenslet informs only near an edge),
+    // so the delete-a-group jackknife's, over groups of interleaved lenslets, when larger.
+    Eigen::Matrix2d jackknife = Eigen::Matrix2d::Zero();
+    {
+        std::vector<Eigen::Vector2d> rows_without;
+        for (int group = 0; group < kJackknifeGroups; ++group) {
+            std::vector<char> subset = used;
+            for (std::size_t k = static_cast<std::size_t>(group); k < subset.size(); k += kJackknifeGroups) subset[k] = 0;
+            AxisModel part(data, subset);
+            Eigen::VectorXd q = p;
+            Eigen::LevenbergMarquardt<AxisModel> solver(part);
+            solver.parameters.maxfev = 200;
+            solver.minimize(q);
+            rows_without.emplace_back(q(1), q(2));
+        }
+        Eigen::Vector2d average = Eigen::Vector2d::Zero();
+        for (const Eigen::Vector2d& r : rows_without) average += r / kJackknifeGroups;
+        for (const Eigen::Vector2d& r : rows_without) jackknife += (r - average) * (r - average).transpose();
+        jackknife *= (kJackknifeGroups - 1.0) / kJackknifeGroups;
+    }
+    fit.offset = p(0);
+    fit.row = {p(1), p(2)};
+    const Eigen::Matrix2d analytic = covariance.block<2, 2>(1, 1);
+    fit.row_covariance = jackknife.trace() > analytic.trace() ? jackknife : analytic;
+    fit.lenslets = static_cast<int>(n);
+    fit.outliers = static_cast<int>(data.value.size()) - fit.lenslets;
+    fit.rms = std::sqrt(residual.squaredNorm() / n) / mean;
+    fit.profile.clear();
+    for (int k = 0; k < 64; ++k) fit.profile.push_back(AxisModel::profile(p, k / 64.0));
+    const auto [lo, hi] = std::minmax_element(fit.profile.begin(), fit.profile.end());
+    const double depth = *hi - *lo;
+    fit.contrast = *hi > 0.0 ? depth / *hi : 0.0;
+    for (std::size_t k = 0; k < data.value.size(); ++k) {
+        LensletReading& l = lenslets[data.lenslet[k]];
+        l.phase = model.phase(p, k);
+        l.light = model.light(p, k);
+        l.fitted = model.predict(p, k);
+        l.outlier = !used[k];
+    }
+    // Lenslets that read too few of the lines' phases (an array turned against the slant):
+    // the phase's slope is then poorly held.
+    std::array<bool, kPhaseBins> seen{};
+    for (const std::size_t k : model.rows) {
+        const double phi = model.phase(p, k);
+        seen[static_cast<std::size_t>(std::min(kPhaseBins - 1.0, (phi - std::floor(phi)) * kPhaseBins))] = true;
+    }
+    const auto bins = std::count(seen.begin(), seen.end(), true);
+    if (bins < kMinPhaseBins)
+        throw InputError(SourceLocation{name},
+                         format_text("the lenslets over the %s measuring band read only %td of %d phases of its "
+                                     "lines: turn the array a degree or two and photograph it again",
+                                     along_x ? "x" : "rows", bins, kPhaseBins));
+    // Lines too blurred or too dark to read: the profile no stronger than the noise.
+    const double noise = std::sqrt(variance);
+    if (!(depth > kReadableDepth * noise))
+        throw InputError(SourceLocation{name},
+                         format_text("the %s measuring band's lines are not readable through the lenslets (their "
+                                     "depth %.4f is within %.0f times the noise %.4f): is the array over the measuring "
+                                     "bands, the sheet in its focus, the sun behind it, the photograph sharp?",
+                                     along_x ? "x" : "rows", depth, kReadableDepth, noise));
+}
+
+}  // namespace
+
+Eigen::Matrix2d PitchReading::to_page() const {
+    RFD_CHECK(x.lenslets > 0 && y.lenslets > 0);
+    Eigen::Matrix2d normals, rows;
+    normals << std::cos(x.normal_angle), std::sin(x.normal_angle), std::cos(y.normal_angle), std::sin(y.normal_angle);
+    rows.row(0) = x.row.transpose();
+    rows.row(1) = y.row.transpose();
+    return normals.inverse() * rows;
+}
+
+PitchReading read_pitch_photo(const Image& photo, const std::string& name, const optics::Design& design,
+                              const print::MoireSheet& sheet, int page) {
+    RFD_CHECK(page >= 0 && page < sheet.pages);
+    const optics::Lattice& lattice = print::moire_lattice(design);
+    const bool hex = lattice.kind() == optics::LatticeKind::Hexagonal;
+    const Image luminance = photo_luminance(photo);
+    const SheetLocation where = find_sheet(luminance, sheet.marks, name);
+    PitchReading reading;
+    reading.name = name;
+    reading.mirrored = where.mirrored;
+    reading.mm_per_pixel = where.mm_per_pixel;
+
+    // The array's design frame: A1 along a row, A2 to the next row; on the page (y down) the
+    // nominal images of these (the lattice search starts from them).
+    const double px = lattice.pitch_x(), py = lattice.pitch_y();
+    Eigen::Matrix2d design_basis, page_basis;
+    design_basis << px, hex ? 0.5 * px : 0.0, 0.0, py;
+    page_basis << px, hex ? 0.5 * px : 0.0, 0.0, -py;
+
+    // The measuring bands' area on this page, resampled coarsely; the diffuser in it.
+    Eigen::Vector2d from = Eigen::Vector2d::Constant(HUGE_VAL), to = -from;
+    for (const print::MoireBand& band : sheet.measuring)
+        if (band.page == page) {
+            from = from.cwiseMin(Eigen::Vector2d(band.left, band.top));
+            to = to.cwiseMax(Eigen::Vector2d(band.left + band.width, band.top + band.height));
+        }
+    from -= Eigen::Vector2d::Constant(5.0);
+    to += Eigen::Vector2d::Constant(5.0);
+    const PageRaster coarse = resample(luminance, where.page_to_photo, from, to, kCoarsePixelsPerMm);
+    const std::vector<std::uint8_t> region = diffuser_region(coarse, 1.5 * px, kEdgeLenslets * std::max(px, py), name);
+    // The lenslet images' lattice shows in their edges and gaps; the moire modulates their
+    // brightness slowly, which would add peaks beside the lattice's: each pixel over the mean
+    // around it (a lenslet wide) keeps the edges and drops the modulation.
+    std::vector<float> contrast(region.size());
+    {
+        const relight::PlaneSize size{coarse.image.width(), coarse.image.height()};
+        std::vector<float> local(coarse.image.plane(0).begin(), coarse.image.plane(0).end());
+        for (float& v : local)
+            if (!std::isfinite(v)) v = 0.0f;
+        std::vector<float> mean(local.size());
+        const double sigma = px * kCoarsePixelsPerMm;
+        relight::vision().gaussian_blur(size, local, mean, 0, sigma, sigma, relight::Border::Replicate);
+        for (std::size_t k = 0; k < local.size(); ++k)
+            contrast[k] = mean[k] > 0.0f ? local[k] / mean[k] - 1.0f : 0.0f;
+    }
+    const RegionSpectrum spectrum(coarse, contrast, region);
+
+    const double cell_pixels = lattice.cell_area() * kCoarsePixelsPerMm * kCoarsePixelsPerMm;
+    if (static_cast<double>(spectrum.pixels()) < 4.0 * kMinLenslets * cell_pixels)
+        throw InputError(SourceLocation{name}, "no lens array found over the bands (the darker region is " +
+                                                   format_fixed(static_cast<double>(spectrum.pixels()) / cell_pixels, 0) +
+                                                   " lenslets large)");
+
+    // The lattice of lenslet images: its reciprocal vectors where the spectrum peaks.
+    int x0 = coarse.image.width(), x1 = 0, y0 = coarse.image.height(), y1 = 0;
+    for (int y = 0; y < coarse.image.height(); ++y)
+        for (int x = 0; x < coarse.image.width(); ++x)
+            if (region[static_cast<std::size_t>(y) * static_cast<std::size_t>(coarse.image.width()) + static_cast<std::size_t>(x)])
+                x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+    const double extent = std::max(x1 - x0, y1 - y0) / kCoarsePixelsPerMm;
+    const Eigen::Matrix2d nominal_reciprocal = page_basis.inverse();  // rows b1, b2
+    Eigen::Matrix2d reciprocal;
+    std::array<std::complex<double>, 2> peak;
+    for (int i = 0; i < 2; ++i) {
+        reciprocal.row(i) = strongest_frequency(spectrum, nominal_reciprocal.row(i).transpose(), extent).transpose();
+        peak[static_cast<std::size_t>(i)] = spectrum.at(reciprocal.row(i).transpose());
+    }
+    ImageLattice images;
+    images.basis = reciprocal.inverse();
+    const Eigen::Vector2d phases(-std::arg(peak[0]) / kTwoPi, -std::arg(peak[1]) / kTwoPi);
+    // The transform's phase places the lattice up to half a period along each basis vector
+    // (a lenslet image may be bright in the middle or at its rim, where images overlap). Of
+    // the four candidates, the one whose reading discs see single lenslets: their readings
+    // then differ most from one lenslet to the next (a disc across two mixes them).
+    const double core = kCoreFraction * std::min(images.basis.col(0).norm(),
+                                                 std::abs(images.basis.determinant()) / images.basis.col(0).norm());
+    const double step = std::max(where.mm_per_pixel, core / 8.0);
+    const int stride = std::max(1, static_cast<int>(std::lround(2.5 * px * kCoarsePixelsPerMm)));
+    double best_variation = -1.0;
+    for (const Eigen::Vector2d& shift : {Eigen::Vector2d(0, 0), Eigen::Vector2d(0.5, 0), Eigen::Vector2d(0, 0.5),
+                                        Eigen::Vector2d(0.5, 0.5)}) {
+        const Eigen::Vector2d origin = images.basis * (phases + shift);
+        double sum = 0.0, sum2 = 0.0;
+        int cells = 0;
+        for (int y = y0; y <= y1; y += stride)
+            for (int x = x0; x <= x1; x += stride) {
+                if (!region[static_cast<std::size_t>(y) * static_cast<std::size_t>(coarse.image.width()) +
+                            static_cast<std::size_t>(x)])
+                    continue;
+                const Eigen::Vector2d n = (images.basis.inverse() * (coarse.page(x, y) - origin)).array().round();
+                const double mean =
+                    disc_statistics(luminance, where.page_to_photo, origin + images.basis * n, core, step).first;
+                if (std::isfinite(mean)) sum += mean, sum2 += mean * mean, ++cells;
+            }
+        if (cells < 2) continue;
+        const double mean = sum / cells, variation = (sum2 / cells - mean * mean) / (mean * mean);
+        if (variation > best_variation) best_variation = variation, images.origin = origin;
+    }
+
+    // Every lenslet image inside the region, read over its central part.
+    const Eigen::Matrix2d to_index = images.basis.inverse();
+    Eigen::Vector2d n_low = Eigen::Vector2d::Constant(HUGE_VAL), n_high = -n_low;
+    for (const Eigen::Vector2d& corner : {coarse.page(x0, y0), coarse.page(x1, y0), coarse.page(x0, y1), coarse.page(x1, y1)}) {
+        const Eigen::Vector2d n = to_index * (corner - images.origin);
+        n_low = n_low.cwiseMin(n);
+        n_high = n_high.cwiseMax(n);
+    }
+    std::vector<Eigen::Vector2d> labels;
+    for (int j = static_cast<int>(std::floor(n_low.y())); j <= static_cast<int>(std::ceil(n_high.y())); ++j)
+        for (int i = static_cast<int>(std::floor(n_low.x())); i <= static_cast<int>(std::ceil(n_high.x())); ++i) {
+            const Eigen::Vector2d at = images.origin + images.basis * Eigen::Vector2d(i, j);
+            const int cx = static_cast<int>(std::floor((at.x() - coarse.origin.x()) * kCoarsePixelsPerMm));
+            const int cy = static_cast<int>(std::floor((at.y() - coarse.origin.y()) * kCoarsePixelsPerMm));
+            if (cx < 0 || cy < 0 || cx >= coarse.image.width() || cy >= coarse.image.height()) continue;
+            if (!region[static_cast<std::size_t>(cy) * static_cast<std::size_t>(coarse.image.width()) + static_cast<std::size_t>(cx)]) continue;
+            const double value = disc_statistics(luminance, where.page_to_photo, at, core, step).first;
+            if (!std::isfinite(value)) continue;
+            LensletReading l;
+            l.page = at;
+            l.value = value;
+            reading.lenslets.push_back(l);
+            labels.push_back(design_basis * Eigen::Vector2d(i, j));
+        }
+
+    // Each lenslet's measuring band: its light seen well inside the band (the light lies up
+    // to a lenslet from where the lenslet focuses, so the band's edges are left out).
+    if (reading.lenslets.empty()) throw InputError(SourceLocation{name}, "no lenslet images found");
+    // The light of a lenslet is seen up to a millimetre or two from where it focuses (the
+    // diffuser's parallax, the light's slant), and a lenslet beside bare film mixes it in.
+    const double margin = std::max(px, py) + kMarginMm;
+    AxisData along_x, along_y;
+    Eigen::Vector2d low = Eigen::Vector2d::Constant(HUGE_VAL), high = -low;
+    for (const LensletReading& l : reading.lenslets) low = low.cwiseMin(l.page), high = high.cwiseMax(l.page);
+    const Eigen::Vector2d centre = 0.5 * (low + high);
+    // The reference lenslet: nearest the middle (labels are taken from it, so c is where it focuses).
+    std::size_t reference = 0;
+    for (std::size_t k = 0; k < reading.lenslets.size(); ++k)
+        if ((reading.lenslets[k].page - centre).squaredNorm() <
+            (reading.lenslets[reference].page - centre).squaredNorm())
+            reference = k;
+    const Eigen::Vector2d reference_label = labels[reference];
+    for (std::size_t k = 0; k < reading.lenslets.size(); ++k) {
+        LensletReading& l = reading.lenslets[k];
+        for (std::size_t b = 0; b < sheet.measuring.size(); ++b) {
+            const print::MoireBand& band = sheet.measuring[b];
+            // Well inside: the band holds the square about it.
+            bool inside = band.page == page;
+            for (const double dx : {-margin, margin})
+                for (const double dy : {-margin, margin}) inside = inside && band.inside(l.page.x() + dx, l.page.y() + dy);
+            if (!inside) continue;
+            l.band = static_cast<int>(b);
+            l.along_x = band.along_x;
+            AxisData& data = band.along_x ? along_x : along_y;
+            data.label.push_back(labels[k] - reference_label);
+            data.where.push_back(l.page);
+            data.value.push_back(l.value);
+            data.period.push_back(band.period);
+            data.origin.push_back(
+                band.normal().dot(Eigen::Vector2d(band.left + 0.5 * band.width, band.top + 0.5 * band.height)));
+            data.lenslet.push_back(k);
+        }
+    }
+    if (static_cast<int>(std::max(along_x.value.size(), along_y.value.size())) < kMinLenslets)
+        throw InputError(SourceLocation{name},
+                         format_text("only %zu and %zu lenslets lie inside the x and rows measuring bands (at least "
+                                     "%d needed in one): lay the array over them",
+                                     along_x.value.size(), along_y.value.size(), kMinLenslets));
+    // Start from the lattice of lenslet images: its rows give the directions (the parallax
+    // magnifies it about the camera's foot but does not turn it), the design the lengths.
+    // A band's lines measure their normal's row of the map: n^T M.
+    const Eigen::Matrix2d image_map = images.basis * design_basis.inverse();
+    const Eigen::Vector2d reference_page = reading.lenslets[reference].page;
+    for (const print::MoireBand& band : sheet.measuring) {
+        if (band.page != page) continue;
+        const Eigen::Vector2d n = band.normal();
+        AxisFit& fit = band.along_x ? reading.x : reading.y;
+        fit.normal_angle = std::atan2(n.y(), n.x());
+        fit_axis(band.along_x ? along_x : along_y, n.dot(reference_page), (n.transpose() * image_map).transpose(), 1.0,
+                 band.line_fraction, band.along_x, fit, reading.lenslets, name);
+    }
+    for (const print::MoireBand& band : sheet.measuring)
+        if (band.page == page) ++(band.along_x ? reading.x.bands : reading.y.bands);
+    return reading;
+}
+
+PitchCalibration calibrate_pitch(const optics::Design& design, const std::vector<PitchReading>& readings,
+                                 const Eigen::Vector2d& sheet_scale) {
+    RFD_CHECK(!readings.empty());
+    const optics::Lattice& lattice = print::moire_lattice(design);
+    PitchCalibration out;
+    out.design_pitch_x = lattice.pitch_x();
+    out.design_pitch_y = lattice.pitch_y();
+    out.sheet_scale_x = sheet_scale.x();
+    out.sheet_scale_y = sheet_scale.y();
+    const auto measured = [](const AxisFit& fit) { return fit.lenslets > 0; };
+    bool any_x = false, any_y = false;
+    for (const PitchReading& r : readings) any_x |= measured(r.x), any_y |= measured(r.y);
+    if (!any_x || !any_y)
+        throw InputError(SourceLocation{readings.front().name},
+                         std::string("no photograph shows the array over the ") + (any_x ? "rows" : "x") +
+                             " measuring band: photograph it there too");
+    // M = F R(theta) diag(sx, sy), and a band whose lines have the normal at angle beta
+    // measures n^T M = (sx cos psi, -sy sin psi), psi = beta + theta. The x band (psi near 0)
+    // gives sx once sin psi is known from its second entry over sy; the rows band (psi near
+    // 90 deg) gives sy once cos psi is known from its first entry over sx. Three passes
+    // settle both from 1.
+    out.scale_x = out.scale_y = 1.0;
+    for (int pass = 0; pass < 3; ++pass) {
+        double wx = 0.0, sx = 0.0, wy = 0.0, sy = 0.0;
+        out.rotation_deg.clear();
+        out.sigma_rotation_deg.clear();
+        out.shear_deg.clear();
+        for (const PitchReading& r : readings) {
+            double turn_sum = 0.0, turn_weight = 0.0;
+            std::vector<double> turns;
+            if (measured(r.x)) {
+                const Eigen::Vector2d u = sheet_scale.cwiseProduct(r.x.row);
+                const Eigen::Matrix2d cov = sheet_scale.asDiagonal() * r.x.row_covariance * sheet_scale.asDiagonal();
+                const double psi = std::asin(std::clamp(-u.y() / out.scale_y, -1.0, 1.0));
+                const double turn_var = cov(1, 1) / std::pow(out.scale_y * std::cos(psi), 2);
+                // The scale's variance: its own entry's, and the turn's through the slant.
+                const double var = cov(0, 0) / std::pow(std::cos(psi), 2) +
+                                   std::pow(u.x() * std::tan(psi) / std::cos(psi), 2) * turn_var;
+                wx += 1.0 / var, sx += u.x() / std::cos(psi) / var;
+                turn_sum += (psi - r.x.normal_angle) / turn_var, turn_weight += 1.0 / turn_var;
+                turns.push_back(psi - r.x.normal_angle);
+            }
+            if (measured(r.y)) {
+                const Eigen::Vector2d u = sheet_scale.cwiseProduct(r.y.row);
+                const Eigen::Matrix2d cov = sheet_scale.asDiagonal() * r.y.row_covariance * sheet_scale.asDiagonal();
+                const double psi = std::acos(std::clamp(u.x() / out.scale_x, -1.0, 1.0));
+                const double turn_var = cov(0, 0) / std::pow(out.scale_x * std::sin(psi), 2);
+                const double var = cov(1, 1) / std::pow(std::sin(psi), 2) +
+                                   std::pow(u.y() / (std::tan(psi) * std::sin(psi)), 2) * turn_var;
+                wy += 1.0 / var, sy += -u.y() / std::sin(psi) / var;
+                turn_sum += (psi - r.y.normal_angle) / turn_var, turn_weight += 1.0 / turn_var;
+                turns.push_back(psi - r.y.normal_angle);
+            }
+            out.rotation_deg.push_back(radians_to_degrees(turn_sum / turn_weight));
+            out.sigma_rotation_deg.push_back(radians_to_degrees(std::sqrt(1.0 / turn_weight)));
+            // The rows' turn from the x band less the columns' from the rows band: the axes'
+            // departure from square (0 for a true array; NaN when a photo shows one band).
+            out.shear_deg.push_back(turns.size() == 2 ? radians_to_degrees(turns[0] - turns[1]) : NAN);
+        }
+        if (wx > 0.0) out.scale_x = sx / wx, out.sigma_scale_x = std::sqrt(1.0 / wx);
+        if (wy > 0.0) out.scale_y = sy / wy, out.sigma_scale_y = std::sqrt(1.0 / wy);
+    }
+    return out;
+}
+
+}  // namespace rfd::calibrate

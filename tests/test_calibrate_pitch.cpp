@@ -1,0 +1,207 @@
+// The lens array's pitch and rotation from photographs of the moire sheet mounted in the
+// display, made without a printer: the sheet's measuring bands under an array of known pitch
+// error and turn, lit from behind by the sun through the display's own exact optics
+// (calibrate/moire_photo.hpp), then photographed by calibrate/camera.hpp. What is read back
+// must be within 0.01 % of the true pitch (ten times finer than the hypothesis bands' 0.1 %
+// steps read by eye) and 0.02 deg of the true turn; what cannot be read must be refused.
+
+#include <cmath>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "calibrate/camera.hpp"
+#include "calibrate/moire_photo.hpp"
+#include "calibrate/pitch.hpp"
+#include "calibrate/pitch_report.hpp"
+#include "core/image_io.hpp"
+#include "optics/design.hpp"
+#include "print/moire.hpp"
+#include "print/printer.hpp"
+#include "tests/support/bundled.hpp"
+#include "tests/support/error_of.hpp"
+#include "tests/support/temp_dir.hpp"
+
+namespace rfd::calibrate {
+namespace {
+
+using rfd::testing::bundled_design;
+using rfd::testing::error_of;
+using ::testing::HasSubstr;
+
+struct MoireFixture {
+    optics::Design design = bundled_design(1);
+    print::PrinterProfile printer = print::load_printer("epson_stylus_pro_4800");
+    print::MoireSheet sheet = print::moire_sheet(design, printer, {print::default_pitch_range(design)});
+};
+
+const MoireFixture& moire_fixture() {
+    static const MoireFixture f;
+    return f;
+}
+
+// A 3000 x 2250 camera framing the A4 sheet, frontal.
+Camera frontal_camera() { return framing_camera(print::Paper{}, 450.0, 0.9, 3000); }
+
+// Through an 8-bit JPEG at quality 80, as phones store them.
+Image stored_jpeg(const Image& photo) {
+    const rfd::testing::TempDir dir;
+    write_photograph(dir / "photo.jpg", photo, 80);
+    return read_image(dir / "photo.jpg");
+}
+
+MoireScene mounted(double pitch_error, double rotation_deg) {
+    MoireScene s;
+    s.mounting.centre = measuring_centre(moire_fixture().sheet);
+    s.mounting.pitch_error_x = s.mounting.pitch_error_y = pitch_error;
+    s.mounting.rotation_deg = rotation_deg;
+    return s;
+}
+
+// The measuring bands: lines half a period wide, a period that is not the pitch so that the
+// lenslets drift across them (a fifth of a period and more per lenslet, as measuring_period
+// says), slanted at most 3 deg, crossing in the array's middle with the crossing left bare.
+TEST(MoireSheet, MeasuringBandsCrossUnderTheArray) {
+    const MoireFixture& f = moire_fixture();
+    const optics::Lattice& lattice = print::moire_lattice(f.design);
+    ASSERT_EQ(f.sheet.measuring.size(), 2u);
+    const print::MoireBand& x = f.sheet.measuring[0];
+    const print::MoireBand& rows = f.sheet.measuring[1];
+    EXPECT_TRUE(x.along_x);
+    EXPECT_FALSE(rows.along_x);
+    for (const print::MoireBand* band : {&x, &rows}) {
+        const double spacing = band->along_x ? lattice.pitch_x() : lattice.pitch_y();
+        const double lines = spacing / band->period;
+        const double drift = lines - std::floor(lines);
+        EXPECT_GE(drift, 0.2);
+        EXPECT_LE(drift, 0.45);
+        EXPECT_NEAR(band->line_fraction, 0.5, 0.0);
+        EXPECT_GT(std::abs(band->slant_rad), 0.0);
+        EXPECT_LE(std::abs(band->slant_rad), 0.0524);
+        EXPECT_EQ(band->page, 0);
+    }
+    // The x band spans the array's width, the rows band (nearly) its height.
+    EXPECT_NEAR(x.width, 2.0 * lattice.half_extent().x(), 1e-9);
+    EXPECT_GT(rows.height, 1.9 * lattice.half_extent().y());
+    // Crossing: the middle is bare, each band's arms are inked somewhere.
+    const Eigen::Vector2d middle = measuring_centre(f.sheet);
+    EXPECT_FALSE(x.inside(middle.x(), middle.y()));
+    EXPECT_FALSE(rows.inside(middle.x(), middle.y()));
+    int inked = 0, checked = 0;
+    for (double dx = -70; dx <= 70; dx += 0.05) {
+        inked += x.inked(middle.x() + dx, middle.y());
+        ++checked;
+    }
+    EXPECT_EQ(checked, 2801);
+    // Half of each arm's length is ink (half-period lines), none in the crossing.
+    EXPECT_NEAR(inked * 0.05, 0.5 * (140.0 - x.hole[2]), 2.0);
+    // The lines are where inked() says, slanted: one passes through the band's centre, and
+    // the next one a period along the normal.
+    const Eigen::Vector2d centre(x.left + 0.5 * x.width, x.top + 0.5 * x.height);
+    const Eigen::Vector2d n = x.normal();
+    EXPECT_NEAR(n.norm(), 1.0, 1e-15);
+    const Eigen::Vector2d on_arm = centre + Eigen::Vector2d(40.0, 0.0);
+    const double across = n.dot(on_arm - centre) / x.period;
+    const Eigen::Vector2d line = on_arm - (across - std::round(across)) * x.period * n;
+    EXPECT_TRUE(x.inked(line.x(), line.y()));
+    EXPECT_TRUE(x.inked(line.x() + 0.24 * x.period * n.x(), line.y() + 0.24 * x.period * n.y()));
+    EXPECT_FALSE(x.inked(line.x() + 0.26 * x.period * n.x(), line.y() + 0.26 * x.period * n.y()));
+}
+
+// Frontal and hand-held photographs (tilted 30 deg, blurred, vignetted, noisy, the sun 10 deg
+// off the axis), the array 0.1 % too large or 0.23 % too small and turned: the pitch within
+// 0.01 % along both axes, the turn within 0.02 deg, each within four of its stated
+// uncertainties (and 0.002 %).
+TEST(PitchCalibration, RecoversThePitchAndTurnFromPhotographs) {
+    const MoireFixture& f = moire_fixture();
+    struct Case {
+        const char* name;
+        double pitch_error, rotation_deg;
+        Camera camera;
+        Eigen::Vector3d light = Eigen::Vector3d::UnitZ();
+    };
+    Camera phone = frontal_camera();
+    phone.pose.tilt_deg = 30.0;
+    phone.pose.turn_deg = 20.0;
+    phone.pose.roll_deg = 7.0;
+    phone.pose.distance = 520.0;
+    phone.blur = 1.5;
+    phone.vignetting = 0.35;
+    phone.photons = 2000.0;
+    phone.seed = 5;
+    const double sun = 10.0 * std::numbers::pi / 180.0;
+    const std::vector<Case> cases = {
+        {"frontal", 0.001, 0.3, frontal_camera()},
+        {"hand-held, sun 10 deg off", -0.0023, -1.2, phone,
+         Eigen::Vector3d(std::sin(sun) * 0.766, std::sin(sun) * 0.643, std::cos(sun))},
+    };
+    for (const Case& c : cases) {
+        const MoireScene s = mounted(c.pitch_error, c.rotation_deg);
+        MoireScene lit = s;
+        lit.light = c.light;
+        const Image photo = stored_jpeg(simulated_moire_photo(f.design, f.sheet, f.printer, lit, c.camera));
+        const PitchReading reading = read_pitch_photo(photo, c.name, f.design, f.sheet);
+        const PitchCalibration calibration = calibrate_pitch(f.design, {reading});
+        const double error_x = calibration.scale_x - (1.0 + c.pitch_error);
+        const double error_y = calibration.scale_y - (1.0 + c.pitch_error);
+        const double error_turn = calibration.rotation_deg[0] - c.rotation_deg;
+        std::printf("%s: pitch %+.4f %% (+- %.4f), rows %+.4f %% (+- %.4f), turn %+.4f deg (+- %.4f)\n", c.name,
+                    100 * error_x, 100 * calibration.sigma_scale_x, 100 * error_y, 100 * calibration.sigma_scale_y,
+                    error_turn, calibration.sigma_rotation_deg[0]);
+        EXPECT_LT(std::abs(error_x), 1e-4) << c.name;
+        EXPECT_LT(std::abs(error_y), 1e-4) << c.name;
+        EXPECT_LT(std::abs(error_turn), 0.02) << c.name;
+        EXPECT_LT(std::abs(error_x), 4 * calibration.sigma_scale_x + 2e-5) << c.name;
+        EXPECT_LT(std::abs(error_y), 4 * calibration.sigma_scale_y + 2e-5) << c.name;
+        EXPECT_GT(reading.x.lenslets, 200) << c.name;
+        EXPECT_GT(reading.y.lenslets, 200) << c.name;
+    }
+}
+
+// The measured pitch goes into the design file the rest of rfd reads: a hexagonal array's
+// one pitch, the rest of the file as it was.
+TEST(PitchCalibration, WritesTheDesignWithTheMeasuredPitch) {
+    const MoireFixture& f = moire_fixture();
+    PitchCalibration calibration;
+    calibration.design_pitch_x = print::moire_lattice(f.design).pitch_x();
+    calibration.design_pitch_y = print::moire_lattice(f.design).pitch_y();
+    calibration.scale_x = 1.0012;
+    calibration.scale_y = 1.0010;
+    calibration.sigma_scale_x = calibration.sigma_scale_y = 1e-5;
+    const std::string text = calibrated_design_text(f.design, calibration, {PitchReading{}});
+    const optics::Design calibrated = optics::parse_design(text, "calibrated.toml");
+    EXPECT_NEAR(print::moire_lattice(calibrated).pitch_x(), calibration.design_pitch_x * 1.0011, 1e-6);
+    EXPECT_EQ(calibrated.planes.size(), f.design.planes.size());
+    EXPECT_THAT(text, HasSubstr("measured by rfd calibrate pitch"));
+    EXPECT_EQ(text.find("lenses_per_cm2"), std::string::npos);
+}
+
+// Photographs it cannot read are refused with the reason, never a number.
+TEST(PitchCalibration, RefusesPhotographsItCannotRead) {
+    const MoireFixture& f = moire_fixture();
+    // The array laid over the hypotheses, not the measuring bands.
+    MoireScene away = mounted(0.001, 0.0);
+    away.mounting.centre.y() += 150.0;
+    const Image off_bands = stored_jpeg(simulated_moire_photo(f.design, f.sheet, f.printer, away, frontal_camera()));
+    EXPECT_THAT(error_of([&] { read_pitch_photo(off_bands, "away.jpg", f.design, f.sheet); }),
+                HasSubstr("away.jpg"));
+    // Too blurred to see the marks.
+    Camera blurred = frontal_camera();
+    blurred.blur = 10.0;
+    const Image soft = stored_jpeg(simulated_moire_photo(f.design, f.sheet, f.printer, mounted(0.0, 0.0), blurred));
+    EXPECT_THAT(error_of([&] { read_pitch_photo(soft, "soft.jpg", f.design, f.sheet); }), HasSubstr("soft.jpg"));
+    // Photographs of one band only cannot give the other axis.
+    EXPECT_THAT(error_of([&] {
+                    PitchReading only_x;
+                    only_x.name = "x.jpg";
+                    only_x.x.lenslets = 100;
+                    calibrate_pitch(f.design, {only_x});
+                }),
+                HasSubstr("rows measuring band"));
+}
+
+}  // namespace
+}  // namespace rfd::calibrate
