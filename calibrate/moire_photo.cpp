@@ -5,6 +5,7 @@
 
 #include <Eigen/LU>
 
+#include "calibrate/sheet_finder.hpp"
 #include "core/error.hpp"
 #include "core/units.hpp"
 #include "optics/display.hpp"
@@ -42,17 +43,10 @@ private:
     float line_;
 };
 
-// Bilinear sample of the diffuser image at array point `a`; NaN outside it.
+// The diffuser image at array point `a`, bilinear; NaN outside it.
 double diffuser_at(const optics::DiffuserImage& diffuser, const Eigen::Vector2d& a) {
-    const Image& image = diffuser.image;
-    const double u = (a.x() - diffuser.first_pixel.x()) / diffuser.pixel_mm;
-    const double v = (diffuser.first_pixel.y() - a.y()) / diffuser.pixel_mm;
-    if (!(u >= 0.0 && v >= 0.0 && u <= image.width() - 1 && v <= image.height() - 1)) return NAN;
-    const int x0 = std::min(static_cast<int>(u), image.width() - 2), y0 = std::min(static_cast<int>(v), image.height() - 2);
-    const double fx = u - x0, fy = v - y0;
-    const double top = (1 - fx) * image.at(x0, y0, 0) + fx * image.at(x0 + 1, y0, 0);
-    const double bottom = (1 - fx) * image.at(x0, y0 + 1, 0) + fx * image.at(x0 + 1, y0 + 1, 0);
-    return (1 - fy) * top + fy * bottom;
+    return sample_bilinear(diffuser.image, (a.x() - diffuser.first_pixel.x()) / diffuser.pixel_mm,
+                           (diffuser.first_pixel.y() - a.y()) / diffuser.pixel_mm);
 }
 
 }  // namespace

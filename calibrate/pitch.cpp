@@ -36,19 +36,9 @@ constexpr double kReadableDepth = 4.0;      // the profile's depth, in noise sta
 constexpr int kLightTerms = 5;              // E = 1 + u + v + u^2 + uv + v^2 terms
 constexpr double kOutlierSigmas = 5.0;
 
-// Bilinear sample of one plane at pixel (u, v) (centres at integers); NaN outside.
-double bilinear(const Image& image, double u, double v) {
-    if (!(u >= 0.0 && v >= 0.0 && u <= image.width() - 1 && v <= image.height() - 1)) return NAN;
-    const int x0 = std::min(static_cast<int>(u), image.width() - 2), y0 = std::min(static_cast<int>(v), image.height() - 2);
-    const double fx = u - x0, fy = v - y0;
-    const double top = (1 - fx) * image.at(x0, y0, 0) + fx * image.at(x0 + 1, y0, 0);
-    const double bottom = (1 - fx) * image.at(x0, y0 + 1, 0) + fx * image.at(x0 + 1, y0 + 1, 0);
-    return (1 - fy) * top + fy * bottom;
-}
-
 double photo_at_page(const Image& luminance, const Eigen::Matrix3d& page_to_photo, const Eigen::Vector2d& page) {
     const Eigen::Vector2d pixel = apply(page_to_photo, page);
-    return bilinear(luminance, pixel.x(), pixel.y());
+    return sample_bilinear(luminance, pixel.x(), pixel.y());
 }
 
 // The page resampled on a grid of `px_per_mm` over a rectangle.
@@ -512,15 +502,6 @@ void fit_axis(AxisData& data, double offset, const Eigen::Vector2d& guess, doubl
 }
 
 }  // namespace
-
-Eigen::Matrix2d PitchReading::to_page() const {
-    RFD_CHECK(x.lenslets > 0 && y.lenslets > 0);
-    Eigen::Matrix2d normals, rows;
-    normals << std::cos(x.normal_angle), std::sin(x.normal_angle), std::cos(y.normal_angle), std::sin(y.normal_angle);
-    rows.row(0) = x.row.transpose();
-    rows.row(1) = y.row.transpose();
-    return normals.inverse() * rows;
-}
 
 PitchReading read_pitch_photo(const Image& photo, const std::string& name, const optics::Design& design,
                               const print::MoireSheet& sheet, int page) {

@@ -81,9 +81,6 @@ struct PitchReading {
     double mm_per_pixel = 0.0;
     AxisFit x, y;
     std::vector<LensletReading> lenslets;
-    /// The map from the design's array frame to the page (columns: the array's axes), when
-    /// the photograph shows both measuring bands.
-    Eigen::Matrix2d to_page() const;
 };
 
 /// Reads one photograph (linear; any channels) of page `page` of `sheet`, printed for

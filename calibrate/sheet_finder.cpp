@@ -198,6 +198,15 @@ Image photo_luminance(const Image& photo) {
     return out;
 }
 
+double sample_bilinear(const Image& plane, double u, double v) {
+    if (!(u >= 0.0 && v >= 0.0 && u <= plane.width() - 1.0 && v <= plane.height() - 1.0))
+        return std::numeric_limits<double>::quiet_NaN();
+    const int x0 = std::min(static_cast<int>(u), plane.width() - 2), y0 = std::min(static_cast<int>(v), plane.height() - 2);
+    const double fx = u - x0, fy = v - y0;
+    return (1 - fy) * ((1 - fx) * plane.at(x0, y0, 0) + fx * plane.at(x0 + 1, y0, 0)) +
+           fy * ((1 - fx) * plane.at(x0, y0 + 1, 0) + fx * plane.at(x0 + 1, y0 + 1, 0));
+}
+
 double mean_over_page_rect(const Image& plane, const Eigen::Matrix3d& page_to_photo, double x0, double y0, double x1,
                            double y1) {
     // Page mm per photo pixel here, from the map's local stretch.
@@ -212,14 +221,9 @@ double mean_over_page_rect(const Image& plane, const Eigen::Matrix3d& page_to_ph
         for (int i = 0; i < nx; ++i) {
             const Eigen::Vector2d p =
                 apply(page_to_photo, {x0 + (x1 - x0) * (i + 0.5) / nx, y0 + (y1 - y0) * (j + 0.5) / ny});
-            const double u = p.x(), v = p.y();
-            if (!(u >= 0.0 && v >= 0.0 && u <= plane.width() - 1.0 && v <= plane.height() - 1.0))
-                return std::numeric_limits<double>::quiet_NaN();
-            const int xa = std::min(static_cast<int>(u), plane.width() - 2),
-                      ya = std::min(static_cast<int>(v), plane.height() - 2);
-            const double fx = u - xa, fy = v - ya;
-            sum += (1 - fy) * ((1 - fx) * plane.at(xa, ya, 0) + fx * plane.at(xa + 1, ya, 0)) +
-                   fy * ((1 - fx) * plane.at(xa, ya + 1, 0) + fx * plane.at(xa + 1, ya + 1, 0));
+            const double value = sample_bilinear(plane, p.x(), p.y());
+            if (std::isnan(value)) return value;
+            sum += value;
         }
     return sum / (nx * ny);
 }

@@ -38,6 +38,10 @@ SheetLocation find_sheet(const Image& photo, const print::SheetMarks& marks, con
 Eigen::Matrix3d homography_from_points(const std::array<Eigen::Vector2d, 4>& from,
                                        const std::array<Eigen::Vector2d, 4>& to);
 
+/// The first channel of `plane` at pixel (u, v) (pixel centres at integers), bilinear; NaN
+/// outside the outermost pixel centres.
+double sample_bilinear(const Image& plane, double u, double v);
+
 /// The mean of one photo plane over a page rectangle [x0, x1] x [y0, y1] mm, sampled bilinearly
 /// about once per photo pixel; NaN when the rectangle leaves the photo.
 double mean_over_page_rect(const Image& plane, const Eigen::Matrix3d& page_to_photo, double x0, double y0, double x1,

@@ -76,7 +76,8 @@ void add_simulate_photo_command(CLI::App& calibrate) {
     auto* cmd = calibrate.add_subcommand(
         "simulate-photo", "A simulated photograph of a printed calibration sheet, to try the calibration without a "
                           "printer or to see what a good photograph looks like: the step wedge printed with a "
-                          "printer's true tone curve, photographed from a pose with blur, vignetting and noise");
+                          "printer's true tone curve, or the moire sheet mounted in a display whose array has a "
+                          "pitch error and a turn, photographed from a pose with blur, vignetting and noise");
     struct Options {
         std::string sheet, printer, truth, out, light = "back", design, pitch, pitch_y, array_on = "both";
         std::vector<double> shift{0.0, 0.0};
@@ -179,7 +180,6 @@ void add_simulate_photo_command(CLI::App& calibrate) {
         std::printf("wrote %s\n", opt->out.c_str());
     });
 }
-
 
 void add_pitch_command(CLI::App& calibrate) {
     auto* cmd = calibrate.add_subcommand(

@@ -22,6 +22,7 @@
 #include "print/moire.hpp"
 #include "print/printer.hpp"
 #include "tests/support/bundled.hpp"
+#include "tests/support/cameras.hpp"
 #include "tests/support/error_of.hpp"
 #include "tests/support/temp_dir.hpp"
 
@@ -123,14 +124,7 @@ TEST(PitchCalibration, RecoversThePitchAndTurnFromPhotographs) {
         Camera camera;
         Eigen::Vector3d light = Eigen::Vector3d::UnitZ();
     };
-    Camera phone = frontal_camera();
-    phone.pose.tilt_deg = 30.0;
-    phone.pose.turn_deg = 20.0;
-    phone.pose.roll_deg = 7.0;
-    phone.pose.distance = 520.0;
-    phone.blur = 1.5;
-    phone.vignetting = 0.35;
-    phone.photons = 2000.0;
+    Camera phone = rfd::testing::hand_held(frontal_camera());
     phone.seed = 5;
     const double sun = 10.0 * std::numbers::pi / 180.0;
     const std::vector<Case> cases = {

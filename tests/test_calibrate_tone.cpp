@@ -18,6 +18,7 @@
 #include "core/image_io.hpp"
 #include "print/printer.hpp"
 #include "print/wedge.hpp"
+#include "tests/support/cameras.hpp"
 #include "tests/support/error_of.hpp"
 #include "tests/support/temp_dir.hpp"
 
@@ -48,15 +49,8 @@ print::PrinterProfile true_printer(const print::PrinterProfile& nominal) {
 Camera scanner() { return framing_camera(print::Paper{}, 450.0); }
 
 Camera phone() {
-    Camera camera = scanner();
-    camera.pose.tilt_deg = 30.0;
-    camera.pose.turn_deg = 20.0;
-    camera.pose.roll_deg = 7.0;
-    camera.pose.distance = 520.0;
-    camera.blur = 1.5;
-    camera.vignetting = 0.35;
+    Camera camera = rfd::testing::hand_held(scanner());
     camera.light_gradient = 0.15;
-    camera.photons = 2000.0;
     camera.read_noise = 0.002;
     camera.seed = 7;
     return camera;
