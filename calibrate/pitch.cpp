@@ -750,6 +750,11 @@ PitchCalibration calibrate_pitch(const optics::Design& design, const std::vector
         if (wx > 0.0) out.scale_x = sx / wx, out.sigma_scale_x = std::sqrt(1.0 / wx);
         if (wy > 0.0) out.scale_y = sy / wy, out.sigma_scale_y = std::sqrt(1.0 / wy);
     }
+    // Never a NaN written as a pitch: readings that do not determine one are refused.
+    if (!std::isfinite(out.scale_x) || !std::isfinite(out.scale_y) || !std::isfinite(out.sigma_scale_x) ||
+        !std::isfinite(out.sigma_scale_y))
+        throw InputError(SourceLocation{readings.front().name},
+                         "the photographs do not determine the pitch (a scale or its uncertainty is not a number)");
     return out;
 }
 

@@ -118,11 +118,14 @@ void add_simulate_photo_command(CLI::App& calibrate) {
     cmd->add_option("--pitch", opt->pitch, "moire: the sheet's x bands, as rfd print moire --pitch");
     cmd->add_option("--pitch-y", opt->pitch_y, "moire: the sheet's row bands, as rfd print moire --pitch-y");
     cmd->add_option("--pitch-error", opt->pitch_error,
-                    "moire: the array's true pitch along a row over the design's, minus 1 (0.001: 0.1 % larger)");
+                    "moire: the array's true pitch along a row over the design's, minus 1 (0.001: 0.1 % larger)")
+        ->check(CLI::Range(-0.1, 0.1));
     cmd->add_option("--pitch-error-y", opt->pitch_error_y,
-                    "moire: the same across the rows (default: --pitch-error)");
+                    "moire: the same across the rows (default: --pitch-error)")
+        ->check(CLI::Range(-0.1, 0.1));
     cmd->add_option("--array-rotation", opt->rotation,
-                    "moire: the array's rows turned against the bands, degrees counter-clockwise");
+                    "moire: the array's rows turned against the bands, degrees counter-clockwise")
+        ->check(CLI::Range(-45.0, 45.0));
     cmd->add_option("--array-on", opt->array_on,
                     "moire: the measuring bands the array is centred on: both, or x or rows (an array shorter than "
                     "the two bands is photographed on each in turn)")
@@ -130,10 +133,12 @@ void add_simulate_photo_command(CLI::App& calibrate) {
     cmd->add_option("--array-shift", opt->shift, "moire: the array's centre from there, X,Y mm")
         ->delimiter(',')
         ->expected(2);
-    cmd->add_option("--light-tilt", opt->light_tilt, "moire: the sun's angle from the display's axis, degrees");
+    cmd->add_option("--light-tilt", opt->light_tilt, "moire: the sun's angle from the display's axis, degrees")
+        ->check(CLI::Range(0.0, 80.0));
     cmd->add_option("--light-turn", opt->light_turn, "moire: the azimuth of that tilt, degrees");
     cmd->add_option("--camera-pixels", opt->pixels,
-                    "Pixels along the picture's longer side (default: 1600 for the wedge, 4000 for the moire)");
+                    "Pixels along the picture's longer side (default: 1600 for the wedge, 4000 for the moire)")
+        ->check(CLI::Range(200, 20000));
     cmd->add_option("--seed", opt->seed, "Seed of the noise");
     cmd->add_option("--out", opt->out, "The photograph: .jpg (8-bit sRGB), .png or .exr (linear)")->required();
     cmd->callback([opt] {
@@ -203,7 +208,8 @@ void add_pitch_command(CLI::App& calibrate) {
                     "The sheet's true size over its nominal size along x and y, X,Y (from a ruler: the distance "
                     "between the corner marks' centres over the nominal)")
         ->delimiter(',')
-        ->expected(2);
+        ->expected(2)
+        ->check(CLI::Range(0.9, 1.1));
     cmd->add_option("--out", opt->out, "The design with the measured pitch to write (TOML)");
     cmd->add_option("--report", opt->report,
                     "Also a folder with every lenslet's reading (CSV) and the fitted line profiles as charts");
