@@ -36,11 +36,6 @@ constexpr double kReadableDepth = 4.0;      // the profile's depth, in noise sta
 constexpr int kLightTerms = 5;              // E = 1 + u + v + u^2 + uv + v^2 terms
 constexpr double kOutlierSigmas = 5.0;
 
-double photo_at_page(const Image& luminance, const Eigen::Matrix3d& page_to_photo, const Eigen::Vector2d& page) {
-    const Eigen::Vector2d pixel = apply(page_to_photo, page);
-    return sample_bilinear(luminance, pixel.x(), pixel.y());
-}
-
 // The page resampled on a grid of `px_per_mm` over a rectangle.
 struct PageRaster {
     Image image;
@@ -60,35 +55,6 @@ PageRaster resample(const Image& luminance, const Eigen::Matrix3d& page_to_photo
         for (int x = 0; x < raster.image.width(); ++x)
             raster.image.at(x, y, 0) = static_cast<float>(photo_at_page(luminance, page_to_photo, raster.page(x, y)));
     return raster;
-}
-
-// Otsu's threshold of the finite values.
-double otsu_threshold(std::span<const float> values) {
-    constexpr int kBins = 256;
-    float lo = HUGE_VALF, hi = -HUGE_VALF;
-    for (const float v : values)
-        if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
-    if (!(hi > lo)) return lo;
-    std::vector<double> histogram(kBins, 0.0);
-    double count = 0.0, sum = 0.0;
-    for (const float v : values)
-        if (std::isfinite(v)) {
-            const int bin = std::min(kBins - 1, static_cast<int>((v - lo) / (hi - lo) * kBins));
-            histogram[static_cast<std::size_t>(bin)] += 1.0;
-            count += 1.0;
-            sum += bin;
-        }
-    double below = 0.0, below_sum = 0.0, best = -1.0;
-    int best_bin = 0;
-    for (int bin = 0; bin < kBins - 1; ++bin) {
-        below += histogram[static_cast<std::size_t>(bin)];
-        below_sum += bin * histogram[static_cast<std::size_t>(bin)];
-        if (below == 0.0 || below == count) continue;
-        const double mean_below = below_sum / below, mean_above = (sum - below_sum) / (count - below);
-        const double between = below * (count - below) * (mean_below - mean_above) * (mean_below - mean_above);
-        if (between > best) best = between, best_bin = bin;
-    }
-    return lo + (best_bin + 1.0) / kBins * (hi - lo);
 }
 
 // The diffuser: the largest dark region of the resampled page, shrunk by `inset_mm` so that
@@ -203,27 +169,6 @@ struct ImageLattice {
     Eigen::Matrix2d basis;
     Eigen::Vector2d origin;
 };
-
-// Mean and variance of the photo over a disc about a page point, sampled about once per
-// photo pixel; NaN mean when any sample leaves the photo.
-std::pair<double, double> disc_statistics(const Image& luminance, const Eigen::Matrix3d& page_to_photo,
-                                          const Eigen::Vector2d& centre, double radius, double step) {
-    double sum = 0.0, sum2 = 0.0;
-    int n = 0;
-    const int steps = std::max(1, static_cast<int>(std::ceil(radius / step)));
-    for (int j = -steps; j <= steps; ++j)
-        for (int i = -steps; i <= steps; ++i) {
-            const Eigen::Vector2d d(i * radius / steps, j * radius / steps);
-            if (d.squaredNorm() > radius * radius) continue;
-            const double v = photo_at_page(luminance, page_to_photo, centre + d);
-            if (!std::isfinite(v)) return {NAN, NAN};
-            sum += v;
-            sum2 += v * v;
-            ++n;
-        }
-    const double mean = sum / n;
-    return {mean, std::max(0.0, sum2 / n - mean * mean)};
-}
 
 // The lenslets one axis fits: position label in the design's array frame (relative to a
 // reference lenslet), the light falloff's terms where their light is seen, value, and the

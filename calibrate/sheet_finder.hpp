@@ -13,7 +13,9 @@
 //
 // Example: SheetLocation where = find_sheet(photo, print::sheet_marks(paper), "scan.jpg");
 
+#include <span>
 #include <string>
+#include <utility>
 
 #include <Eigen/Core>
 
@@ -49,5 +51,17 @@ double mean_over_page_rect(const Image& plane, const Eigen::Matrix3d& page_to_ph
 
 /// The luminance of a linear photo: the mean of its channels, one channel.
 Image photo_luminance(const Image& photo);
+
+/// The photo at a point of a plane (page mm, or any plane's mm) through `plane_to_photo`,
+/// bilinear; NaN outside the photo.
+double photo_at_page(const Image& luminance, const Eigen::Matrix3d& plane_to_photo, const Eigen::Vector2d& point);
+
+/// Mean and variance of the photo over a disc about a plane point (radius in the plane's mm),
+/// sampled every `step` mm; NaN mean when any sample leaves the photo.
+std::pair<double, double> disc_statistics(const Image& luminance, const Eigen::Matrix3d& plane_to_photo,
+                                          const Eigen::Vector2d& centre, double radius, double step);
+
+/// Otsu's threshold of the finite values (the one best splitting them into two classes).
+double otsu_threshold(std::span<const float> values);
 
 }  // namespace rfd::calibrate

@@ -10,9 +10,11 @@
 #include <vector>
 
 #include "calibrate/camera.hpp"
+#include "calibrate/display_photo.hpp"
 #include "calibrate/moire_photo.hpp"
 #include "calibrate/pitch.hpp"
 #include "calibrate/pitch_report.hpp"
+#include "calibrate/registration.hpp"
 #include "calibrate/tone.hpp"
 #include "calibrate/tone_report.hpp"
 #include "cli/arguments.hpp"
@@ -22,6 +24,8 @@
 #include "core/image_io.hpp"
 #include "core/units.hpp"
 #include "optics/design_optics.hpp"
+#include "optics/misalignment.hpp"
+#include "predict/summaries.hpp"
 #include "print/moire.hpp"
 #include "print/printer.hpp"
 #include "print/wedge.hpp"
@@ -76,11 +80,13 @@ void add_simulate_photo_command(CLI::App& calibrate) {
     auto* cmd = calibrate.add_subcommand(
         "simulate-photo", "A simulated photograph of a printed calibration sheet, to try the calibration without a "
                           "printer or to see what a good photograph looks like: the step wedge printed with a "
-                          "printer's true tone curve, or the moire sheet mounted in a display whose array has a "
-                          "pitch error and a turn, photographed from a pose with blur, vignetting and noise");
+                          "printer's true tone curve, the moire sheet mounted in a display whose array has a "
+                          "pitch error and a turn, or an assembled display whose pattern is shifted and turned, "
+                          "photographed from a pose with blur, vignetting and noise");
     struct Options {
-        std::string sheet, printer, truth, out, light = "back", design, pitch, pitch_y, array_on = "both";
-        std::vector<double> shift{0.0, 0.0};
+        std::string sheet, printer, truth, out, light = "back", design, pitch, pitch_y, array_on = "both", pattern;
+        std::vector<double> shift{0.0, 0.0}, pattern_shift{0.0, 0.0};
+        double pattern_rotation = 0, pattern_scale = 0;
         double pitch_error = 0, pitch_error_y = NAN, rotation = 0, light_tilt = 0, light_turn = 0;
         int pixels = 0;
         int steps = static_cast<int>(print::kWedgeStepsOption.fallback);
@@ -94,9 +100,10 @@ void add_simulate_photo_command(CLI::App& calibrate) {
     auto opt = std::make_shared<Options>();
     cmd->add_option("SHEET", opt->sheet,
                     "The sheet: wedge (the step wedge on a light box), or moire (the pitch-calibration sheet mounted "
-                    "in the display of --design in place of its pattern, lit from behind by the sun)")
+                    "in the display of --design in place of its pattern, lit from behind by the sun), or display (the "
+                    "display of --design assembled with --pattern, lit from behind by the sun)")
         ->required()
-        ->check(CLI::IsMember({"wedge", "moire"}));
+        ->check(CLI::IsMember({"wedge", "moire", "display"}));
     cmd->add_option("PRINTER", opt->printer, "The profile the sheet is printed with: a TOML file or a bundled name")
         ->required();
     cmd->add_option("--true-printer", opt->truth,
@@ -133,7 +140,21 @@ void add_simulate_photo_command(CLI::App& calibrate) {
     cmd->add_option("--array-shift", opt->shift, "moire: the array's centre from there, X,Y mm")
         ->delimiter(',')
         ->expected(2);
-    cmd->add_option("--light-tilt", opt->light_tilt, "moire: the sun's angle from the display's axis, degrees")
+    cmd->add_option("--pattern", opt->pattern, "display: the pattern file printed and mounted");
+    cmd->add_option("--pattern-shift", opt->pattern_shift,
+                    "display: the pattern mounted this far right and up of where it belongs, X,Y mm")
+        ->delimiter(',')
+        ->expected(2)
+        ->check(CLI::Range(-5.0, 5.0));
+    cmd->add_option("--pattern-rotation", opt->pattern_rotation,
+                    "display: the pattern turned counter-clockwise about the array's axis, degrees")
+        ->check(CLI::Range(-10.0, 10.0));
+    cmd->add_option("--pattern-scale", opt->pattern_scale,
+                    "display: the pattern printed this much too large, relative (0.001: 0.1 %)")
+        ->check(CLI::Range(-0.1, 0.1));
+    cmd->add_option("--light-tilt", opt->light_tilt,
+                    "moire, display: the sun's angle from the display's axis, degrees (the second photograph of a "
+                    "turned pair: --light-turn plus 180 and --camera-roll 180)")
         ->check(CLI::Range(0.0, 80.0));
     cmd->add_option("--light-turn", opt->light_turn, "moire: the azimuth of that tilt, degrees");
     cmd->add_option("--camera-pixels", opt->pixels,
@@ -144,9 +165,16 @@ void add_simulate_photo_command(CLI::App& calibrate) {
     cmd->callback([opt] {
         const print::PrinterProfile printer = print::load_printer(opt->printer);
         const print::PrinterProfile truth = opt->truth.empty() ? printer : print::load_printer(opt->truth);
-        const bool moire = opt->sheet == "moire";
-        const int pixels = opt->pixels > 0 ? opt->pixels : moire ? 4000 : 1600;
-        calibrate::Camera camera = calibrate::framing_camera(printer.paper, opt->distance, opt->fill, pixels);
+        const bool moire = opt->sheet == "moire", display = opt->sheet == "display";
+        const int pixels = opt->pixels > 0 ? opt->pixels : moire ? 4000 : display ? 3000 : 1600;
+        std::optional<optics::Design> design;
+        if (moire || display) {
+            if (opt->design.empty()) throw InputError(SourceLocation{"--design"}, "the " + opt->sheet + " needs a design");
+            if (opt->from_back) throw InputError(SourceLocation{"--from-back"}, "the " + opt->sheet + " is photographed from the front");
+            design = optics::load_design(opt->design);
+        }
+        calibrate::Camera camera = calibrate::framing_camera(display ? calibrate::display_paper(*design) : printer.paper,
+                                                             opt->distance, opt->fill, pixels);
         camera.pose.tilt_deg = opt->tilt;
         camera.pose.turn_deg = opt->turn;
         camera.pose.roll_deg = opt->roll;
@@ -155,12 +183,23 @@ void add_simulate_photo_command(CLI::App& calibrate) {
         camera.vignetting = opt->camera.vignetting;
         camera.photons = opt->camera.photons;
         camera.seed = opt->seed;
-        if (moire) {
-            if (opt->design.empty()) throw InputError(SourceLocation{"--design"}, "the moire sheet needs a design");
-            if (opt->from_back) throw InputError(SourceLocation{"--from-back"}, "the moire is photographed from the front");
-            const optics::Design design = optics::load_design(opt->design);
+        const Eigen::Vector3d light =
+            optics::incident_direction(degrees_to_radians(opt->light_tilt), degrees_to_radians(opt->light_turn));
+        if (display) {
+            if (opt->pattern.empty()) throw InputError(SourceLocation{"--pattern"}, "the display needs its pattern");
+            PrintOptions print_options;
+            print_options.printer = opt->printer;
+            const print::PrintedTransparency printed = printed_pattern(*design, opt->pattern, print_options);
+            const optics::MisalignedTransparency mounted(
+                printed, {{opt->pattern_shift[0], opt->pattern_shift[1]}, degrees_to_radians(opt->pattern_rotation),
+                          opt->pattern_scale});
+            calibrate::DisplayScene scene;
+            scene.light = light;
+            calibrate::write_photograph(opt->out, calibrate::simulated_display_photo(*design, mounted, scene, camera),
+                                        opt->quality);
+        } else if (moire) {
             const print::MoireSheet sheet =
-                print::moire_sheet(design, printer, moire_options(design, opt->pitch, opt->pitch_y));
+                print::moire_sheet(*design, printer, moire_options(*design, opt->pitch, opt->pitch_y));
             calibrate::MoireScene scene;
             const auto on = opt->array_on == "x"      ? calibrate::MeasuringBands::X
                             : opt->array_on == "rows" ? calibrate::MeasuringBands::Rows
@@ -170,16 +209,15 @@ void add_simulate_photo_command(CLI::App& calibrate) {
             scene.mounting.rotation_deg = opt->rotation;
             scene.mounting.pitch_error_x = opt->pitch_error;
             scene.mounting.pitch_error_y = std::isnan(opt->pitch_error_y) ? opt->pitch_error : opt->pitch_error_y;
-            scene.light = optics::incident_direction(degrees_to_radians(opt->light_tilt),
-                                                     degrees_to_radians(opt->light_turn));
-            calibrate::write_photograph(opt->out, calibrate::simulated_moire_photo(design, sheet, truth, scene, camera),
+            scene.light = light;
+            calibrate::write_photograph(opt->out, calibrate::simulated_moire_photo(*design, sheet, truth, scene, camera),
                                         opt->quality);
         } else {
             const print::WedgeSheet sheet = print::wedge_sheet(printer, opt->steps);
-            const auto light =
+            const auto scan_light =
                 opt->light == "reflected" ? calibrate::ScanLight::Reflected : calibrate::ScanLight::Back;
             calibrate::write_photograph(opt->out,
-                                        calibrate::simulated_wedge_photo(sheet, printer, truth, camera, light),
+                                        calibrate::simulated_wedge_photo(sheet, printer, truth, camera, scan_light),
                                         opt->quality);
         }
         std::printf("wrote %s\n", opt->out.c_str());
@@ -236,15 +274,68 @@ void add_pitch_command(CLI::App& calibrate) {
     });
 }
 
+void add_registration_command(CLI::App& calibrate) {
+    auto* cmd = calibrate.add_subcommand(
+        "registration", "The printed pattern's shift and turn against the lens array from photographs of the "
+                        "assembled display lit from behind by one small light: whether they are inside the design's "
+                        "tolerances and how to move the pattern");
+    struct Options {
+        std::string design, pattern, tolerance;
+        std::vector<std::string> photos;
+        PrintOptions print;
+        double light_tilt = NAN, light_turn = 0;
+    };
+    auto opt = std::make_shared<Options>();
+    cmd->add_option("DESIGN", opt->design, "The display's design")->required();
+    cmd->add_option("PATTERN", opt->pattern, "The pattern file that was printed and mounted")->required();
+    cmd->add_option("PHOTO", opt->photos,
+                    "Photographs of the display from the front; two turned by half a turn against each other "
+                    "(the light unchanged) cancel the light's tilt")
+        ->required();
+    add_print_options(*cmd, opt->print);
+    cmd->add_option("--light-tilt", opt->light_tilt,
+                    "The light's angle from the display's axis, degrees, when known (otherwise a turned pair "
+                    "measures it, or it is taken as head-on)")
+        ->check(CLI::Range(0.0, 60.0));
+    cmd->add_option("--light-turn", opt->light_turn, "The azimuth of that tilt from the display's +x, degrees");
+    cmd->add_option("--tolerance", opt->tolerance, "Folder that rfd simulate tolerance wrote: judge against it");
+    cmd->callback([opt] {
+        const optics::Design design = optics::load_design(opt->design);
+        calibrate::RegistrationTolerances tolerances;
+        if (!opt->tolerance.empty()) {
+            const std::filesystem::path file = std::filesystem::path(opt->tolerance) / "summary.json";
+            if (!std::filesystem::exists(file))
+                throw IoError(SourceLocation{file.string(), 0, 0, "--tolerance"},
+                              "cannot open (expected the folder that rfd simulate tolerance --out wrote)");
+            for (const predict::ToleranceCurveRecord& curve :
+                 predict::read_summary<predict::ToleranceSummary>(file).curves) {
+                if (curve.kind == "shift") tolerances.shift_mm = curve.tolerance.value_or(curve.max);
+                if (curve.kind == "rotation") tolerances.rotation_deg = curve.tolerance.value_or(curve.max);
+            }
+        }
+        const print::PrintedTransparency printed = printed_pattern(design, opt->pattern, opt->print);
+        const calibrate::PatternMap map(printed, design);
+        std::vector<calibrate::RegistrationReading> readings;
+        for (const std::string& photo : opt->photos)
+            readings.push_back(calibrate::read_registration_photo(read_image(photo), photo, design, map));
+        std::optional<Eigen::Vector3d> light;
+        if (std::isfinite(opt->light_tilt))
+            light = optics::incident_direction(degrees_to_radians(opt->light_tilt), degrees_to_radians(opt->light_turn));
+        const calibrate::Registration registration = calibrate::combine_registration(design, readings, light);
+        std::fputs(calibrate::registration_text(registration, readings, tolerances).c_str(), stdout);
+    });
+}
+
 }  // namespace
 
 void add_calibrate_commands(CLI::App& app) {
     auto* calibrate = app.add_subcommand(
-        "calibrate", "Measure the printed test sheets: the printer's tone curve, the lens array's pitch; simulated photographs to "
-        "try them");
+        "calibrate", "Measure the printed test sheets and the assembled display: the printer's tone curve, the lens array's "
+        "pitch, the pattern's registration; simulated photographs to try them");
     calibrate->require_subcommand(1);
     add_tone_command(*calibrate);
     add_pitch_command(*calibrate);
+    add_registration_command(*calibrate);
     add_simulate_photo_command(*calibrate);
 }
 

@@ -1,0 +1,726 @@
+#include "calibrate/registration.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numeric>
+
+#include <Eigen/Dense>
+
+#include "calibrate/camera.hpp"
+#include "calibrate/sheet_finder.hpp"
+#include "core/error.hpp"
+#include "core/parallel.hpp"
+#include "core/text.hpp"
+#include "core/units.hpp"
+#include "relight/vision.hpp"
+
+namespace rfd::calibrate {
+namespace {
+
+constexpr int kPatternSamples = 2;         // pattern samples per grid step along each axis
+constexpr double kReadRadius = 1.0 / 6.0;  // radius read of each lenslet image, of its pitch
+constexpr double kCentroidRadius = 0.5;   // of the pitch: the window a lenslet image's centroid is taken over
+// The homography's refinement: lenslets within these fractions of the half-width from the
+// middle (a square), one centroid pass each.
+constexpr std::array<double, 8> kGrowth{0.3, 0.4, 0.55, 0.7, 0.85, 1.0, 1.0, 1.0};
+constexpr double kLightRadius = 0.4;      // of the pitch: a lenslet's light on the diffuser, about
+constexpr double kSearchStepMm = 0.02;    // the shift's first search
+constexpr int kGainTerms = 6;            // gain: 1, u, v, u^2, uv, v^2
+constexpr int kGroups = 8;
+constexpr double kTurnMargin = 0.05;      // the best quarter turn's correlation over the next's
+
+// The array's lenslets and its outline (cell corners of the outermost lenslets).
+struct ArrayShape {
+    optics::Lattice lattice;
+    std::vector<Eigen::Vector2d> centres;
+    std::vector<optics::CellIndex> cells;
+    Eigen::Vector2d low, high;  // bounding box of the cells
+    // The corners of the largest quadrilateral on the lit footprint (every lenslet's light a
+    // disc of kLightRadius pitches), as the outline's: top left, top right, bottom right,
+    // bottom left when upright.
+    std::array<Eigen::Vector2d, 4> corners;
+};
+
+std::optional<std::array<Eigen::Vector2d, 4>> quadrilateral_corners(std::vector<Eigen::Vector2d> points);
+
+ArrayShape array_shape(const optics::Design& design) {
+    ArrayShape shape{optics::DesignOptics(design).lattice(), {}, {}, {}, {}};
+    const optics::Lattice& lattice = shape.lattice;
+    shape.low = Eigen::Vector2d::Constant(HUGE_VAL);
+    shape.high = -shape.low;
+    const std::vector<Eigen::Vector2d> corners = lattice.cell_corners();
+    for (int j = 0; j < lattice.count_y(); ++j)
+        for (int i = 0; i < lattice.count_x(); ++i) {
+            const Eigen::Vector2d c = lattice.center({i, j});
+            shape.centres.push_back(c);
+            shape.cells.push_back({i, j});
+            for (const Eigen::Vector2d& corner : corners) {
+                shape.low = shape.low.cwiseMin(c + corner);
+                shape.high = shape.high.cwiseMax(c + corner);
+            }
+        }
+    // The footprint on the screen's axes (y down), its corners back on the array's.
+    std::vector<Eigen::Vector2d> footprint;
+    const double radius = kLightRadius * lattice.pitch_x();
+    for (const Eigen::Vector2d& c : shape.centres)
+        for (int k = 0; k < 16; ++k)
+            footprint.emplace_back(c.x() + radius * std::cos(k * kPi / 8), -(c.y() + radius * std::sin(k * kPi / 8)));
+    const auto quadrilateral = quadrilateral_corners(footprint);
+    RFD_CHECK(quadrilateral.has_value());
+    for (std::size_t k = 0; k < 4; ++k) shape.corners[k] = Eigen::Vector2d((*quadrilateral)[k].x(), -(*quadrilateral)[k].y());
+    return shape;
+}
+
+// Plane mm per photo pixel at a plane point (the geometric mean over the two axes).
+double mm_per_pixel_at(const Eigen::Matrix3d& plane_to_photo, const Eigen::Vector2d& point) {
+    const Eigen::Vector2d at = apply(plane_to_photo, point);
+    const Eigen::Vector2d ax = apply(plane_to_photo, point + Eigen::Vector2d::UnitX()) - at;
+    const Eigen::Vector2d ay = apply(plane_to_photo, point + Eigen::Vector2d::UnitY()) - at;
+    return 1.0 / std::sqrt(std::abs(ax.x() * ay.y() - ax.y() * ay.x()));
+}
+
+// The homography of weighted least squares taking `from` to `to`: the normalised direct
+// linear transform, reweighted twice by the inverse square of each point's projective depth so
+// that its algebraic residuals weigh as the pixels' (under perspective they differ).
+Eigen::Matrix3d fit_homography(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to,
+                               const std::vector<double>& weight) {
+    const auto normaliser = [&](const std::vector<Eigen::Vector2d>& points) {
+        Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+        double total = 0.0, spread = 0.0;
+        for (std::size_t k = 0; k < points.size(); ++k) mean += weight[k] * points[k], total += weight[k];
+        mean /= total;
+        for (std::size_t k = 0; k < points.size(); ++k) spread += weight[k] * (points[k] - mean).norm();
+        const double scale = std::sqrt(2.0) * total / spread;
+        Eigen::Matrix3d n;
+        n << scale, 0, -scale * mean.x(), 0, scale, -scale * mean.y(), 0, 0, 1;
+        return n;
+    };
+    const Eigen::Matrix3d nf = normaliser(from), nt = normaliser(to);
+    std::vector<double> depth(from.size(), 1.0);
+    Eigen::Matrix3d m = Eigen::Matrix3d::Identity();
+    for (int pass = 0; pass < 3; ++pass) {
+        Eigen::Matrix<double, 9, 9> normal = Eigen::Matrix<double, 9, 9>::Zero();
+        for (std::size_t k = 0; k < from.size(); ++k) {
+            const Eigen::Vector3d p = nf * from[k].homogeneous();
+            const Eigen::Vector3d q = nt * to[k].homogeneous();
+            Eigen::Matrix<double, 2, 9> rows;
+            rows << p.transpose(), 0, 0, 0, -q.x() * p.transpose(), 0, 0, 0, p.transpose(), -q.y() * p.transpose();
+            normal += weight[k] / (depth[k] * depth[k]) * rows.transpose() * rows;
+        }
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 9, 9>> solver(normal);
+        const Eigen::Matrix<double, 9, 1> h = solver.eigenvectors().col(0);
+        m << h(0), h(1), h(2), h(3), h(4), h(5), h(6), h(7), h(8);
+        double mean_depth = 0.0;
+        for (std::size_t k = 0; k < from.size(); ++k)
+            depth[k] = std::abs(m.row(2).dot(nf * from[k].homogeneous())), mean_depth += depth[k] / static_cast<double>(from.size());
+        for (double& d : depth) d /= mean_depth;
+    }
+    return nt.inverse() * m * nf;
+}
+
+// The lit display: the largest region brighter than Otsu's threshold of the smoothed photo,
+// and the four corners of its convex hull (the quadrilateral of largest area on it), in
+// clockwise order on the screen starting from the one nearest the photo's +x axis direction.
+struct Outline {
+    std::array<Eigen::Vector2d, 4> corners;
+    double dark = 0.0;  // the mean of the darker class: the holder
+    double pixels = 0.0;
+};
+
+double cross(const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    return (a - o).x() * (b - o).y() - (a - o).y() * (b - o).x();
+}
+
+// The corners of the largest quadrilateral on the convex hull of `points` (Andrew's monotone
+// chain, then from the hull's widest pair and the points farthest on either side, each corner
+// moved to the best place between its neighbours until none moves), in clockwise order on
+// the screen (y down) from the one whose direction from their middle has the smallest angle
+// (-pi .. pi): for an upright rectangle, top left, top right, bottom right, bottom left.
+std::optional<std::array<Eigen::Vector2d, 4>> quadrilateral_corners(std::vector<Eigen::Vector2d> points) {
+    std::sort(points.begin(), points.end(),
+              [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
+    std::vector<Eigen::Vector2d> hull(2 * points.size() + 1);
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        while (k >= 2 && cross(hull[k - 2], hull[k - 1], points[i]) <= 0) --k;
+        hull[k++] = points[i];
+    }
+    for (std::size_t i = points.size() - 1, lower = k + 1; i > 0; --i) {
+        while (k >= lower && cross(hull[k - 2], hull[k - 1], points[i - 1]) <= 0) --k;
+        hull[k++] = points[i - 1];
+    }
+    if (k < 5) return std::nullopt;
+    hull.resize(k - 1);
+    const std::size_t n = hull.size();
+    std::array<std::size_t, 4> q{};
+    double widest = -1.0;
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t j = i + 1; j < n; ++j)
+            if ((hull[i] - hull[j]).squaredNorm() > widest) widest = (hull[i] - hull[j]).squaredNorm(), q[0] = i, q[2] = j;
+    const auto farthest = [&](std::size_t from, std::size_t to) {
+        std::size_t best = from;
+        double best_area = -1.0;
+        for (std::size_t i = (from + 1) % n; i != to; i = (i + 1) % n) {
+            const double a = std::abs(cross(hull[from], hull[to], hull[i]));
+            if (a > best_area) best_area = a, best = i;
+        }
+        return best;
+    };
+    q[1] = farthest(q[0], q[2]);
+    q[3] = farthest(q[2], q[0]);
+    for (int pass = 0; pass < 20; ++pass) {
+        bool moved = false;
+        for (std::size_t c = 0; c < 4; ++c) {
+            const std::size_t best = farthest(q[(c + 3) % 4], q[(c + 1) % 4]);
+            if (best != q[c]) q[c] = best, moved = true;
+        }
+        if (!moved) break;
+    }
+    std::array<Eigen::Vector2d, 4> corners;
+    Eigen::Vector2d middle = Eigen::Vector2d::Zero();
+    for (std::size_t c = 0; c < 4; ++c) corners[c] = hull[q[c]], middle += 0.25 * hull[q[c]];
+    std::sort(corners.begin(), corners.end(), [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+        return std::atan2(a.y() - middle.y(), a.x() - middle.x()) < std::atan2(b.y() - middle.y(), b.x() - middle.x());
+    });
+    return corners;
+}
+
+Outline find_outline(const Image& luminance, const std::string& name) {
+    const int w = luminance.width(), h = luminance.height();
+    const relight::PlaneSize size{w, h};
+    std::vector<float> smooth(luminance.plane(0).begin(), luminance.plane(0).end());
+    const double sigma = std::max(w, h) / 200.0;
+    relight::vision().gaussian_blur(size, smooth, smooth, 0, sigma, sigma, relight::Border::Replicate);
+    const double threshold = otsu_threshold(smooth);
+    std::vector<std::uint8_t> bright(smooth.size());
+    double dark_sum = 0.0, dark_count = 0.0;
+    for (std::size_t k = 0; k < smooth.size(); ++k) {
+        bright[k] = smooth[k] > threshold;
+        if (!bright[k]) dark_sum += smooth[k], dark_count += 1.0;
+    }
+    std::vector<int> labels(smooth.size());
+    const int count = relight::vision().connected_components(size, bright, labels);
+    std::vector<double> area(static_cast<std::size_t>(count) + 1, 0.0);
+    for (const int label : labels)
+        if (label > 0) area[static_cast<std::size_t>(label)] += 1.0;
+    const auto largest = static_cast<int>(std::max_element(area.begin(), area.end()) - area.begin());
+    Outline outline;
+    outline.pixels = largest > 0 ? area[static_cast<std::size_t>(largest)] : 0.0;
+    outline.dark = dark_count > 0.0 ? dark_sum / dark_count : 0.0;
+    if (largest == 0 || outline.pixels < 0.02 * w * h)
+        throw InputError(SourceLocation{name}, "no lit display found: the photograph shows no bright region over 2 % of "
+                                               "its area (is the display lit from behind and in view?)");
+    // The region's leftmost and rightmost pixel of every row: their hull is the region's.
+    std::vector<Eigen::Vector2d> points;
+    for (int y = 0; y < h; ++y) {
+        int first = -1, last = -1;
+        for (int x = 0; x < w; ++x)
+            if (labels[static_cast<std::size_t>(y) * static_cast<std::size_t>(w) + static_cast<std::size_t>(x)] == largest) {
+                if (first < 0) first = x;
+                last = x;
+            }
+        if (first >= 0) points.emplace_back(first, y), points.emplace_back(last, y);
+    }
+    const auto quadrilateral = quadrilateral_corners(points);
+    if (!quadrilateral) throw InputError(SourceLocation{name}, "the lit region has no corners");
+    outline.corners = *quadrilateral;
+    return outline;
+}
+
+Eigen::Matrix3d translation(const Eigen::Vector2d& offset) {
+    Eigen::Matrix3d t = Eigen::Matrix3d::Identity();
+    t.topRightCorner<2, 1>() = offset;
+    return t;
+}
+
+// The lattice's two shortest vectors: along a row, and to the next row.
+std::array<Eigen::Vector2d, 2> lattice_vectors(const optics::Lattice& lattice) {
+    const Eigen::Vector2d along = lattice.center({1, 0}) - lattice.center({0, 0});
+    return {along, lattice.center({0, 1}) - lattice.center({0, 0})};
+}
+
+// The sum of the photo's brightness over discs at the array's lenslets moved by `offset`,
+// those with |u| <= reach (u: array point over the half-width, from the middle).
+double brightness_at(const Image& luminance, const ArrayShape& shape, const Eigen::Matrix3d& array_to_photo,
+                     const Eigen::Vector2d& offset, double reach) {
+    const Eigen::Vector2d middle = 0.5 * (shape.low + shape.high), half = 0.5 * (shape.high - shape.low);
+    const double radius = 0.2 * shape.lattice.pitch_x();
+    double sum = 0.0;
+    for (const Eigen::Vector2d& c : shape.centres) {
+        if ((c - middle).cwiseQuotient(half).cwiseAbs().maxCoeff() > reach) continue;
+        const double v = disc_statistics(luminance, array_to_photo, c + offset, radius, 0.5 * radius).first;
+        if (std::isfinite(v)) sum += v;
+    }
+    return sum;
+}
+
+// Where the lenslet images lie within a cell, in the array's middle: the offset over one
+// cell that puts the lenslets' discs on the brightest places (the images, not the gaps).
+// The outline's corners may miss by most of a pitch where the pattern is dark at the edge.
+Eigen::Vector2d lattice_phase(const Image& luminance, const ArrayShape& shape, const Eigen::Matrix3d& array_to_photo) {
+    const auto [a1, a2] = lattice_vectors(shape.lattice);
+    constexpr int kSteps = 10;
+    Eigen::Vector2d best = Eigen::Vector2d::Zero();
+    double best_sum = -1.0;
+    for (int j = 0; j < kSteps; ++j)
+        for (int i = 0; i < kSteps; ++i) {
+            const Eigen::Vector2d offset = (i - kSteps / 2) / double(kSteps) * a1 + (j - kSteps / 2) / double(kSteps) * a2;
+            const double sum = brightness_at(luminance, shape, array_to_photo, offset, 0.3);
+            if (sum > best_sum) best_sum = sum, best = offset;
+        }
+    return best;
+}
+
+// The whole-lenslet offset of the labels: the lattice of images is found up to a lattice
+// vector, which only the array's edge tells (a pattern shifted by exactly one lenslet reads
+// the same inside): of the offsets within two lenslets, the one whose lenslets hold the most
+// light (the others put an edge row on the dark holder).
+Eigen::Vector2d whole_lenslet_offset(const Image& luminance, const ArrayShape& shape,
+                                     const Eigen::Matrix3d& array_to_photo) {
+    const auto [a1, a2] = lattice_vectors(shape.lattice);
+    Eigen::Vector2d best = Eigen::Vector2d::Zero();
+    double best_sum = -1.0;
+    for (int j = -2; j <= 2; ++j)
+        for (int i = -2; i <= 2; ++i) {
+            const Eigen::Vector2d offset = i * a1 + j * a2;
+            const double sum = brightness_at(luminance, shape, array_to_photo, offset, 2.0);
+            if (sum > best_sum) best_sum = sum, best = offset;
+        }
+    return best;
+}
+
+// Refines the array-to-photo homography from the lenslet images' centroids, growing from the
+// array's middle outward: the first homography (from the outline's corners) may be off by
+// most of a pitch where the pattern is dark at the array's edge, and a lenslet image then
+// pulls toward its neighbour's; the middle's lenslets, where it is best, fix the map that
+// places the next ring.
+Eigen::Matrix3d refine_homography(const Image& luminance, const ArrayShape& shape, Eigen::Matrix3d array_to_photo,
+                                  double dark) {
+    const double pitch = shape.lattice.pitch_x();
+    const double radius = kCentroidRadius * pitch;
+    const int steps = 5;
+    const Eigen::Vector2d middle = 0.5 * (shape.low + shape.high), half = 0.5 * (shape.high - shape.low);
+    for (const double reach : kGrowth) {
+        std::vector<Eigen::Vector2d> from, to;
+        std::vector<double> weight;
+        for (std::size_t k = 0; k < shape.centres.size(); ++k)
+            if ((shape.centres[k] - middle).cwiseQuotient(half).cwiseAbs().maxCoeff() <= reach)
+                from.push_back(shape.centres[k]);
+        to.resize(from.size());
+        weight.resize(from.size());
+        parallel_for_chunks(from.size(), 256, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t k = begin; k < end; ++k) {
+                const Eigen::Vector2d& c = from[k];
+                Eigen::Vector2d moment = Eigen::Vector2d::Zero();
+                double total = 0.0;
+                for (int j = -steps; j <= steps; ++j)
+                    for (int i = -steps; i <= steps; ++i) {
+                        const Eigen::Vector2d d(i * radius / steps, j * radius / steps);
+                        if (d.squaredNorm() > radius * radius) continue;
+                        const double v = photo_at_page(luminance, array_to_photo, c + d);
+                        if (!std::isfinite(v)) continue;
+                        const double mass = std::max(0.0, v - dark);
+                        moment += mass * d;
+                        total += mass;
+                    }
+                to[k] = apply(array_to_photo, total > 0.0 ? Eigen::Vector2d(c + moment / total) : c);
+                weight[k] = total + 1e-12;
+            }
+        });
+        array_to_photo = fit_homography(from, to, weight);
+    }
+    return array_to_photo;
+}
+
+// The model of one quarter turn: lenslets' centres and readings; the fit's parameters
+// (b_x, b_y, rotation, pitch error) and the gain solved at each.
+struct FitData {
+    std::vector<Eigen::Vector2d> centre;
+    std::vector<double> value;
+    std::vector<std::array<double, kGainTerms>> terms;
+};
+
+struct FitResult {
+    Eigen::Vector4d parameters = Eigen::Vector4d::Zero();
+    Eigen::Matrix4d covariance = Eigen::Matrix4d::Zero();
+    double correlation = 0.0, rms = 0.0;
+    std::vector<double> fitted;
+};
+
+Eigen::Vector2d pattern_point(const Eigen::Vector4d& p, const Eigen::Vector2d& c) {
+    const double cs = std::cos(p(2)), sn = std::sin(p(2));
+    const Eigen::Vector2d d = c - p.head<2>();
+    return Eigen::Vector2d(cs * d.x() + sn * d.y(), -sn * d.x() + cs * d.y()) / (1.0 + p(3));
+}
+
+// Residuals of the readings against gain x pattern + offset, the gain's terms and the offset
+// solved by least squares, over lenslets `use` (all when empty).
+Eigen::VectorXd residuals(const FitData& data, const PatternMap& map, const Eigen::Vector4d& p,
+                          const std::vector<std::size_t>& use, std::vector<double>* fitted = nullptr) {
+    const std::size_t n = use.size();
+    Eigen::MatrixXd a(static_cast<Eigen::Index>(n), kGainTerms + 1);
+    Eigen::VectorXd b(static_cast<Eigen::Index>(n));
+    for (std::size_t r = 0; r < n; ++r) {
+        const std::size_t k = use[r];
+        const double pattern = map.at(pattern_point(p, data.centre[k]));
+        for (int t = 0; t < kGainTerms; ++t) a(static_cast<Eigen::Index>(r), t) = data.terms[k][static_cast<std::size_t>(t)] * pattern;
+        a(static_cast<Eigen::Index>(r), kGainTerms) = 1.0;
+        b(static_cast<Eigen::Index>(r)) = data.value[k];
+    }
+    const Eigen::VectorXd x = (a.transpose() * a).ldlt().solve(a.transpose() * b);
+    const Eigen::VectorXd model = a * x;
+    if (fitted) fitted->assign(model.data(), model.data() + model.size());
+    return b - model;
+}
+
+// Pearson correlation of the readings with the pattern at shift b (no turn, no scale).
+double correlation_at(const FitData& data, const PatternMap& map, const Eigen::Vector2d& b) {
+    double sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
+    const double n = static_cast<double>(data.value.size());
+    for (std::size_t k = 0; k < data.value.size(); ++k) {
+        const double x = map.at(data.centre[k] - b), y = data.value[k];
+        sx += x, sy += y, sxx += x * x, syy += y * y, sxy += x * y;
+    }
+    const double vx = sxx - sx * sx / n, vy = syy - sy * sy / n;
+    return vx > 0 && vy > 0 ? (sxy - sx * sy / n) / std::sqrt(vx * vy) : 0.0;
+}
+
+// Gauss-Newton from `start` over lenslets `use`; the covariance from the residuals.
+FitResult gauss_newton(const FitData& data, const PatternMap& map, Eigen::Vector4d p, const std::vector<std::size_t>& use) {
+    const Eigen::Vector4d step(1e-3, 1e-3, 1e-5, 1e-5);
+    Eigen::VectorXd r = residuals(data, map, p, use);
+    Eigen::MatrixXd jacobian(r.size(), 4);
+    for (int iteration = 0; iteration < 30; ++iteration) {
+        for (int i = 0; i < 4; ++i) {
+            Eigen::Vector4d plus = p, minus = p;
+            plus(i) += step(i);
+            minus(i) -= step(i);
+            jacobian.col(i) = (residuals(data, map, plus, use) - residuals(data, map, minus, use)) / (2.0 * step(i));
+        }
+        const Eigen::Vector4d delta = -(jacobian.transpose() * jacobian).ldlt().solve(jacobian.transpose() * r);
+        // Halve the step until the residual falls.
+        double scale = 1.0;
+        Eigen::VectorXd trial;
+        for (; scale > 1e-3; scale *= 0.5) {
+            trial = residuals(data, map, p + scale * delta, use);
+            if (trial.squaredNorm() <= r.squaredNorm()) break;
+        }
+        if (scale <= 1e-3) break;
+        p += scale * delta;
+        r = trial;
+        if ((scale * delta).cwiseQuotient(step).cwiseAbs().maxCoeff() < 1e-3) break;
+    }
+    FitResult result;
+    result.parameters = p;
+    const double dof = std::max(1.0, static_cast<double>(r.size()) - 4 - kGainTerms - 1);
+    result.covariance = (jacobian.transpose() * jacobian).inverse() * (r.squaredNorm() / dof);
+    return result;
+}
+
+struct TurnFit {
+    FitResult fit;
+    FitData data;
+    std::vector<optics::CellIndex> cells;
+    Eigen::Matrix3d array_to_photo;
+};
+
+// Reads the lenslets with the homography whose array corners go to the outline's corners
+// turned by `quarter_turns`, and fits.
+TurnFit fit_turn(const Image& luminance, const ArrayShape& shape, const Outline& outline, int quarter_turns,
+                 const PatternMap& map) {
+    const std::array<Eigen::Vector2d, 4>& array_corners = shape.corners;
+    std::array<Eigen::Vector2d, 4> photo_corners;
+    for (std::size_t c = 0; c < 4; ++c) photo_corners[c] = outline.corners[(c + 4 - static_cast<std::size_t>(quarter_turns)) % 4];
+    TurnFit turn;
+    Eigen::Matrix3d to_photo = homography_from_points(array_corners, photo_corners);
+    to_photo = to_photo * translation(lattice_phase(luminance, shape, to_photo));
+    to_photo = refine_homography(luminance, shape, to_photo, outline.dark);
+    turn.array_to_photo = to_photo * translation(whole_lenslet_offset(luminance, shape, to_photo));
+
+    // Every lenslet away from the corner markers, read over its core.
+    const optics::Lattice& lattice = shape.lattice;
+    const double pitch = lattice.pitch_x();
+    const Eigen::Vector2d half = 0.5 * (shape.high - shape.low), middle = 0.5 * (shape.high + shape.low);
+    const double mm_per_pixel = mm_per_pixel_at(turn.array_to_photo, middle);
+    std::vector<double> values(shape.centres.size());
+    parallel_for_chunks(shape.centres.size(), 256, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t k = begin; k < end; ++k)
+            values[k] = disc_statistics(luminance, turn.array_to_photo, shape.centres[k], kReadRadius * pitch,
+                                        std::max(0.25 * mm_per_pixel, 0.02 * pitch)).first;
+    });
+    for (std::size_t k = 0; k < shape.centres.size(); ++k) {
+        const optics::CellIndex cell = shape.cells[k];
+        const bool near_corner = (cell.i <= 1 || cell.i >= lattice.count_x() - 2) && (cell.j <= 1 || cell.j >= lattice.count_y() - 2);
+        if (near_corner || !std::isfinite(values[k])) continue;
+        const Eigen::Vector2d u = (shape.centres[k] - middle).cwiseQuotient(half);
+        turn.data.centre.push_back(shape.centres[k]);
+        turn.data.value.push_back(values[k]);
+        turn.data.terms.push_back({1.0, u.x(), u.y(), u.x() * u.x(), u.x() * u.y(), u.y() * u.y()});
+        turn.cells.push_back(cell);
+    }
+    if (turn.data.value.size() < 16) return turn;
+
+    // The shift with the best correlation within half a pitch, then Gauss-Newton.
+    const int steps = static_cast<int>(std::ceil(0.5 * pitch / kSearchStepMm));
+    std::vector<double> score(static_cast<std::size_t>((2 * steps + 1) * (2 * steps + 1)));
+    parallel_for_chunks(score.size(), 16, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t s = begin; s < end; ++s) {
+            const Eigen::Vector2d b(kSearchStepMm * (static_cast<int>(s) % (2 * steps + 1) - steps),
+                                    kSearchStepMm * (static_cast<int>(s) / (2 * steps + 1) - steps));
+            score[s] = correlation_at(turn.data, map, b);
+        }
+    });
+    const auto best = static_cast<int>(std::max_element(score.begin(), score.end()) - score.begin());
+    Eigen::Vector4d start = Eigen::Vector4d::Zero();
+    start.head<2>() = Eigen::Vector2d(kSearchStepMm * (best % (2 * steps + 1) - steps), kSearchStepMm * (best / (2 * steps + 1) - steps));
+    std::vector<std::size_t> all(turn.data.value.size());
+    std::iota(all.begin(), all.end(), std::size_t{0});
+    turn.fit = gauss_newton(turn.data, map, start, all);
+    const Eigen::VectorXd r = residuals(turn.data, map, turn.fit.parameters, all, &turn.fit.fitted);
+    Eigen::Map<const Eigen::VectorXd> measured(turn.data.value.data(), static_cast<Eigen::Index>(turn.data.value.size()));
+    const double mean = measured.mean();
+    turn.fit.rms = std::sqrt(r.squaredNorm() / static_cast<double>(r.size())) / mean;
+    const double spread = (measured.array() - mean).square().sum();
+    turn.fit.correlation = spread > 0 ? std::sqrt(std::max(0.0, 1.0 - r.squaredNorm() / spread)) : 0.0;
+    return turn;
+}
+
+}  // namespace
+
+PatternMap::PatternMap(const optics::Transparency& printed, const optics::Design& design) {
+    const ArrayShape shape = array_shape(design);
+    const double reach = 0.5 * shape.lattice.pitch_x() + 0.5;  // a shifted array's lenslets read this far out
+    origin_ = shape.low - Eigen::Vector2d::Constant(reach);
+    width_ = static_cast<int>(std::ceil((shape.high.x() - shape.low.x() + 2 * reach) / kPatternStepMm)) + 1;
+    height_ = static_cast<int>(std::ceil((shape.high.y() - shape.low.y() + 2 * reach) / kPatternStepMm)) + 1;
+    values_.assign(static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_), 0.0f);
+    const int channels = printed.channels();
+    // Row by row (a streamed pattern reads each of its rows once), each sample the mean of
+    // kPatternSamples^2 points over its grid cell.
+    parallel_for_chunks(static_cast<std::size_t>(height_), 8, [&](std::size_t begin, std::size_t end) {
+        std::vector<Eigen::Vector2d> points(static_cast<std::size_t>(width_) * kPatternSamples * kPatternSamples);
+        std::vector<float> out(points.size() * static_cast<std::size_t>(channels));
+        for (auto y = static_cast<int>(begin); y < static_cast<int>(end); ++y) {
+            std::size_t n = 0;
+            for (int sy = 0; sy < kPatternSamples; ++sy)
+                for (int x = 0; x < width_; ++x)
+                    for (int sx = 0; sx < kPatternSamples; ++sx)
+                        points[n++] = origin_ + kPatternStepMm * Eigen::Vector2d(x + (sx + 0.5) / kPatternSamples - 0.5,
+                                                                                  y + (sy + 0.5) / kPatternSamples - 0.5);
+            printed.sample(points, out);
+            for (int x = 0; x < width_; ++x) {
+                double sum = 0.0;
+                for (int sy = 0; sy < kPatternSamples; ++sy)
+                    for (int sx = 0; sx < kPatternSamples; ++sx) {
+                        const std::size_t point = (static_cast<std::size_t>(sy) * static_cast<std::size_t>(width_) +
+                                                   static_cast<std::size_t>(x)) * kPatternSamples + static_cast<std::size_t>(sx);
+                        for (int c = 0; c < channels; ++c) sum += out[point * static_cast<std::size_t>(channels) + static_cast<std::size_t>(c)];
+                    }
+                values_[static_cast<std::size_t>(y) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(x)] =
+                    static_cast<float>(sum / (kPatternSamples * kPatternSamples * channels));
+            }
+        }
+    });
+}
+
+double PatternMap::at(const Eigen::Vector2d& point) const {
+    const double u = (point.x() - origin_.x()) / kPatternStepMm, v = (point.y() - origin_.y()) / kPatternStepMm;
+    if (!(u >= 0.0 && v >= 0.0 && u < width_ - 1 && v < height_ - 1)) return 0.0;
+    const int x = static_cast<int>(u), y = static_cast<int>(v);
+    const double fx = u - x, fy = v - y;
+    const float* row = values_.data() + static_cast<std::size_t>(y) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(x);
+    return (1 - fy) * ((1 - fx) * row[0] + fx * row[1]) + fy * ((1 - fx) * row[width_] + fx * row[width_ + 1]);
+}
+
+RegistrationReading read_registration_photo(const Image& photo, const std::string& name,
+                                            const optics::Design& design, const PatternMap& map) {
+    const ArrayShape shape = array_shape(design);
+    const Image luminance = photo_luminance(photo);
+    const Outline outline = find_outline(luminance, name);
+    std::array<TurnFit, 4> turns;
+    for (int q = 0; q < 4; ++q) turns[static_cast<std::size_t>(q)] = fit_turn(luminance, shape, outline, q, map);
+    std::array<int, 4> order{0, 1, 2, 3};
+    std::sort(order.begin(), order.end(), [&](int a, int b) {
+        return turns[static_cast<std::size_t>(a)].fit.correlation > turns[static_cast<std::size_t>(b)].fit.correlation;
+    });
+    TurnFit& best = turns[static_cast<std::size_t>(order[0])];
+    RegistrationReading reading;
+    reading.name = name;
+    reading.quarter_turns = order[0];
+    reading.correlation = best.fit.correlation;
+    reading.runner_up = turns[static_cast<std::size_t>(order[1])].fit.correlation;
+    if (reading.correlation < kMinCorrelation)
+        throw InputError(SourceLocation{name}, format_text("the lenslets' readings do not follow the pattern (correlation "
+                                                           "%.2f, at least %.2f needed): is it this pattern, lit from "
+                                                           "behind by one small light, the photograph sharp?",
+                                                           reading.correlation, kMinCorrelation));
+    if (reading.correlation < reading.runner_up + kTurnMargin)
+        throw InputError(SourceLocation{name}, format_text("the pattern fits two ways up about as well (correlations "
+                                                           "%.3f and %.3f): it is too plain to say which",
+                                                           reading.correlation, reading.runner_up));
+    const Eigen::Vector4d& p = best.fit.parameters;
+    reading.apparent_shift = p.head<2>();
+    reading.rotation_rad = p(2);
+    reading.pitch_error = p(3);
+    reading.rms = best.fit.rms;
+    // Uncertainty: the fit's, or the jackknife's over groups of columns when larger.
+    Eigen::Matrix4d covariance = best.fit.covariance;
+    {
+        std::array<Eigen::Vector4d, kGroups> estimates;
+        const int columns = shape.lattice.count_x();
+        for (int g = 0; g < kGroups; ++g) {
+            std::vector<std::size_t> use;
+            for (std::size_t k = 0; k < best.cells.size(); ++k)
+                if (best.cells[k].i * kGroups / columns != g) use.push_back(k);
+            estimates[static_cast<std::size_t>(g)] = gauss_newton(best.data, map, p, use).parameters;
+        }
+        Eigen::Vector4d mean = Eigen::Vector4d::Zero();
+        for (const Eigen::Vector4d& e : estimates) mean += e / kGroups;
+        Eigen::Matrix4d jackknife = Eigen::Matrix4d::Zero();
+        for (const Eigen::Vector4d& e : estimates) jackknife += (e - mean) * (e - mean).transpose();
+        jackknife *= (kGroups - 1.0) / kGroups;
+        for (int i = 0; i < 4; ++i)
+            if (jackknife(i, i) > covariance(i, i)) {
+                const double ratio = std::sqrt(jackknife(i, i) / covariance(i, i));
+                covariance.row(i) *= ratio;
+                covariance.col(i) *= ratio;
+            }
+    }
+    reading.covariance = covariance;
+    const double sigma = std::sqrt(std::max(covariance(0, 0), covariance(1, 1)));
+    if (!(sigma <= kMaxShiftSigmaMm))
+        throw InputError(SourceLocation{name}, format_text("the shift is uncertain by %.3f mm (at most %.3f mm "
+                                                           "measures): the photograph is too blurred or too dark",
+                                                           sigma, kMaxShiftSigmaMm));
+    reading.array_to_photo = best.array_to_photo;
+    reading.mm_per_pixel = mm_per_pixel_at(best.array_to_photo, 0.5 * (shape.low + shape.high));
+    for (std::size_t k = 0; k < best.data.value.size(); ++k)
+        reading.lenslets.push_back({best.data.centre[k], best.data.value[k], best.fit.fitted[k]});
+    return reading;
+}
+
+Eigen::Vector2d spot_offset(const optics::Design& design, const Eigen::Vector3d& light) {
+    const optics::DisplaySimulator simulator(design);
+    optics::SimulationOptions options;
+    options.model = optics::Model::Exact;
+    options.rays_per_side = 32;
+    const optics::RepeatedRays rays = simulator.trace_lenslet({{light.normalized(), {1.0, 1.0, 1.0}, 0.0}}, options);
+    // The reading is taken over a disc about the centroid of the lenslet's light on the
+    // diffuser: the pattern is read where the rays landing in that disc crossed it.
+    Eigen::Vector2d landing = Eigen::Vector2d::Zero();
+    double total = 0.0;
+    for (const optics::LensletRay& ray : rays.rays)
+        if (!ray.crossed) landing += ray.reaching * ray.on_diffuser, total += ray.reaching;
+    if (!(total > 0.0)) throw InputError(SourceLocation{}, "no light reaches the pattern from that direction");
+    landing /= total;
+    const double radius = kReadRadius * optics::DesignOptics(design).lattice().pitch_x();
+    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+    double read = 0.0;
+    for (const optics::LensletRay& ray : rays.rays)
+        if (!ray.crossed && (ray.on_diffuser - landing).norm() <= radius)
+            sum += ray.reaching * ray.on_pattern, read += ray.reaching;
+    if (!(read > 0.0)) throw InputError(SourceLocation{}, "the light from that direction misses the lenslets' centres");
+    return sum / read;
+}
+
+Registration combine_registration(const optics::Design& design, const std::vector<RegistrationReading>& readings,
+                                  const std::optional<Eigen::Vector3d>& light) {
+    RFD_CHECK(!readings.empty());
+    Registration result;
+    // Each photograph's b, with its variance; the spot offset to add.
+    Eigen::Vector2d spot = Eigen::Vector2d::Zero();
+    std::vector<const RegistrationReading*> first_way, turned;
+    for (const RegistrationReading& r : readings)
+        ((r.quarter_turns - readings.front().quarter_turns + 4) % 4 == 2 ? turned : first_way).push_back(&r);
+    const auto mean_of = [](const std::vector<const RegistrationReading*>& group) {
+        Eigen::Vector4d mean = Eigen::Vector4d::Zero();
+        Eigen::Matrix4d covariance = Eigen::Matrix4d::Zero();
+        for (const RegistrationReading* r : group) {
+            mean += Eigen::Vector4d(r->apparent_shift.x(), r->apparent_shift.y(), r->rotation_rad, r->pitch_error);
+            covariance += r->covariance;
+        }
+        const auto n = static_cast<double>(group.size());
+        return std::pair{Eigen::Vector4d(mean / n), Eigen::Matrix4d(covariance / (n * n))};
+    };
+    Eigen::Vector4d estimate;
+    Eigen::Matrix4d covariance;
+    if (light) {
+        spot = spot_offset(design, *light);
+        std::vector<const RegistrationReading*> all;
+        for (const RegistrationReading& r : readings) all.push_back(&r);
+        std::tie(estimate, covariance) = mean_of(all);
+        estimate.head<2>() += spot;
+        result.light = "given";
+    } else if (!turned.empty()) {
+        const auto [a, ca] = mean_of(first_way);
+        const auto [b, cb] = mean_of(turned);
+        estimate = 0.5 * (a + b);
+        covariance = 0.25 * (ca + cb);
+        spot = 0.5 * (b - a).head<2>();
+        result.light = "turned pair";
+    } else {
+        std::vector<const RegistrationReading*> all;
+        for (const RegistrationReading& r : readings) all.push_back(&r);
+        std::tie(estimate, covariance) = mean_of(all);
+        result.light = "assumed head-on";
+    }
+    result.spot = spot;
+    result.shift_mm = estimate.head<2>();
+    result.sigma_shift_mm = Eigen::Vector2d(std::sqrt(covariance(0, 0)), std::sqrt(covariance(1, 1)));
+    result.rotation_deg = radians_to_degrees(estimate(2));
+    result.sigma_rotation_deg = radians_to_degrees(std::sqrt(covariance(2, 2)));
+    result.pitch_error = estimate(3);
+    result.sigma_pitch_error = std::sqrt(covariance(3, 3));
+    return result;
+}
+
+}  // namespace rfd::calibrate
+
+namespace rfd::calibrate {
+
+std::string registration_text(const Registration& m, const std::vector<RegistrationReading>& readings,
+                              const RegistrationTolerances& tolerances) {
+    std::string text;
+    for (const RegistrationReading& r : readings)
+        text += format_text("%s: %zu lenslets, %.3f mm a pixel, turned %d quarter turn(s), fit correlation %.3f "
+                            "(next way up %.3f), residual %.1f %%; reads shift %+.4f, %+.4f mm\n",
+                            r.name.c_str(), r.lenslets.size(), r.mm_per_pixel, r.quarter_turns, r.correlation,
+                            r.runner_up, 100.0 * r.rms, r.apparent_shift.x(), r.apparent_shift.y());
+    if (m.light == "given")
+        text += format_text("light: as given (its spot %+.4f, %+.4f mm from the lenslets' centres)\n", m.spot.x(), m.spot.y());
+    else if (m.light == "turned pair")
+        text += format_text("light: from the turned pair, its spot %+.4f, %+.4f mm from the lenslets' centres\n",
+                            m.spot.x(), m.spot.y());
+    else
+        text += "light: assumed head-on (a light tilted by 1 deg moves the reading by about f tan 1 deg; photograph "
+                "the display again turned by half a turn, or give --light-tilt)\n";
+    text += format_text("shift     %+.4f, %+.4f mm (+-%.4f, %.4f): the pattern lies this far right and up of where it "
+                        "belongs, seen from the front\n",
+                        m.shift_mm.x(), m.shift_mm.y(), m.sigma_shift_mm.x(), m.sigma_shift_mm.y());
+    text += format_text("turn      %+.4f deg (+-%.4f), counter-clockwise seen from the front\n", m.rotation_deg,
+                        m.sigma_rotation_deg);
+    text += format_text("scale     %+.4f %% (+-%.4f): the print's size over the encoded, with the light's spread\n",
+                        100.0 * m.pitch_error, 100.0 * m.sigma_pitch_error);
+    const double shift = m.shift_mm.norm();
+    if (tolerances.shift_mm)
+        text += format_text("shift %.3f mm is %s the design's tolerance of %.3f mm\n", shift,
+                            shift <= *tolerances.shift_mm ? "inside" : "OUTSIDE", *tolerances.shift_mm);
+    if (tolerances.rotation_deg)
+        text += format_text("turn %.3f deg is %s the design's tolerance of %.3f deg\n", std::abs(m.rotation_deg),
+                            std::abs(m.rotation_deg) <= *tolerances.rotation_deg ? "inside" : "OUTSIDE",
+                            *tolerances.rotation_deg);
+    const bool inside = (!tolerances.shift_mm || shift <= *tolerances.shift_mm) &&
+                        (!tolerances.rotation_deg || std::abs(m.rotation_deg) <= *tolerances.rotation_deg);
+    if (!tolerances.shift_mm && !tolerances.rotation_deg)
+        text += "tolerances: not given (--tolerance: the folder rfd simulate tolerance wrote)\n";
+    if (inside && (tolerances.shift_mm || tolerances.rotation_deg))
+        text += "verdict: inside the tolerances; fix the pattern where it is\n";
+    else
+        text += format_text("to do: move the pattern by %+.3f, %+.3f mm (right, up, seen from the front) and turn it by "
+                            "%+.3f deg (counter-clockwise), or reprint it shifted so\n",
+                            -m.shift_mm.x(), -m.shift_mm.y(), -m.rotation_deg);
+    return text;
+}
+
+}  // namespace rfd::calibrate
