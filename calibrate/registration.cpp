@@ -28,7 +28,9 @@ constexpr double kLightRadius = 0.4;      // of the pitch: a lenslet's light on 
 constexpr double kSearchStepMm = 0.02;    // the shift's first search
 constexpr int kGainTerms = 6;            // gain: 1, u, v, u^2, uv, v^2
 constexpr int kGroups = 8;
-constexpr double kTurnMargin = 0.05;      // the best quarter turn's correlation over the next's
+constexpr double kTurnMargin = 0.05;
+constexpr double kDistinctShiftMm = 0.06;   // shifts this far apart are different readings
+constexpr double kAmbiguousChi2 = 25.0;     // a second shift fitting within 5 noise sigmas      // the best quarter turn's correlation over the next's
 
 // The array's lenslets and its outline (cell corners of the outermost lenslets).
 struct ArrayShape {
@@ -420,6 +422,10 @@ FitResult gauss_newton(const FitData& data, const PatternMap& map, Eigen::Vector
 
 struct TurnFit {
     FitResult fit;
+    // How much worse the best distinct shift fits (residual sum of squares over the noise
+    // variance): below kAmbiguousChi2, the pattern cannot tell them apart.
+    double alternative_chi2 = HUGE_VAL;
+    Eigen::Vector2d alternative = Eigen::Vector2d::Zero();
     FitData data;
     std::vector<optics::CellIndex> cells;
     Eigen::Matrix3d array_to_photo;
@@ -472,11 +478,30 @@ TurnFit fit_turn(const Image& luminance, const ArrayShape& shape, const Outline&
         }
     });
     const auto best = static_cast<int>(std::max_element(score.begin(), score.end()) - score.begin());
-    Eigen::Vector4d start = Eigen::Vector4d::Zero();
-    start.head<2>() = Eigen::Vector2d(kSearchStepMm * (best % (2 * steps + 1) - steps), kSearchStepMm * (best / (2 * steps + 1) - steps));
+    const auto shift_of = [&](int index) {
+        return Eigen::Vector2d(kSearchStepMm * (index % (2 * steps + 1) - steps), kSearchStepMm * (index / (2 * steps + 1) - steps));
+    };
     std::vector<std::size_t> all(turn.data.value.size());
     std::iota(all.begin(), all.end(), std::size_t{0});
+    Eigen::Vector4d start = Eigen::Vector4d::Zero();
+    start.head<2>() = shift_of(best);
     turn.fit = gauss_newton(turn.data, map, start, all);
+    // The best other shift, away from this one (a pattern whose lenslets' images are
+    // symmetric reads the same with the shift mirrored): it must fit clearly worse.
+    int other = -1;
+    for (int k = 0; k < static_cast<int>(score.size()); ++k)
+        if ((shift_of(k) - shift_of(best)).norm() > kDistinctShiftMm &&
+            (other < 0 || score[static_cast<std::size_t>(k)] > score[static_cast<std::size_t>(other)]))
+            other = k;
+    if (other >= 0) {
+        start.head<2>() = shift_of(other);
+        const FitResult alternative = gauss_newton(turn.data, map, start, all);
+        const double best_rss = residuals(turn.data, map, turn.fit.parameters, all).squaredNorm();
+        const double other_rss = residuals(turn.data, map, alternative.parameters, all).squaredNorm();
+        if ((alternative.parameters.head<2>() - turn.fit.parameters.head<2>()).norm() > kDistinctShiftMm)
+            turn.alternative_chi2 = (other_rss - best_rss) / (best_rss / static_cast<double>(all.size()));
+        turn.alternative = alternative.parameters.head<2>();
+    }
     const Eigen::VectorXd r = residuals(turn.data, map, turn.fit.parameters, all, &turn.fit.fitted);
     Eigen::Map<const Eigen::VectorXd> measured(turn.data.value.data(), static_cast<Eigen::Index>(turn.data.value.size()));
     const double mean = measured.mean();
@@ -534,22 +559,28 @@ double PatternMap::at(const Eigen::Vector2d& point) const {
 }
 
 RegistrationReading read_registration_photo(const Image& photo, const std::string& name,
-                                            const optics::Design& design, const PatternMap& map) {
+                                            const optics::Design& design, const PatternMap& map,
+                                            std::optional<int> quarter_turns) {
+    RFD_CHECK(!quarter_turns || (*quarter_turns >= 0 && *quarter_turns < 4));
     const ArrayShape shape = array_shape(design);
     const Image luminance = photo_luminance(photo);
     const Outline outline = find_outline(luminance, name);
-    std::array<TurnFit, 4> turns;
-    for (int q = 0; q < 4; ++q) turns[static_cast<std::size_t>(q)] = fit_turn(luminance, shape, outline, q, map);
-    std::array<int, 4> order{0, 1, 2, 3};
-    std::sort(order.begin(), order.end(), [&](int a, int b) {
-        return turns[static_cast<std::size_t>(a)].fit.correlation > turns[static_cast<std::size_t>(b)].fit.correlation;
-    });
-    TurnFit& best = turns[static_cast<std::size_t>(order[0])];
+    // The quarter turns to try: the one given, or all.
+    std::vector<int> tried;
+    for (int q = 0; q < 4; ++q)
+        if (!quarter_turns || *quarter_turns == q) tried.push_back(q);
+    std::vector<TurnFit> turns;
+    for (const int q : tried) turns.push_back(fit_turn(luminance, shape, outline, q, map));
+    std::vector<std::size_t> order(turns.size());
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    std::sort(order.begin(), order.end(),
+              [&](std::size_t a, std::size_t b) { return turns[a].fit.correlation > turns[b].fit.correlation; });
+    TurnFit& best = turns[order[0]];
     RegistrationReading reading;
     reading.name = name;
-    reading.quarter_turns = order[0];
+    reading.quarter_turns = tried[order[0]];
     reading.correlation = best.fit.correlation;
-    reading.runner_up = turns[static_cast<std::size_t>(order[1])].fit.correlation;
+    reading.runner_up = order.size() > 1 ? turns[order[1]].fit.correlation : NAN;
     if (reading.correlation < kMinCorrelation)
         throw InputError(SourceLocation{name}, format_text("the lenslets' readings do not follow the pattern (correlation "
                                                            "%.2f, at least %.2f needed): is it this pattern, lit from "
@@ -557,8 +588,16 @@ RegistrationReading read_registration_photo(const Image& photo, const std::strin
                                                            reading.correlation, kMinCorrelation));
     if (reading.correlation < reading.runner_up + kTurnMargin)
         throw InputError(SourceLocation{name}, format_text("the pattern fits two ways up about as well (correlations "
-                                                           "%.3f and %.3f): it is too plain to say which",
+                                                           "%.3f and %.3f): it is too symmetric to say which; say "
+                                                           "which way up the display is in the photograph",
                                                            reading.correlation, reading.runner_up));
+    if (best.alternative_chi2 < kAmbiguousChi2)
+        throw InputError(SourceLocation{name}, format_text("the pattern reads about as well shifted by %+.3f, %+.3f mm as by "
+                                                           "%+.3f, %+.3f mm (its lenslets' images are too symmetric or too "
+                                                           "plain to tell): photograph it under a light off the axis, or "
+                                                           "register with a picture that changes with the light",
+                                                           best.alternative.x(), best.alternative.y(),
+                                                           best.fit.parameters.x(), best.fit.parameters.y()));
     const Eigen::Vector4d& p = best.fit.parameters;
     reading.apparent_shift = p.head<2>();
     reading.rotation_rad = p(2);
@@ -588,11 +627,15 @@ RegistrationReading read_registration_photo(const Image& photo, const std::strin
             }
     }
     reading.covariance = covariance;
-    const double sigma = std::sqrt(std::max(covariance(0, 0), covariance(1, 1)));
-    if (!(sigma <= kMaxShiftSigmaMm))
-        throw InputError(SourceLocation{name}, format_text("the shift is uncertain by %.3f mm (at most %.3f mm "
-                                                           "measures): the photograph is too blurred or too dark",
-                                                           sigma, kMaxShiftSigmaMm));
+    for (int axis = 0; axis < 2; ++axis) {
+        const double sigma = std::sqrt(covariance(axis, axis));
+        if (!(sigma <= kMaxShiftSigmaMm))
+            throw InputError(SourceLocation{name}, format_text("the shift along %s is uncertain by %.3f mm (at most %.3f mm "
+                                                               "measures): the photograph is too blurred or too dark, or the "
+                                                               "pattern has too little detail along %s",
+                                                               axis == 0 ? "x" : "y", sigma, kMaxShiftSigmaMm,
+                                                               axis == 0 ? "x" : "y"));
+    }
     reading.array_to_photo = best.array_to_photo;
     reading.mm_per_pixel = mm_per_pixel_at(best.array_to_photo, 0.5 * (shape.low + shape.high));
     for (std::size_t k = 0; k < best.data.value.size(); ++k)
@@ -683,10 +726,11 @@ std::string registration_text(const Registration& m, const std::vector<Registrat
                               const RegistrationTolerances& tolerances) {
     std::string text;
     for (const RegistrationReading& r : readings)
-        text += format_text("%s: %zu lenslets, %.3f mm a pixel, turned %d quarter turn(s), fit correlation %.3f "
-                            "(next way up %.3f), residual %.1f %%; reads shift %+.4f, %+.4f mm\n",
+        text += format_text("%s: %zu lenslets, %.3f mm a pixel, turned %d quarter turn(s), fit correlation %.3f%s, "
+                            "residual %.1f %%; reads shift %+.4f, %+.4f mm\n",
                             r.name.c_str(), r.lenslets.size(), r.mm_per_pixel, r.quarter_turns, r.correlation,
-                            r.runner_up, 100.0 * r.rms, r.apparent_shift.x(), r.apparent_shift.y());
+                            std::isfinite(r.runner_up) ? format_text(" (next way up %.3f)", r.runner_up).c_str() : "",
+                            100.0 * r.rms, r.apparent_shift.x(), r.apparent_shift.y());
     if (m.light == "given")
         text += format_text("light: as given (its spot %+.4f, %+.4f mm from the lenslets' centres)\n", m.spot.x(), m.spot.y());
     else if (m.light == "turned pair")

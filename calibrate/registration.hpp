@@ -15,11 +15,16 @@
 // turn in its plane, the light unchanged, reverses s: the mean of the two is the shift, half
 // their difference the light's offset. Or the light's direction is given.
 //
-// Steps: the lit display is the largest bright region; the four corners of its convex hull
-// give a first homography from the array to the photo; the lenslet images' centroids then
-// refine it (a weighted least-squares homography over every lenslet, four times); every
-// lenslet is read over a disc a third of its pitch wide about its image. The photograph does
-// not say which side of the display is up: each quarter turn is fitted and the best kept.
+// Steps: the lit display is the largest region brighter than Otsu's threshold; the four
+// corners of its convex hull (the largest quadrilateral on it) give a first homography from
+// the array's lit footprint to the photo, good to a pitch or so; the lenslet images' phase
+// over the array's middle, then their centroids, in squares growing from the middle outward,
+// refine it (a weighted least-squares homography each time); the whole-lenslet offset of the
+// labels is the one that keeps the edge rows on light, not on the holder. So the display's
+// corners must be lit: a pattern dark at the array's edge is refused (its readings do not
+// follow it). Every lenslet is read over a disc a third of its pitch wide about its image.
+// The photograph may not say which side of the display is up: it is given (upright, or
+// turned by half a turn), or each quarter turn is fitted and the best kept.
 // The fit: the pattern (its transmittance's mean over the channels, averaged on a grid of
 // kPatternStepMm) correlated with the readings over shifts within half a pitch, then Gauss-
 // Newton on the shift, turn and scale with the light falloff solved linearly at every step.
@@ -27,8 +32,10 @@
 //
 // Where it stops (InputError, saying which): no lit display in view, a pattern the readings do
 // not follow (correlation under kMinCorrelation: another pattern, blurred or dark), two
-// quarter turns that fit about as well (a pattern too plain to say which way is up), or a
-// shift less certain than kMaxShiftSigmaMm.
+// quarter turns that fit about as well (a pattern too plain to say which way is up), a second
+// shift that fits within 5 noise sigmas of the best (lenslet images symmetric about their
+// centres read the same with the shift mirrored), or a shift less certain than
+// kMaxShiftSigmaMm along either axis (a pattern without detail along it: vertical bars).
 //
 // Example: PatternMap map(printed, design);
 //          RegistrationReading r = read_registration_photo(photo, "photo.jpg", design, map);
@@ -46,8 +53,8 @@
 namespace rfd::calibrate {
 
 inline constexpr double kPatternStepMm = 0.04;
-inline constexpr double kMinCorrelation = 0.5;
-inline constexpr double kMaxShiftSigmaMm = 0.05;
+inline constexpr double kMinCorrelation = 0.9;
+inline constexpr double kMaxShiftSigmaMm = 0.03;
 
 /// The printed pattern's transmittance (mean over its channels) averaged on a grid of
 /// kPatternStepMm over the array, bilinear between: what a lenslet's spot reads.
@@ -79,7 +86,7 @@ struct RegistrationReading {
     double pitch_error = 0.0;
     Eigen::Matrix4d covariance = Eigen::Matrix4d::Zero();  ///< of (b_x, b_y, rotation, pitch_error)
     double correlation = 0.0;       ///< of the readings and the model, at the best quarter turn
-    double runner_up = 0.0;         ///< the next best quarter turn's
+    double runner_up = 0.0;         ///< the next best quarter turn's (NaN: one was given)
     double rms = 0.0;               ///< residual over the mean reading
     double mm_per_pixel = 0.0;      ///< on the display, at its centre
     Eigen::Matrix3d array_to_photo = Eigen::Matrix3d::Identity();  ///< where the lenslets' light is seen
@@ -87,9 +94,12 @@ struct RegistrationReading {
 };
 
 /// Reads one photograph (linear; any channels) of `design` assembled with the pattern `map`
-/// was made from. InputError naming `name` where it cannot measure (see the header comment).
+/// was made from, the display turned by `quarter_turns` (counter-clockwise, 0..3: 0 is upright
+/// within 45 deg) in the picture, or, when not given, by whichever fits best. InputError naming
+/// `name` where it cannot measure (see the header comment).
 RegistrationReading read_registration_photo(const Image& photo, const std::string& name,
-                                            const optics::Design& design, const PatternMap& map);
+                                            const optics::Design& design, const PatternMap& map,
+                                            std::optional<int> quarter_turns = std::nullopt);
 
 /// Where the light's spot falls on the pattern, from the lenslet's centre, for a light of
 /// direction of travel `light` (z > 0): the mean over the lenslet's rays (exact optics), mm.

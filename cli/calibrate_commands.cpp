@@ -169,8 +169,9 @@ void add_simulate_photo_command(CLI::App& calibrate) {
         const int pixels = opt->pixels > 0 ? opt->pixels : moire ? 4000 : display ? 3000 : 1600;
         std::optional<optics::Design> design;
         if (moire || display) {
-            if (opt->design.empty()) throw InputError(SourceLocation{"--design"}, "the " + opt->sheet + " needs a design");
-            if (opt->from_back) throw InputError(SourceLocation{"--from-back"}, "the " + opt->sheet + " is photographed from the front");
+            const std::string what = moire ? "the moire sheet" : "the display";
+            if (opt->design.empty()) throw InputError(SourceLocation{"--design"}, what + " needs a design");
+            if (opt->from_back) throw InputError(SourceLocation{"--from-back"}, what + " is photographed from the front");
             design = optics::load_design(opt->design);
         }
         calibrate::Camera camera = calibrate::framing_camera(display ? calibrate::display_paper(*design) : printer.paper,
@@ -281,17 +282,24 @@ void add_registration_command(CLI::App& calibrate) {
                         "tolerances and how to move the pattern");
     struct Options {
         std::string design, pattern, tolerance;
-        std::vector<std::string> photos;
+        std::vector<std::string> photos, turned;
         PrintOptions print;
         double light_tilt = NAN, light_turn = 0;
+        bool any_way_up = false;
     };
     auto opt = std::make_shared<Options>();
     cmd->add_option("DESIGN", opt->design, "The display's design")->required();
     cmd->add_option("PATTERN", opt->pattern, "The pattern file that was printed and mounted")->required();
     cmd->add_option("PHOTO", opt->photos,
-                    "Photographs of the display from the front; two turned by half a turn against each other "
-                    "(the light unchanged) cancel the light's tilt")
+                    "Photographs of the display from the front, lit from behind by one small light, upright (its top "
+                    "up within 45 deg)")
         ->required();
+    cmd->add_option("--turned", opt->turned,
+                    "Photographs of the display turned by half a turn in its plane, the light and camera unchanged: "
+                    "with the upright ones they cancel the light's tilt");
+    cmd->add_flag("--any-way-up", opt->any_way_up,
+                  "The photographs may show the display any way up: try each quarter turn (the pattern must not look "
+                  "the same turned)");
     add_print_options(*cmd, opt->print);
     cmd->add_option("--light-tilt", opt->light_tilt,
                     "The light's angle from the display's axis, degrees, when known (otherwise a turned pair "
@@ -317,7 +325,11 @@ void add_registration_command(CLI::App& calibrate) {
         const calibrate::PatternMap map(printed, design);
         std::vector<calibrate::RegistrationReading> readings;
         for (const std::string& photo : opt->photos)
-            readings.push_back(calibrate::read_registration_photo(read_image(photo), photo, design, map));
+            readings.push_back(calibrate::read_registration_photo(read_image(photo), photo, design, map,
+                                                                  opt->any_way_up ? std::nullopt : std::optional(0)));
+        for (const std::string& photo : opt->turned)
+            readings.push_back(calibrate::read_registration_photo(read_image(photo), photo, design, map,
+                                                                  opt->any_way_up ? std::nullopt : std::optional(2)));
         std::optional<Eigen::Vector3d> light;
         if (std::isfinite(opt->light_tilt))
             light = optics::incident_direction(degrees_to_radians(opt->light_tilt), degrees_to_radians(opt->light_turn));

@@ -1,0 +1,48 @@
+# `rfd calibrate simulate-photo display` and `rfd calibrate registration` end to end: Design I
+# with a relit scene's pattern (spheres on a checkerboard, printed at 720 dpi) mounted 0.08 mm
+# right, 0.05 mm down and turned 0.1 deg, photographed from 20 deg with blur and noise, and
+# the pair turned by half a turn (the sun head-on: this scene's pattern reads 0.03-0.06 mm
+# uncertain with the sun 1-3 deg off, which the command refuses); the shift read back within
+# 0.03 mm; the same text twice; a pattern too symmetric to read, a bad option and a missing
+# pattern refused with the reason.
+include(${CMAKE_CURRENT_LIST_DIR}/run_rfd.cmake)
+file(REMOVE_RECURSE ${OUT})
+file(MAKE_DIRECTORY ${OUT})
+set(design ${DESIGN})
+
+run(0 capture render ${SCENE} --samples-per-pixel 1 --resolution 63x73 --lights 60 --out ${OUT}/field)
+run(0 pattern encode ${design} ${OUT}/field --printer inkjet_720 --out ${OUT}/pattern.exr)
+set(mounted --design ${design} --pattern ${OUT}/pattern.exr --pattern-shift 0.08,-0.05 --pattern-rotation 0.1
+    --camera-pixels 2400 --blur 1 --photons 3000)
+run(0 calibrate simulate-photo display inkjet_720 ${mounted} --camera-tilt 20 --out ${OUT}/front.jpg)
+foreach(run a b)
+  run(0 calibrate registration ${design} ${OUT}/pattern.exr ${OUT}/front.jpg)
+  set(text_${run} "${last_output}")
+endforeach()
+if(NOT text_a STREQUAL text_b)
+  message(FATAL_ERROR "two readings of one photograph differ")
+endif()
+# +0.08 +- 0.03, -0.05 +- 0.03
+expect("shift +\\+0\\.(0[5-9]|1[01])[0-9]*, -0\\.0[2-8][0-9]* mm")
+expect("light: assumed head-on")
+
+# Upright and turned by half a turn, the camera unchanged.
+run(0 calibrate simulate-photo display inkjet_720 ${mounted} --camera-roll 180 --seed 2 --out ${OUT}/turned.jpg)
+run(0 calibrate registration ${design} ${OUT}/pattern.exr ${OUT}/front.jpg --turned ${OUT}/turned.jpg)
+expect("light: from the turned pair")
+expect("shift +\\+0\\.(0[5-9]|1[01])[0-9]*, -0\\.0[2-8][0-9]* mm")
+
+# Refused, with the reason.
+run(0 pattern field diamonds --resolution 63x73 --out ${OUT}/diamonds)
+run(0 pattern encode ${design} ${OUT}/diamonds --printer inkjet_720 --out ${OUT}/diamonds.exr)
+run(0 calibrate simulate-photo display inkjet_720 --design ${design} --pattern ${OUT}/diamonds.exr
+    --pattern-shift 0.08,-0.05 --camera-pixels 1600 --out ${OUT}/diamonds.jpg)
+run(2 calibrate registration ${design} ${OUT}/diamonds.exr ${OUT}/diamonds.jpg)
+expect("diamonds.jpg: ")
+run(2 calibrate registration ${design} ${OUT}/pattern.exr ${OUT}/front.jpg --light-tilt 90)
+expect("--light-tilt: Value 90 not in range")
+run(2 calibrate simulate-photo display inkjet_720 --design ${design} --out ${OUT}/never.jpg)
+expect("the display needs its pattern")
+if(EXISTS ${OUT}/never.jpg)
+  message(FATAL_ERROR "a refused command wrote never.jpg")
+endif()
