@@ -36,7 +36,7 @@ public:
     explicit Texture(unsigned seed) {
         std::mt19937 random(seed);
         std::uniform_real_distribution<double> unit(0.0, 1.0);
-        for (int k = 0; k < 24; ++k) {
+        for (int k = 0; k < 12; ++k) {
             const double angle = 2.0 * kPi * unit(random);
             const double wavelength = 0.15 * std::pow(40.0, unit(random));  // 0.15 .. 6 mm
             waves_.push_back({Eigen::Vector2d(std::cos(angle), std::sin(angle)) * 2.0 * kPi / wavelength,
@@ -48,7 +48,7 @@ public:
         for (std::size_t k = 0; k < points.size(); ++k) {
             double sum = 0.0;
             for (const Wave& w : waves_) sum += std::sin(w.k.dot(points[k]) + w.phase);
-            out[k] = static_cast<float>(std::clamp(0.5 + 0.12 * sum, 0.02, 1.0));
+            out[k] = static_cast<float>(std::clamp(0.5 + 0.17 * sum, 0.02, 1.0));
         }
     }
 
@@ -71,15 +71,18 @@ const RegistrationFixture& registration_fixture() {
     return f;
 }
 
-Camera display_camera() { return framing_camera(display_paper(registration_fixture().design), 450.0, 0.9, 2400); }
+Camera display_camera() { return framing_camera(display_paper(registration_fixture().design), 450.0, 0.9, 1800); }
 
-Image photo_of(const optics::Mounting& mounting, const DisplayScene& scene, const Camera& camera) {
+// Through the display's exact optics, 8 x 8 rays a lenslet (each lenslet's reading is their mean).
+Image photo_of(const optics::Mounting& mounting, DisplayScene scene, const Camera& camera) {
     const RegistrationFixture& f = registration_fixture();
     const optics::MisalignedTransparency mounted(f.pattern, mounting);
+    scene.rays_per_side = 8;
     return simulated_display_photo(f.design, mounted, scene, camera);
 }
 
-// Head-on sun, frontal camera: one photograph measures the shift and the turn.
+// Head-on sun, frontal camera: one photograph measures the shift and the turn, and which way
+// up the display is.
 TEST(Registration, ReadsTheShiftAndTurnFromAPhotograph) {
     const RegistrationFixture& f = registration_fixture();
     const optics::Mounting mounting{{0.12, -0.07}, degrees_to_radians(0.1), 0.0};
@@ -109,11 +112,10 @@ TEST(Registration, ATurnedPairCancelsTheLight) {
     DisplayScene turned = scene;
     turned.light.head<2>() *= -1.0;
     Camera camera = rfd::testing::hand_held(display_camera());
-    const RegistrationReading a = read_registration_photo(photo_of(mounting, scene, camera), "upright", f.design, f.map);
+    const RegistrationReading a = read_registration_photo(photo_of(mounting, scene, camera), "upright", f.design, f.map, 0);
     camera.pose.roll_deg += 180.0;
     camera.seed = 2;
-    const RegistrationReading b = read_registration_photo(photo_of(mounting, turned, camera), "turned", f.design, f.map);
-    EXPECT_EQ((b.quarter_turns - a.quarter_turns + 4) % 4, 2);
+    const RegistrationReading b = read_registration_photo(photo_of(mounting, turned, camera), "turned", f.design, f.map, 2);
     const Registration m = combine_registration(f.design, {a, b}, std::nullopt);
     const Eigen::Vector2d spot = spot_offset(f.design, scene.light);
     std::printf("pair: shift %+.4f %+.4f (+-%.4f) mm, turn %+.4f deg; spot %+.4f %+.4f vs %+.4f %+.4f\n",
