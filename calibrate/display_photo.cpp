@@ -28,6 +28,14 @@ std::pair<Eigen::Vector2d, Eigen::Vector2d> array_box(const optics::Lattice& lat
 
 }  // namespace
 
+double diffuser_at(const optics::DiffuserImage& diffuser, const Eigen::Vector2d& a) {
+    const double u = (a.x() - diffuser.first_pixel.x()) / diffuser.pixel_mm;
+    const double v = (diffuser.first_pixel.y() - a.y()) / diffuser.pixel_mm;
+    double sum = 0.0;
+    for (int c = 0; c < diffuser.image.channels(); ++c) sum += sample_bilinear(diffuser.image, u, v, c);
+    return sum / diffuser.image.channels();
+}
+
 print::Paper display_paper(const optics::Design& design) {
     const auto [low, high] = array_box(optics::DesignOptics(design).lattice());
     const double half_x = std::max(high.x(), -low.x()), half_y = std::max(high.y(), -low.y());
@@ -60,27 +68,14 @@ Image simulated_display_photo(const optics::Design& design, const optics::Transp
     const int width = static_cast<int>(std::ceil(paper.width * kPlanePixelsPerMm));
     const int height = static_cast<int>(std::ceil(paper.height * kPlanePixelsPerMm));
     Image seen(width, height, 1);
-    const int channels = diffuser.image.channels();
     for (int y = 0; y < height; ++y)
         for (int x = 0; x < width; ++x) {
             // Array point of this pixel, then the diffuser's pixel there.
             const Eigen::Vector2d a((x + 0.5) / kPlanePixelsPerMm - 0.5 * paper.width,
                                     0.5 * paper.height - (y + 0.5) / kPlanePixelsPerMm);
-            const double u = (a.x() - diffuser.first_pixel.x()) / diffuser.pixel_mm;
-            const double v = (diffuser.first_pixel.y() - a.y()) / diffuser.pixel_mm;
-            double value = scene.holder;
-            if (u >= 0.0 && v >= 0.0 && u <= diffuser.image.width() - 1 && v <= diffuser.image.height() - 1) {
-                double sum = 0.0;
-                for (int c = 0; c < channels; ++c) {
-                    const int ui = std::min(static_cast<int>(u), diffuser.image.width() - 2);
-                    const int vi = std::min(static_cast<int>(v), diffuser.image.height() - 2);
-                    const double fu = u - ui, fv = v - vi;
-                    sum += (1 - fv) * ((1 - fu) * diffuser.image.at(ui, vi, c) + fu * diffuser.image.at(ui + 1, vi, c)) +
-                           fv * ((1 - fu) * diffuser.image.at(ui, vi + 1, c) + fu * diffuser.image.at(ui + 1, vi + 1, c));
-                }
-                value = std::max(scene.holder, transmittance * sum / channels);
-            }
-            seen.at(x, y, 0) = static_cast<float>(value);
+            const double value = diffuser_at(diffuser, a);
+            seen.at(x, y, 0) =
+                static_cast<float>(std::isfinite(value) ? std::max(scene.holder, transmittance * value) : scene.holder);
         }
     return photograph(seen, kPlanePixelsPerMm, camera);
 }

@@ -32,6 +32,9 @@ print::Paper display_paper(const optics::Design& design);
 /// The point of the photographed plane where array point `a` lies.
 Eigen::Vector2d display_plane_point(const optics::Design& design, const Eigen::Vector2d& a);
 
+/// The diffuser image at array point `a`: the mean of its channels, bilinear; NaN outside it.
+double diffuser_at(const optics::DiffuserImage& diffuser, const Eigen::Vector2d& a);
+
 /// What is photographed besides the pattern: the light and how much light the holder passes.
 struct DisplayScene {
     /// The light's direction of travel, from behind toward the camera (z > 0, the display's

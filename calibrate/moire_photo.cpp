@@ -5,6 +5,7 @@
 
 #include <Eigen/LU>
 
+#include "calibrate/display_photo.hpp"
 #include "calibrate/sheet_finder.hpp"
 #include "core/error.hpp"
 #include "core/units.hpp"
@@ -42,12 +43,6 @@ private:
     Eigen::Matrix2d to_page_;
     float line_;
 };
-
-// The diffuser image at array point `a`, bilinear; NaN outside it.
-double diffuser_at(const optics::DiffuserImage& diffuser, const Eigen::Vector2d& a) {
-    return sample_bilinear(diffuser.image, (a.x() - diffuser.first_pixel.x()) / diffuser.pixel_mm,
-                           (diffuser.first_pixel.y() - a.y()) / diffuser.pixel_mm);
-}
 
 }  // namespace
 

@@ -198,13 +198,14 @@ Image photo_luminance(const Image& photo) {
     return out;
 }
 
-double sample_bilinear(const Image& plane, double u, double v) {
+double sample_bilinear(const Image& plane, double u, double v, int channel) {
     if (!(u >= 0.0 && v >= 0.0 && u <= plane.width() - 1.0 && v <= plane.height() - 1.0))
         return std::numeric_limits<double>::quiet_NaN();
     const int x0 = std::min(static_cast<int>(u), plane.width() - 2), y0 = std::min(static_cast<int>(v), plane.height() - 2);
     const double fx = u - x0, fy = v - y0;
-    return (1 - fy) * ((1 - fx) * plane.at(x0, y0, 0) + fx * plane.at(x0 + 1, y0, 0)) +
-           fy * ((1 - fx) * plane.at(x0, y0 + 1, 0) + fx * plane.at(x0 + 1, y0 + 1, 0));
+    const int c = channel;
+    return (1 - fy) * ((1 - fx) * plane.at(x0, y0, c) + fx * plane.at(x0 + 1, y0, c)) +
+           fy * ((1 - fx) * plane.at(x0, y0 + 1, c) + fx * plane.at(x0 + 1, y0 + 1, c));
 }
 
 double mean_over_page_rect(const Image& plane, const Eigen::Matrix3d& page_to_photo, double x0, double y0, double x1,

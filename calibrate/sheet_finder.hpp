@@ -40,9 +40,9 @@ SheetLocation find_sheet(const Image& photo, const print::SheetMarks& marks, con
 Eigen::Matrix3d homography_from_points(const std::array<Eigen::Vector2d, 4>& from,
                                        const std::array<Eigen::Vector2d, 4>& to);
 
-/// The first channel of `plane` at pixel (u, v) (pixel centres at integers), bilinear; NaN
+/// Channel `channel` of `plane` at pixel (u, v) (pixel centres at integers), bilinear; NaN
 /// outside the outermost pixel centres.
-double sample_bilinear(const Image& plane, double u, double v);
+double sample_bilinear(const Image& plane, double u, double v, int channel = 0);
 
 /// The mean of one photo plane over a page rectangle [x0, x1] x [y0, y1] mm, sampled bilinearly
 /// about once per photo pixel; NaN when the rectangle leaves the photo.

@@ -212,4 +212,12 @@ void add_frame_option(CLI::App& command, predict::LightFrame& frame) {
                "to its axis) or field (as the field was captured, before --tilt/--turn/--angle-scale)");
 }
 
+std::filesystem::path summary_file(const std::string& folder, const char* option) {
+    const std::filesystem::path file = std::filesystem::path(folder) / "summary.json";
+    if (!std::filesystem::exists(file))
+        throw IoError(SourceLocation{file.string(), 0, 0, option},
+                      std::string("cannot open (expected the folder that rfd simulate ") + (option + 2) + " --out wrote)");
+    return file;
+}
+
 }  // namespace rfd::cli

@@ -4,6 +4,7 @@
 #include <array>
 #include <cstddef>
 #include <cmath>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <utility>
@@ -133,5 +134,10 @@ double field_of_view_half_angle_deg(const optics::DesignOptics& optics, const st
 
 /// --frame display|field for --light (predict::kDefaultLightFrame), with its help.
 void add_frame_option(CLI::App& command, predict::LightFrame& frame);
+
+/// FOLDER/summary.json of the folder an `rfd simulate` subcommand wrote, given as `option`
+/// (--compare, --tolerance: the subcommand's name after the dashes); IoError naming the file
+/// and the option when it is not there.
+std::filesystem::path summary_file(const std::string& folder, const char* option);
 
 }  // namespace rfd::cli

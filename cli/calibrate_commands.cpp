@@ -311,12 +311,8 @@ void add_registration_command(CLI::App& calibrate) {
         const optics::Design design = optics::load_design(opt->design);
         calibrate::RegistrationTolerances tolerances;
         if (!opt->tolerance.empty()) {
-            const std::filesystem::path file = std::filesystem::path(opt->tolerance) / "summary.json";
-            if (!std::filesystem::exists(file))
-                throw IoError(SourceLocation{file.string(), 0, 0, "--tolerance"},
-                              "cannot open (expected the folder that rfd simulate tolerance --out wrote)");
             for (const predict::ToleranceCurveRecord& curve :
-                 predict::read_summary<predict::ToleranceSummary>(file).curves) {
+                 predict::read_summary<predict::ToleranceSummary>(summary_file(opt->tolerance, "--tolerance")).curves) {
                 if (curve.kind == "shift") tolerances.shift_mm = curve.tolerance.value_or(curve.max);
                 if (curve.kind == "rotation") tolerances.rotation_deg = curve.tolerance.value_or(curve.max);
             }

@@ -45,20 +45,12 @@ void add_simulate_verdict_command(CLI::App& simulate) {
             if (onset)
                 inputs.crosstalk_free_cone_deg = std::min(inputs.crosstalk_free_cone_deg.value_or(1e300), 2.0 * *onset);
         inputs.warnings = analysis.warnings;
-        const auto summary = [](const std::string& folder, const char* option) {
-            const std::filesystem::path file = std::filesystem::path(folder) / "summary.json";
-            if (!std::filesystem::exists(file))
-                throw IoError(SourceLocation{file.string(), 0, 0, option},
-                              std::string("cannot open (expected the folder that rfd simulate ") + (option + 2) +
-                                  " --out wrote)");
-            return file;
-        };
-        const auto compare = predict::read_summary<predict::CompareSummary>(summary(opt->compare, "--compare"));
+        const auto compare = predict::read_summary<predict::CompareSummary>(summary_file(opt->compare, "--compare"));
         for (const predict::CompareDirection& d : compare.directions)
             inputs.directions.push_back({d.display_angle_deg, d.inside_fov, d.crosstalk_free, d.mse, d.peak});
         if (!opt->tolerance.empty()) {
             predict::AssemblyTolerances t;
-            const auto tolerance = predict::read_summary<predict::ToleranceSummary>(summary(opt->tolerance, "--tolerance"));
+            const auto tolerance = predict::read_summary<predict::ToleranceSummary>(summary_file(opt->tolerance, "--tolerance"));
             for (const predict::ToleranceCurveRecord& curve : tolerance.curves) {
                 // A sweep that never fell below the threshold bounds the tolerance from below
                 // by its largest error.
