@@ -722,6 +722,12 @@ Registration combine_registration(const optics::Design& design, const std::vecto
 
 namespace rfd::calibrate {
 
+std::optional<bool> inside_tolerances(const Registration& m, const RegistrationTolerances& tolerances) {
+    if (!tolerances.shift_mm && !tolerances.rotation_deg) return std::nullopt;
+    return (!tolerances.shift_mm || m.shift_mm.norm() <= *tolerances.shift_mm) &&
+           (!tolerances.rotation_deg || std::abs(m.rotation_deg) <= *tolerances.rotation_deg);
+}
+
 std::string registration_text(const Registration& m, const std::vector<RegistrationReading>& readings,
                               const RegistrationTolerances& tolerances) {
     std::string text;
@@ -754,11 +760,9 @@ std::string registration_text(const Registration& m, const std::vector<Registrat
         text += format_text("turn %.3f deg is %s the design's tolerance of %.3f deg\n", std::abs(m.rotation_deg),
                             std::abs(m.rotation_deg) <= *tolerances.rotation_deg ? "inside" : "OUTSIDE",
                             *tolerances.rotation_deg);
-    const bool inside = (!tolerances.shift_mm || shift <= *tolerances.shift_mm) &&
-                        (!tolerances.rotation_deg || std::abs(m.rotation_deg) <= *tolerances.rotation_deg);
-    if (!tolerances.shift_mm && !tolerances.rotation_deg)
-        text += "tolerances: not given (--tolerance: the folder rfd simulate tolerance wrote)\n";
-    if (inside && (tolerances.shift_mm || tolerances.rotation_deg))
+    const std::optional<bool> inside = inside_tolerances(m, tolerances);
+    if (!inside) text += "tolerances: not given (--tolerance: the folder rfd simulate tolerance wrote)\n";
+    if (inside.value_or(false))
         text += "verdict: inside the tolerances; fix the pattern where it is\n";
     else
         text += format_text("to do: move the pattern by %+.3f, %+.3f mm (right, up, seen from the front) and turn it by "

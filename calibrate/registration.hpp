@@ -133,6 +133,10 @@ struct RegistrationTolerances {
     std::optional<double> shift_mm, rotation_deg;
 };
 
+/// Whether the shift (its length) and the turn are inside `tolerances`; nullopt when neither
+/// is known.
+std::optional<bool> inside_tolerances(const Registration& registration, const RegistrationTolerances& tolerances);
+
 /// What `rfd calibrate registration` prints: each photograph's fit, the combined shift, turn
 /// and scale with uncertainties, whether they are inside `tolerances`, and what to do.
 std::string registration_text(const Registration& registration, const std::vector<RegistrationReading>& readings,

@@ -281,7 +281,7 @@ void add_registration_command(CLI::App& calibrate) {
                         "assembled display lit from behind by one small light: whether they are inside the design's "
                         "tolerances and how to move the pattern");
     struct Options {
-        std::string design, pattern, tolerance;
+        std::string design, pattern, tolerance, out;
         std::vector<std::string> photos, turned;
         PrintOptions print;
         double light_tilt = NAN, light_turn = 0;
@@ -307,7 +307,10 @@ void add_registration_command(CLI::App& calibrate) {
         ->check(CLI::Range(0.0, 60.0));
     cmd->add_option("--light-turn", opt->light_turn, "The azimuth of that tilt from the display's +x, degrees");
     cmd->add_option("--tolerance", opt->tolerance, "Folder that rfd simulate tolerance wrote: judge against it");
+    cmd->add_option("--out", opt->out, "Also the result as JSON (what rfd make reads)");
     cmd->callback([opt] {
+        if (!opt->out.empty() && std::filesystem::path(opt->out).extension() != ".json")
+            throw InputError(SourceLocation{opt->out, 0, 0, "--out"}, "expected a .json file");
         const optics::Design design = optics::load_design(opt->design);
         calibrate::RegistrationTolerances tolerances;
         if (!opt->tolerance.empty()) {
@@ -331,6 +334,22 @@ void add_registration_command(CLI::App& calibrate) {
             light = optics::incident_direction(degrees_to_radians(opt->light_tilt), degrees_to_radians(opt->light_turn));
         const calibrate::Registration registration = calibrate::combine_registration(design, readings, light);
         std::fputs(calibrate::registration_text(registration, readings, tolerances).c_str(), stdout);
+        if (!opt->out.empty()) {
+            predict::RegistrationSummary summary;
+            summary.design = design.name;
+            summary.photographs = static_cast<int>(readings.size());
+            summary.light = registration.light;
+            summary.shift_mm = {registration.shift_mm.x(), registration.shift_mm.y()};
+            summary.sigma_shift_mm = {registration.sigma_shift_mm.x(), registration.sigma_shift_mm.y()};
+            summary.rotation_deg = registration.rotation_deg;
+            summary.sigma_rotation_deg = registration.sigma_rotation_deg;
+            summary.scale_error = registration.pitch_error;
+            summary.sigma_scale_error = registration.sigma_pitch_error;
+            summary.tolerance_shift_mm = tolerances.shift_mm;
+            summary.tolerance_rotation_deg = tolerances.rotation_deg;
+            summary.inside = calibrate::inside_tolerances(registration, tolerances);
+            predict::write_summary(opt->out, summary);
+        }
     });
 }
 

@@ -362,6 +362,37 @@ void from_json(const json& j, VerdictReport& v) {
     read(j, "warnings", v.warnings);
 }
 
+void to_json(json& j, const RegistrationSummary& r) {
+    j = {{"design", r.design},
+         {"photographs", r.photographs},
+         {"light", r.light},
+         {"shift_mm", r.shift_mm},
+         {"sigma_shift_mm", r.sigma_shift_mm},
+         {"rotation_deg", r.rotation_deg},
+         {"sigma_rotation_deg", r.sigma_rotation_deg},
+         {"scale_error", r.scale_error},
+         {"sigma_scale_error", r.sigma_scale_error},
+         {"tolerance_shift_mm", number_or_null(r.tolerance_shift_mm)},
+         {"tolerance_rotation_deg", number_or_null(r.tolerance_rotation_deg)},
+         {"inside", r.inside ? json(*r.inside) : json()}};
+}
+
+void from_json(const json& j, RegistrationSummary& r) {
+    read(j, "design", r.design);
+    read(j, "photographs", r.photographs);
+    read(j, "light", r.light);
+    read(j, "shift_mm", r.shift_mm);
+    read(j, "sigma_shift_mm", r.sigma_shift_mm);
+    read(j, "rotation_deg", r.rotation_deg);
+    read(j, "sigma_rotation_deg", r.sigma_rotation_deg);
+    read(j, "scale_error", r.scale_error);
+    read(j, "sigma_scale_error", r.sigma_scale_error);
+    r.tolerance_shift_mm = optional_number(j, "tolerance_shift_mm");
+    r.tolerance_rotation_deg = optional_number(j, "tolerance_rotation_deg");
+    const json& inside = j.at("inside");
+    r.inside = inside.is_null() ? std::nullopt : std::optional<bool>(inside.get<bool>());
+}
+
 template <class Summary>
 std::string summary_text(const Summary& value) {
     return json(value).dump(2) + "\n";
@@ -389,6 +420,9 @@ template void write_summary(const std::filesystem::path&, const VerdictReport&);
 template CompareSummary read_summary(const std::filesystem::path&);
 template ToleranceSummary read_summary(const std::filesystem::path&);
 template VerdictReport read_summary(const std::filesystem::path&);
+template void write_summary(const std::filesystem::path&, const RegistrationSummary&);
+template RegistrationSummary read_summary(const std::filesystem::path&);
+template std::string summary_text(const RegistrationSummary&);
 template std::string summary_text(const CompareSummary&);
 template std::string summary_text(const ToleranceSummary&);
 template std::string summary_text(const VerdictReport&);

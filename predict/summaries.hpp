@@ -6,6 +6,7 @@
 //   predict/compare/summary.json    CompareSummary    rfd simulate compare  -> rfd simulate verdict
 //   predict/tolerance/summary.json  ToleranceSummary  rfd simulate tolerance -> rfd simulate verdict
 //   verdict.json                    VerdictReport     rfd simulate verdict  -> README.txt, index.html
+//   calibration/registration.json   RegistrationSummary rfd calibrate registration -> README.txt
 //
 // One PSNR for a display against its field: 10 log10(field_peak^2 / MSE), field_peak the
 // brightest reference value over every compared direction (psnr_against_field_db). A
@@ -137,6 +138,20 @@ struct VerdictReport {
     std::vector<std::string> warnings;
 };
 
+/// calibration/registration.json: where the printed pattern sits on the lens array, as
+/// photographs of the assembled display measured it, and whether that is inside the design's
+/// tolerances.
+struct RegistrationSummary {
+    std::string design;
+    int photographs = 0;
+    std::string light;  ///< how the light's spot was taken out: "given", "turned pair", "assumed head-on"
+    std::array<double, 2> shift_mm{}, sigma_shift_mm{};  ///< right and up of where it belongs, seen from the front
+    double rotation_deg = 0.0, sigma_rotation_deg = 0.0;  ///< counter-clockwise seen from the front
+    double scale_error = 0.0, sigma_scale_error = 0.0;    ///< the print's size over the encoded, minus 1
+    std::optional<double> tolerance_shift_mm, tolerance_rotation_deg;
+    std::optional<bool> inside;  ///< nullopt: no tolerances to judge against
+};
+
 /// The report of `verdict`; `at_least` as in VerdictReport::Tolerances.
 VerdictReport verdict_report(const Verdict& verdict, const std::vector<std::string>& at_least);
 
@@ -152,6 +167,8 @@ void to_json(nlohmann::json& json, const ToleranceSummary& value);
 void from_json(const nlohmann::json& json, ToleranceSummary& value);
 void to_json(nlohmann::json& json, const VerdictReport& value);
 void from_json(const nlohmann::json& json, VerdictReport& value);
+void to_json(nlohmann::json& json, const RegistrationSummary& value);
+void from_json(const nlohmann::json& json, RegistrationSummary& value);
 
 /// Writes `value` as indented JSON, atomically.
 template <class Summary>

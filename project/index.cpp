@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <system_error>
 
@@ -44,6 +45,32 @@ std::vector<std::string> files_with_extension(const fs::path& folder, const fs::
     return files;
 }
 
+// The registration step's result as one instruction; nullopt when it was not made (or its
+// file is not what it wrote: the step re-makes it next time).
+std::optional<std::string> registration_text(const fs::path& out) {
+    std::error_code ec;
+    if (!fs::exists(out / "calibration/registration.json", ec)) return std::nullopt;
+    predict::RegistrationSummary r;
+    try {
+        r = predict::read_summary<predict::RegistrationSummary>(out / "calibration/registration.json");
+    } catch (const Error&) {
+        return std::nullopt;
+    }
+    std::string text = "Measured from " + std::to_string(r.photographs) + " photograph(s) of the display (light " +
+                       r.light + "): the pattern lies " + format_fixed(r.shift_mm[0], 3) + ", " +
+                       format_fixed(r.shift_mm[1], 3) + " mm right and up of where it belongs (+-" +
+                       format_fixed(std::max(r.sigma_shift_mm[0], r.sigma_shift_mm[1]), 3) + "), turned " +
+                       format_fixed(r.rotation_deg, 3) + " deg counter-clockwise, seen from the front. ";
+    if (r.inside && *r.inside)
+        text += "That is inside the assembly tolerances: fix the pattern where it is.";
+    else
+        text += std::string(r.inside ? "That is OUTSIDE the assembly tolerances: " : "") + "move the pattern by " +
+                format_fixed(-r.shift_mm[0], 3) + ", " + format_fixed(-r.shift_mm[1], 3) + " mm and turn it by " +
+                format_fixed(-r.rotation_deg, 3) + " deg" +
+                (r.inside ? "." : " (no tolerances were predicted to judge against).");
+    return text + " The whole report: logs/calibrate_registration.txt.";
+}
+
 std::vector<Section> instructions(const Project& project, const fs::path& out) {
     const optics::Design design = optics::load_design(project.design);
     const print::PrinterProfile printer = print::load_printer(project.printer);
@@ -51,13 +78,38 @@ std::vector<Section> instructions(const Project& project, const fs::path& out) {
                                      format_number(printer.dpi_y.value) + " dpi)";
     std::vector<Section> sections;
 
-    Section print_first{"1. Calibrate", {}};
-    if (made(out, "print/moire.pdf"))
+    Section holder{"1. Print the holder", {}};
+    if (made(out, "holder")) {
+        const holders::HolderProfile profile = holders::load_profile(project.printer_3d);
+        holder.items.push_back({"3D-print these parts with " + profile.name +
+                                    ". holder.txt in logs/ lists the seats and the checks they passed; holder.scad "
+                                    "is the OpenSCAD source.",
+                                files_with_extension(out / "holder", out, ".stl")});
+    }
+    holder.items.push_back(
+        {"If you do not know your 3D printer's clearance, print the fit-test coupon first: "
+         "rfd holder coupon --out coupon.scad --stl coupon.stl",
+         {}});
+    sections.push_back(holder);
+
+    // The order that makes the rest right: the test sheets are printed and photographed
+    // before the pattern, which is then encoded for the measured pitch and tone.
+    Section print_first{"2. Calibrate (before printing the pattern)", {}};
+    if (made(out, "calibration/design.toml"))
+        print_first.items.push_back(
+            {"The lens array's pitch, measured from " + std::to_string(project.calibration.moire_photos.size()) +
+                 " photograph(s) of the moire sheet: the pattern, the sheets, the holder and the predictions here "
+                 "are for it (calibration/design.toml, its pitch line says how far it is from the design's; every "
+                 "lenslet's reading in calibration/pitch).",
+             {"calibration/pitch/profile_x.png", "calibration/design.toml"}});
+    else if (made(out, "print/moire.pdf"))
         print_first.items.push_back(
             {"Print moire.pdf on transparency film with " + film_printer +
-                 ", at 100 % (no scaling, no colour adjustment). Lay the lens array on it: the band whose fringes "
-                 "vanish or are widest has the array's true pitch. If it is not the design's, put it into the "
-                 "design's lattice and run rfd make again.",
+                 ", at 100 % (no scaling, no colour adjustment). Lay it in the holder's pattern pocket under the lens "
+                 "array, light it from behind and photograph it from the front with its four corner discs in view "
+                 "(docs/usage.md, \"Calibrating from photographs\"); name the photographs in the project's "
+                 "[calibration] moire_photos: rfd make then measures the array's true pitch and builds everything "
+                 "for it.",
              {"print/moire.pdf", "print/moire.png"}});
     if (made(out, "calibration/printer.toml"))
         print_first.items.push_back(
@@ -72,21 +124,8 @@ std::vector<Section> instructions(const Project& project, const fs::path& out) {
              "[calibration] wedge_photos: rfd make then measures the printer's tone curve and prints and predicts "
              "everything with it.",
              {"print/wedge.pdf", "print/wedge.png"}});
-    print_first.items.push_back(
-        {"If you do not know your 3D printer's clearance, print the fit-test coupon first: "
-         "rfd holder coupon --out coupon.scad --stl coupon.stl",
-         {}});
     sections.push_back(print_first);
 
-    Section holder{"2. Print the holder", {}};
-    if (made(out, "holder")) {
-        const holders::HolderProfile profile = holders::load_profile(project.printer_3d);
-        holder.items.push_back({"3D-print these parts with " + profile.name +
-                                    ". holder.txt in logs/ lists the seats and the checks they passed; holder.scad "
-                                    "is the OpenSCAD source.",
-                                files_with_extension(out / "holder", out, ".stl")});
-    }
-    sections.push_back(holder);
 
     Section film{"3. Print the pattern", {}};
     std::vector<std::string> fronts, backs;
@@ -119,6 +158,19 @@ std::vector<Section> instructions(const Project& project, const fs::path& out) {
     assemble.items.push_back(
         {"Light it from behind with a small lamp; the picture changes as the lamp moves.", {}});
     sections.push_back(assemble);
+
+    Section check{"5. Check where the pattern sits", {}};
+    if (const std::optional<std::string> measured = registration_text(out))
+        check.items.push_back({*measured, {"calibration/registration.json"}});
+    else
+        check.items.push_back(
+            {"Light the display from behind with one small lamp far away (or the sun), photograph it from the "
+             "front with the whole display in the frame, then turn the display by half a turn in its plane, the "
+             "lamp and camera where they were, and photograph it again; name them in the project's [calibration] "
+             "display_photos and turned_photos: rfd make then says how far the pattern is from where it belongs "
+             "and whether that is inside the tolerances (docs/usage.md, \"Calibrating from photographs\").",
+             {}});
+    sections.push_back(check);
 
     Section predicted{"What it will show", {}};
     if (made(out, "predict/compare/psnr.png"))

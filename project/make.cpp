@@ -71,8 +71,11 @@ std::string last_lines(const std::string& text, int count) {
 
 std::vector<Step> plan(const Project& p) {
     // The user's files by absolute path, what steps make by their place in the output folder.
-    const fs::path design_file = outside(p.design);
-    const std::string design = design_file.string();
+    // `design` is the one built: the named design, or the one with the measured pitch.
+    const fs::path named_design_file = outside(p.design);
+    const std::string named_design = named_design_file.string();
+    fs::path design_file = named_design_file;
+    std::string design = named_design;
     const fs::path printer = outside(print::printer_file(p.printer));
     // A bundled printer is passed on by name, so the pattern records the name users know.
     const std::string printer_name = fs::path(p.printer).has_parent_path() ? printer.string() : p.printer;
@@ -83,7 +86,8 @@ std::vector<Step> plan(const Project& p) {
     // the profile's own (its codes do not depend on it).
     fs::path film_printer = printer;
     std::string film_printer_name = printer_name;
-    if (const Calibration& c = p.calibration; !c.wedge_photos.empty()) {
+    const Calibration& c = p.calibration;
+    if (!c.wedge_photos.empty()) {
         Step tone{"calibrate_tone",
                   "the printer's tone curve measured from the photographs of its wedge (calibration/printer.toml; the "
                   "patches and curves in calibration/tone)",
@@ -99,6 +103,28 @@ std::vector<Step> plan(const Project& p) {
         steps.push_back(std::move(tone));
         film_printer = "calibration/printer.toml";
         film_printer_name = film_printer.string();
+    }
+    // With photographs of the moire sheet under the array, the array's pitch is measured next
+    // and the pattern is encoded, printed and predicted for the measured design. The moire
+    // sheet and the holder stay the named design's: they were printed before the photographs
+    // (the sheet's bands are what was photographed; the holder held the array for them).
+    if (!c.moire_photos.empty()) {
+        Step pitch{"calibrate_pitch",
+                   "the lens array's pitch measured from the photographs of the moire sheet (calibration/design.toml; "
+                   "every lenslet's reading and the fitted profiles in calibration/pitch)",
+                   {"calibrate", "pitch", named_design},
+                   {named_design_file, film_printer},
+                   {"calibration/design.toml", "calibration/pitch"}};
+        for (const fs::path& photo : c.moire_photos) {
+            pitch.arguments.push_back(outside(photo).string());
+            pitch.inputs.push_back(outside(photo));
+        }
+        pitch.arguments.insert(pitch.arguments.end(),
+                               {"--printer", film_printer_name, "--page", std::to_string(c.moire_page), "--out",
+                                "calibration/design.toml", "--report", "calibration/pitch"});
+        steps.push_back(std::move(pitch));
+        design_file = "calibration/design.toml";
+        design = design_file.string();
     }
 
     fs::path field;
@@ -187,9 +213,9 @@ std::vector<Step> plan(const Project& p) {
         }
     if (p.outputs.moire)
         steps.push_back({"moire", "the pitch calibration sheet (moire.pdf)",
-                         {"print", "moire", design, "--printer", film_printer_name, "--out", "print/moire.pdf",
+                         {"print", "moire", named_design, "--printer", film_printer_name, "--out", "print/moire.pdf",
                           "--preview", "print/moire.png"},
-                         {design_file, film_printer},
+                         {named_design_file, film_printer},
                          {"print/moire.pdf", "print/moire.png"}});
     if (p.outputs.wedge)
         steps.push_back({"wedge", "the step wedge that measures the printer's tone curve (wedge.pdf)",
@@ -199,9 +225,9 @@ std::vector<Step> plan(const Project& p) {
                          {"print/wedge.pdf", "print/wedge.png"}});
     if (p.outputs.holder)
         steps.push_back({"holder", "the lens holder: OpenSCAD source, STLs to 3D-print, and their checks",
-                         {"holder", design, "--3d-printer", outside(p.printer_3d).string(), "--printer", film_printer_name,
-                          "--out", "holder/holder.scad", "--stl", "holder/holder.stl"},
-                         {design_file, outside(p.printer_3d), film_printer},
+                         {"holder", named_design, "--3d-printer", outside(p.printer_3d).string(), "--printer",
+                          film_printer_name, "--out", "holder/holder.scad", "--stl", "holder/holder.stl"},
+                         {named_design_file, outside(p.printer_3d), film_printer},
                          {"holder"}});
     if (p.outputs.compare_sweep > 0)
         steps.push_back({"compare",
@@ -217,6 +243,35 @@ std::vector<Step> plan(const Project& p) {
                          {"simulate", "tolerance", design, pattern, "--out", "predict/tolerance"},
                          {design_file, pattern_file},
                          {"predict/tolerance"}});
+    // Photographs of the assembled display: where its pattern sits, judged against the
+    // tolerances just predicted.
+    if (!c.display_photos.empty()) {
+        Step registration{"calibrate_registration",
+                          "where the printed pattern sits on the lens array, measured from the photographs of the "
+                          "assembled display (calibration/registration.json; the report in "
+                          "logs/calibrate_registration.txt)",
+                          {"calibrate", "registration", design, pattern},
+                          {design_file, pattern_file},
+                          {"calibration/registration.json"}};
+        for (const fs::path& photo : c.display_photos) {
+            registration.arguments.push_back(outside(photo).string());
+            registration.inputs.push_back(outside(photo));
+        }
+        for (const fs::path& photo : c.turned_photos) {
+            registration.arguments.insert(registration.arguments.end(), {"--turned", outside(photo).string()});
+            registration.inputs.push_back(outside(photo));
+        }
+        if (c.display_light_tilt_deg)
+            registration.arguments.insert(registration.arguments.end(),
+                                          {"--light-tilt", format_number(*c.display_light_tilt_deg, 17), "--light-turn",
+                                           format_number(c.display_light_turn_deg, 17)});
+        if (p.outputs.tolerance) {
+            registration.arguments.insert(registration.arguments.end(), {"--tolerance", "predict/tolerance"});
+            registration.inputs.push_back("predict/tolerance");
+        }
+        registration.arguments.insert(registration.arguments.end(), {"--out", "calibration/registration.json"});
+        steps.push_back(std::move(registration));
+    }
     if (p.outputs.preview_lights > 0) {
         steps.push_back({"preview", "the preview page's pictures: predicted and relit over the field of view",
                          {"simulate", "preview", design, pattern, field.string(), "--count",

@@ -134,18 +134,40 @@ Outputs read_outputs(ConfigTable& table) {
     return o;
 }
 
-Calibration read_calibration(ConfigTable& table, const fs::path& folder) {
-    Calibration c;
-    // Each photograph checked like every other source: a regular file, before anything reads it.
-    for (const std::string& photo : table.strings("wedge_photos")) {
+// Photographs named under `key`, each a regular file, before anything reads them.
+std::vector<fs::path> photographs(ConfigTable& table, const std::string& key, const fs::path& folder) {
+    std::vector<fs::path> photos;
+    if (!table.has(key)) return photos;
+    for (const std::string& photo : table.strings(key)) {
         const fs::path path = (folder / photo).lexically_normal();
         std::error_code ec;
         if (photo.empty() || !fs::is_regular_file(path, ec))
-            table.fail("wedge_photos", "cannot open '" + path.string() + "': expected a photograph (a regular file)");
-        c.wedge_photos.push_back(path);
+            table.fail(key, "cannot open '" + path.string() + "': expected a photograph (a regular file)");
+        photos.push_back(path);
     }
-    if (c.wedge_photos.empty()) table.fail("wedge_photos", "expected at least one photograph of the printed wedge");
+    if (photos.empty()) table.fail(key, "expected at least one photograph (or leave the key out)");
+    return photos;
+}
+
+Calibration read_calibration(ConfigTable& table, const fs::path& folder) {
+    Calibration c;
+    c.wedge_photos = photographs(table, "wedge_photos", folder);
     if (table.has("light")) c.light = table.choice("light", {"back", "reflected"});
+    c.moire_photos = photographs(table, "moire_photos", folder);
+    if (table.has("moire_page")) c.moire_page = static_cast<int>(table.integer("moire_page", 1, 100));
+    c.display_photos = photographs(table, "display_photos", folder);
+    c.turned_photos = photographs(table, "turned_photos", folder);
+    c.display_light_tilt_deg = table.optional_number("display_light_tilt_deg", 0.0, 60.0);
+    if (table.has("display_light_turn_deg"))
+        c.display_light_turn_deg = table.number("display_light_turn_deg", -360.0, 360.0);
+    if (c.wedge_photos.empty() && c.moire_photos.empty() && c.display_photos.empty())
+        table.fail("wedge_photos", "the table names no photographs: expected wedge_photos, moire_photos or "
+                                   "display_photos");
+    if (!c.turned_photos.empty() && c.display_photos.empty())
+        table.fail("turned_photos", "expected display_photos too: the turned photographs pair with upright ones");
+    if (c.display_photos.empty() && (table.has("display_light_tilt_deg") || table.has("display_light_turn_deg")))
+        table.fail(table.has("display_light_tilt_deg") ? "display_light_tilt_deg" : "display_light_turn_deg",
+                   "expected display_photos: the light is the one they were taken in");
     return c;
 }
 

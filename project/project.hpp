@@ -10,9 +10,16 @@
 //   [optimize] enabled, iterations, spacing_mm, core_weight: the pattern is optimised through
 //              the simulator (rfd pattern optimize) and the sheets print that one, unless
 //              enabled = false
-//   [calibration] wedge_photos, light: photographs of the printed step wedge; the printer's
-//              tone curve is measured from them (rfd calibrate tone) and everything is
-//              printed and predicted with the measured profile
+//   [calibration] what the maker photographed, each optional:
+//              wedge_photos, light: the printed step wedge; the printer's tone curve is
+//              measured from them (rfd calibrate tone) and everything is printed and
+//              predicted with the measured profile;
+//              moire_photos, moire_page: the moire sheet under the lens array; the array's
+//              pitch is measured (rfd calibrate pitch) and everything after is encoded,
+//              printed and predicted for the measured design;
+//              display_photos, turned_photos, display_light_tilt_deg, display_light_turn_deg:
+//              the assembled display lit from behind; the pattern's registration is measured
+//              (rfd calibrate registration) and judged against the assembly tolerances
 //
 // Paths are relative to the project file. Every key is checked like every other input
 // file: an unknown key or a value out of range is an error naming file, line and key.
@@ -71,10 +78,16 @@ struct Optimization {
     double core_weight = predict::kCoreWeightOption.fallback;
 };
 
-/// What the maker measured on the printed test sheets.
+/// What the maker photographed: the printed test sheets, then the assembled display.
 struct Calibration {
     std::vector<std::filesystem::path> wedge_photos;  ///< scans or photographs of print/wedge.pdf
     std::string light = "back";                       ///< how they were lit: "back" or "reflected"
+    std::vector<std::filesystem::path> moire_photos;  ///< of print/moire.pdf under the lens array
+    int moire_page = 1;                               ///< the sheet's page they show
+    std::vector<std::filesystem::path> display_photos;  ///< of the assembled display, upright
+    std::vector<std::filesystem::path> turned_photos;   ///< the same turned by half a turn
+    std::optional<double> display_light_tilt_deg;       ///< the lamp's tilt from the axis, when known
+    double display_light_turn_deg = 0.0;                ///< and its azimuth
 };
 
 struct Project {

@@ -360,6 +360,65 @@ TEST(ProjectPlan, WedgePhotographsCalibrateThePrinterFirst) {
     EXPECT_THAT(error_for("wedge_photos = [\"wedge 1.jpg\"]\nlight = \"side\"\n"), HasSubstr("calibration.light"));
 }
 
+// Photographs of the moire sheet: the pitch is measured before the pattern, which is built
+// for the measured design; the sheet and the holder stay the named design's (printed before
+// the photographs). Photographs of the display: its registration, judged against the
+// tolerances predicted for it.
+TEST(ProjectPlan, MoireAndDisplayPhotographsMeasureThePitchAndTheRegistration) {
+    TempDir dir;
+    write_small_field(dir / "field", 0.5f);
+    for (const char* photo : {"moire.jpg", "up.jpg", "turned.jpg"}) write(dir / photo, "a photograph");
+    const std::string photos = "\n[calibration]\nmoire_photos = [\"moire.jpg\"]\nmoire_page = 2\n"
+                               "display_photos = [\"up.jpg\"]\nturned_photos = [\"turned.jpg\"]\n";
+    write(dir / "p.toml", kProject + photos);
+    const std::vector<Step> steps = plan(load_project(dir / "p.toml"));
+    std::vector<std::string> order;
+    std::map<std::string, std::string> lines;
+    for (const Step& step : steps) {
+        order.push_back(step.name);
+        lines[step.name] = command_line(step) + " ";
+    }
+    const auto at = [&](const char* name) { return std::find(order.begin(), order.end(), name) - order.begin(); };
+    ASSERT_LT(at("calibrate_pitch"), at("pattern"));
+    ASSERT_LT(at("tolerance"), at("calibrate_registration"));
+    ASSERT_LT(at("calibrate_registration"), static_cast<long>(order.size()));
+    EXPECT_THAT(lines["calibrate_pitch"],
+                AllOf(HasSubstr("calibrate pitch /"), HasSubstr("design2.toml"), HasSubstr("moire.jpg"),
+                      HasSubstr("--page 2"), HasSubstr("--out calibration/design.toml")));
+    for (const char* step : {"pattern", "optimize", "sheet_front_pdf", "compare", "tolerance", "preview", "verdict",
+                             "calibrate_registration"})
+        EXPECT_THAT(lines[step], HasSubstr(" calibration/design.toml ")) << step;
+    for (const char* step : {"moire", "holder"}) {
+        EXPECT_THAT(lines[step], HasSubstr("design2.toml")) << step;
+        EXPECT_THAT(lines[step], Not(HasSubstr("calibration/design.toml"))) << step;
+    }
+    EXPECT_THAT(lines["calibrate_registration"],
+                AllOf(HasSubstr("calibrate registration calibration/design.toml pattern_optimized.exr /"),
+                      HasSubstr("up.jpg --turned /"), HasSubstr("turned.jpg --tolerance predict/tolerance"),
+                      HasSubstr("--out calibration/registration.json"), Not(HasSubstr("--light-tilt"))));
+    write(dir / "p.toml", kProject + photos + "display_light_tilt_deg = 5\ndisplay_light_turn_deg = 90\n");
+    for (const Step& step : plan(load_project(dir / "p.toml"))) {
+        if (step.name == "calibrate_registration") {
+            EXPECT_THAT(command_line(step), HasSubstr("--light-tilt 5 --light-turn 90"));
+        }
+    }
+
+    const auto error_for = [&](const std::string& table) {
+        write(dir / "p.toml", kProject + "\n[calibration]\n" + table);
+        return error_of([&] { load_project(dir / "p.toml"); });
+    };
+    EXPECT_THAT(error_for("light = \"back\"\n"), HasSubstr("names no photographs"));
+    EXPECT_THAT(error_for("moire_photos = [\"moire.jpg\"]\nmoire_page = 0\n"), HasSubstr("calibration.moire_page"));
+    EXPECT_THAT(error_for("moire_photos = [\"moire.jpg\"]\nturned_photos = [\"turned.jpg\"]\n"),
+                AllOf(HasSubstr("calibration.turned_photos"), HasSubstr("display_photos")));
+    EXPECT_THAT(error_for("moire_photos = [\"moire.jpg\"]\ndisplay_light_tilt_deg = 3\n"),
+                HasSubstr("calibration.display_light_tilt_deg"));
+    EXPECT_THAT(error_for("display_photos = [\"up.jpg\"]\ndisplay_light_tilt_deg = 70\n"),
+                HasSubstr("calibration.display_light_tilt_deg"));
+    EXPECT_THAT(error_for("display_photos = [\"nowhere.jpg\"]\n"),
+                AllOf(HasSubstr("calibration.display_photos"), HasSubstr("nowhere.jpg")));
+}
+
 // Optimisation is the default; `enabled = false` prints the direct encoding.
 TEST(ProjectPlan, PatternsAreOptimisedUnlessTheProjectSaysNot) {
     TempDir dir;

@@ -91,6 +91,31 @@ TEST(Summaries, ToleranceSummaryRoundTripsEveryKey) {
     EXPECT_EQ(read.curves.at(0).sweep.at(1).shift_lenslets, 0.25);
 }
 
+TEST(Summaries, RegistrationSummaryRoundTripsEveryKey) {
+    TempDir dir;
+    RegistrationSummary s;
+    s.design = "Design I";
+    s.photographs = 2;
+    s.light = "turned pair";
+    s.shift_mm = {0.081, -0.049};
+    s.sigma_shift_mm = {0.002, 0.003};
+    s.rotation_deg = 0.11;
+    s.sigma_rotation_deg = 0.004;
+    s.scale_error = -2e-4;
+    s.sigma_scale_error = 5e-5;
+    s.tolerance_shift_mm = 0.19;
+    s.inside = true;
+    write_summary(dir / "registration.json", s);
+    const RegistrationSummary read = read_summary<RegistrationSummary>(dir / "registration.json");
+    EXPECT_EQ(summary_text(read), summary_text(s));
+    EXPECT_EQ(read.shift_mm[1], -0.049);
+    EXPECT_FALSE(read.tolerance_rotation_deg);
+    EXPECT_EQ(read.inside, std::optional<bool>(true));
+    s.inside.reset();
+    write_summary(dir / "registration.json", s);
+    EXPECT_FALSE(read_summary<RegistrationSummary>(dir / "registration.json").inside);
+}
+
 TEST(Summaries, VerdictReportRoundTripsEveryKeyAndComesFromTheVerdict) {
     TempDir dir;
     VerdictInputs inputs;
