@@ -85,7 +85,8 @@ void add_simulate_compare_command(CLI::App& simulate) {
                    "resolution, with PSNR and error maps, for a sweep of light directions (Designs I and II)");
     struct Options {
         PrintOptions print;
-        std::string design, pattern, field, out, models = "paraxial,exact,auto", accuracy_rays = "2,4,8,16";
+        std::string design, pattern, field, out, encoded_for, models = "paraxial,exact,auto",
+                                                          accuracy_rays = "2,4,8,16";
         optics::ModelChoice model = optics::ModelChoice::Auto;
         std::vector<std::string> lights;
         predict::LightFrame frame{};
@@ -99,6 +100,10 @@ void add_simulate_compare_command(CLI::App& simulate) {
     cmd->add_option("PATTERN", opt->pattern, "Pattern file from `rfd pattern encode`")->required();
     cmd->add_option("FIELD", opt->field, "The reflectance field the pattern was encoded from (folder or .lp)")->required();
     cmd->add_option("--out", opt->out, "Output folder")->required();
+    cmd->add_option("--encoded-for", opt->encoded_for,
+                    "The design the pattern was encoded and printed for, when DESIGN is another (the array's measured "
+                    "pitch: rfd calibrate pitch): that print laid centred on DESIGN's array, against the field as "
+                    "DESIGN's lenslets show it");
     cmd->add_option("--light", opt->lights,
                     "Also compare under a white light from THETA,PHI (degrees, in the frame --frame names); repeat "
                     "for several");
@@ -131,7 +136,11 @@ void add_simulate_compare_command(CLI::App& simulate) {
         const auto start = std::chrono::steady_clock::now();
         const optics::Design design = optics::load_design(opt->design);
         const optics::DisplaySimulator simulator(design);
-        const print::PrintedTransparency pattern = printed_pattern(design, opt->pattern, opt->print);
+        const optics::Design printed_for = opt->encoded_for.empty() ? design : optics::load_design(opt->encoded_for);
+        if (printed_for.kind != design.kind)
+            throw InputError(SourceLocation{opt->encoded_for, 0, 0, "--encoded-for"},
+                             "a design of another kind than DESIGN's: its print does not fit DESIGN's array");
+        const print::PrintedTransparency pattern = printed_pattern(printed_for, opt->pattern, opt->print);
         if (opt->sweep == 0 && opt->lights.empty()) throw InputError("--sweep 0 needs at least one --light");
         const Eigen::Vector2d dot_mm(pattern.geometry().dot_x, pattern.geometry().dot_y);
         const optics::ResolvedModel choice = optics::resolve(opt->model, simulator.optics(), dot_mm, opt->tolerance_dots);
@@ -141,8 +150,12 @@ void add_simulate_compare_command(CLI::App& simulate) {
             settings.accuracy_models = parse_models(opt->models, simulator.optics(), dot_mm, opt->tolerance_dots);
             settings.reference_rays = opt->reference_rays;
         }
-        // The field as the encoder saw it: same options, same lenslet samples.
-        const predict::EncodedField reference(design, opt->pattern, pattern.geometry(), pattern.tone().white, opt->field);
+        // The field as the encoder saw it: same options, same lenslet samples, DESIGN's lenslets.
+        const patterns::PatternGeometry& printed = pattern.geometry();
+        const predict::EncodedField reference(
+            design, opt->pattern,
+            patterns::pattern_geometry(design, Dpi{printed.dpi_x}, Dpi{printed.dpi_y}, printed.margin_mm),
+            pattern.tone().white, opt->field);
         const predict::DisplayComparison comparison(simulator, pattern, reference.encoder(), pattern.tone());
         settings.sweep = opt->sweep;
         settings.lights = white_light_directions(opt->lights, opt->frame, reference.encoder().options().mapping);
