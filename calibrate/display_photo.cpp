@@ -10,6 +10,7 @@ namespace rfd::calibrate {
 namespace {
 
 constexpr double kPlanePixelsPerMm = 10.0;  // finer than a photograph's pixel on the display
+constexpr int kMacroPixelRays = 64;          // per side of a Design II lenslet
 
 // The array's bounding box in its frame: its outermost cells' corners.
 std::pair<Eigen::Vector2d, Eigen::Vector2d> array_box(const optics::Lattice& lattice) {
@@ -58,7 +59,11 @@ Image simulated_display_photo(const optics::Design& design, const optics::Transp
     const optics::DisplaySimulator simulator(design);  // InputError unless Design I or II
     optics::SimulationOptions options;
     options.model = optics::Model::Exact;
-    options.rays_per_side = scene.rays_per_side;
+    // Design II's corrective pair spreads each lenslet's light over the image of its whole
+    // aperture, a cell 16 diffuser pixels across and more: with few rays it would be a grid
+    // of dots, not the even macro-pixel the display shows.
+    options.rays_per_side = design.kind == optics::DesignKind::II ? std::max(scene.rays_per_side, kMacroPixelRays)
+                                                                  : scene.rays_per_side;
     options.pixels_per_pitch = 16.0;
     const optics::DiffuserImage diffuser = simulator.simulate(
         mounted, {{scene.light.normalized(), {1.0, 1.0, 1.0}, scene.light_radius_rad}}, options);
