@@ -30,6 +30,7 @@ constexpr int kGainTerms = 6;            // gain: 1, u, v, u^2, uv, v^2
 constexpr int kGroups = 8;
 constexpr double kTurnMargin = 0.05;
 constexpr double kDistinctShiftMm = 0.06;   // shifts this far apart are different readings
+constexpr std::size_t kMinReadLenslets = 16;  // readings a fit needs (shift, turn, scale, light falloff)
 constexpr double kAmbiguousChi2 = 25.0;     // a second shift fitting within 5 noise sigmas      // the best quarter turn's correlation over the next's
 
 // The array's lenslets and its outline (cell corners of the outermost lenslets).
@@ -431,6 +432,11 @@ struct TurnFit {
     Eigen::Matrix3d array_to_photo;
 };
 
+// A lenslet on a corner marker's clear cell or beside it: left out of the fit.
+bool near_marker(const optics::Lattice& lattice, const optics::CellIndex& cell) {
+    return (cell.i <= 1 || cell.i >= lattice.count_x() - 2) && (cell.j <= 1 || cell.j >= lattice.count_y() - 2);
+}
+
 // Reads the lenslets with the homography whose array corners go to the outline's corners
 // turned by `quarter_turns`, and fits.
 TurnFit fit_turn(const Image& luminance, const ArrayShape& shape, const Outline& outline, int quarter_turns,
@@ -457,15 +463,14 @@ TurnFit fit_turn(const Image& luminance, const ArrayShape& shape, const Outline&
     });
     for (std::size_t k = 0; k < shape.centres.size(); ++k) {
         const optics::CellIndex cell = shape.cells[k];
-        const bool near_corner = (cell.i <= 1 || cell.i >= lattice.count_x() - 2) && (cell.j <= 1 || cell.j >= lattice.count_y() - 2);
-        if (near_corner || !std::isfinite(values[k])) continue;
+        if (near_marker(lattice, cell) || !std::isfinite(values[k])) continue;
         const Eigen::Vector2d u = (shape.centres[k] - middle).cwiseQuotient(half);
         turn.data.centre.push_back(shape.centres[k]);
         turn.data.value.push_back(values[k]);
         turn.data.terms.push_back({1.0, u.x(), u.y(), u.x() * u.x(), u.x() * u.y(), u.y() * u.y()});
         turn.cells.push_back(cell);
     }
-    if (turn.data.value.size() < 16) return turn;
+    if (turn.data.value.size() < kMinReadLenslets) return turn;
 
     // The shift with the best correlation within half a pitch, then Gauss-Newton.
     const int steps = static_cast<int>(std::ceil(0.5 * pitch / kSearchStepMm));
@@ -563,6 +568,16 @@ RegistrationReading read_registration_photo(const Image& photo, const std::strin
                                             std::optional<int> quarter_turns) {
     RFD_CHECK(!quarter_turns || (*quarter_turns >= 0 && *quarter_turns < 4));
     const ArrayShape shape = array_shape(design);
+    // An array too small to spare its corners (Design II's 6 x 5 leaves 14 lenslets) does not
+    // hold enough readings to fit the shift, turn, scale and light falloff.
+    const auto readable = static_cast<std::size_t>(std::count_if(
+        shape.cells.begin(), shape.cells.end(), [&](const optics::CellIndex& c) { return !near_marker(shape.lattice, c); }));
+    if (readable < kMinReadLenslets)
+        throw InputError(SourceLocation{design.file},
+                         format_text("the array has %zu lenslets away from its corner markers, too few to measure the "
+                                     "registration from (at least %zu): centre the markers under the corner lenslets "
+                                     "by eye",
+                                     readable, kMinReadLenslets));
     const Image luminance = photo_luminance(photo);
     const Outline outline = find_outline(luminance, name);
     // The quarter turns to try: the one given, or all.
