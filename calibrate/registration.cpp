@@ -563,13 +563,10 @@ double PatternMap::at(const Eigen::Vector2d& point) const {
     return (1 - fy) * ((1 - fx) * row[0] + fx * row[1]) + fy * ((1 - fx) * row[width_] + fx * row[width_ + 1]);
 }
 
-RegistrationReading read_registration_photo(const Image& photo, const std::string& name,
-                                            const optics::Design& design, const PatternMap& map,
-                                            std::optional<int> quarter_turns) {
-    RFD_CHECK(!quarter_turns || (*quarter_turns >= 0 && *quarter_turns < 4));
-    const ArrayShape shape = array_shape(design);
+void check_registration_readable(const optics::Design& design) {
     // An array too small to spare its corners (Design II's 6 x 5 leaves 14 lenslets) does not
     // hold enough readings to fit the shift, turn, scale and light falloff.
+    const ArrayShape shape = array_shape(design);
     const auto readable = static_cast<std::size_t>(std::count_if(
         shape.cells.begin(), shape.cells.end(), [&](const optics::CellIndex& c) { return !near_marker(shape.lattice, c); }));
     if (readable < kMinReadLenslets)
@@ -578,6 +575,14 @@ RegistrationReading read_registration_photo(const Image& photo, const std::strin
                                      "registration from (at least %zu): centre the markers under the corner lenslets "
                                      "by eye",
                                      readable, kMinReadLenslets));
+}
+
+RegistrationReading read_registration_photo(const Image& photo, const std::string& name,
+                                            const optics::Design& design, const PatternMap& map,
+                                            std::optional<int> quarter_turns) {
+    RFD_CHECK(!quarter_turns || (*quarter_turns >= 0 && *quarter_turns < 4));
+    const ArrayShape shape = array_shape(design);
+    check_registration_readable(design);
     const Image luminance = photo_luminance(photo);
     const Outline outline = find_outline(luminance, name);
     // The quarter turns to try: the one given, or all.

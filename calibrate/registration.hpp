@@ -93,6 +93,10 @@ struct RegistrationReading {
     std::vector<RegistrationLenslet> lenslets;
 };
 
+/// InputError naming the design file when its array is too small to measure the registration
+/// from: fewer than 16 lenslets away from its corner markers (Design II's 6 x 5 has 14).
+void check_registration_readable(const optics::Design& design);
+
 /// Reads one photograph (linear; any channels) of `design` assembled with the pattern `map`
 /// was made from, the display turned by `quarter_turns` (counter-clockwise, 0..3: 0 is upright
 /// within 45 deg) in the picture, or, when not given, by whichever fits best. InputError naming

@@ -312,6 +312,7 @@ void add_registration_command(CLI::App& calibrate) {
         if (!opt->out.empty() && std::filesystem::path(opt->out).extension() != ".json")
             throw InputError(SourceLocation{opt->out, 0, 0, "--out"}, "expected a .json file");
         const optics::Design design = optics::load_design(opt->design);
+        calibrate::check_registration_readable(design);  // before the pattern is read
         calibrate::RegistrationTolerances tolerances;
         if (!opt->tolerance.empty()) {
             for (const predict::ToleranceCurveRecord& curve :

@@ -47,10 +47,9 @@ run(0 calibrate simulate-photo display inkjet_720 --design ${design} --pattern $
     --pattern-shift 0.08,-0.05 --camera-pixels 1600 --out ${OUT}/diamonds.jpg)
 run(2 calibrate registration ${design} ${OUT}/diamonds.exr ${OUT}/diamonds.jpg)
 expect("diamonds.jpg: ")
-# Design II's 6 x 5 array: 14 lenslets away from its corner markers, too few for the fit.
-run(0 pattern field bars --resolution 6x5 --out ${OUT}/bars)
-run(0 pattern encode ${DESIGN2} ${OUT}/bars --printer inkjet_720 --out ${OUT}/design2.exr)
-run(2 calibrate registration ${DESIGN2} ${OUT}/design2.exr ${OUT}/front.jpg)
+# Design II's 6 x 5 array: 14 lenslets away from its corner markers, too few for the fit (said
+# before the pattern is read).
+run(2 calibrate registration ${DESIGN2} ${OUT}/pattern.exr ${OUT}/front.jpg)
 expect("design2.toml: the array has 14 lenslets away from its corner markers")
 run(2 calibrate registration ${design} ${OUT}/pattern.exr ${OUT}/front.jpg --light-tilt 90)
 expect("--light-tilt: Value 90 not in range")
