@@ -448,9 +448,23 @@ void fit_axis(AxisData& data, double offset, const Eigen::Vector2d& guess, doubl
 
 }  // namespace
 
+void check_pitch_readable(const optics::Design& design) {
+    const optics::Lattice& lattice = print::moire_lattice(design);
+    // The lenslets the reader keeps: those over kEdgeLenslets pitches inside the array's edge.
+    const int edge = static_cast<int>(std::ceil(kEdgeLenslets));
+    const int inside = std::max(0, lattice.count_x() - 2 * edge) * std::max(0, lattice.count_y() - 2 * edge);
+    if (inside < 4 * kMinLenslets)
+        throw InputError(SourceLocation{design.file},
+                         format_text("the lens array (%d x %d lenslets) is too small for the moire sheet's measuring "
+                                     "bands (%d lenslets away from its edge, %d needed): read the sheet's hypothesis "
+                                     "bands by eye (the band whose fringes vanish has the array's pitch)",
+                                     lattice.count_x(), lattice.count_y(), inside, 4 * kMinLenslets));
+}
+
 PitchReading read_pitch_photo(const Image& photo, const std::string& name, const optics::Design& design,
                               const print::MoireSheet& sheet, int page) {
     RFD_CHECK(page >= 0 && page < sheet.pages);
+    check_pitch_readable(design);
     const optics::Lattice& lattice = print::moire_lattice(design);
     const bool hex = lattice.kind() == optics::LatticeKind::Hexagonal;
     const Image luminance = photo_luminance(photo);

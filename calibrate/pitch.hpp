@@ -32,8 +32,9 @@
 // Where it stops: marks not all in view, no darker diffuser region, fewer than 12 lenslets
 // inside both bands, lenslets reading fewer than 16 of 20 phases of a band's lines (an array
 // turned against the slant), or lines no deeper than 4 times the noise (blurred, dark, the
-// array not over the bands): InputError, saying which. Arrays too small to keep a lenslet's
-// margin inside a band (Design II's 6 x 5) are refused by the same checks.
+// array not over the bands): InputError, saying which. Arrays too small to fill the bands
+// away from their edges (Design II's 6 x 5) are refused before any photograph is read
+// (check_pitch_readable).
 //
 // Example: PitchReading reading = read_pitch_photo(photo, "photo.jpg", design, sheet);
 
@@ -82,6 +83,12 @@ struct PitchReading {
     AxisFit x, y;
     std::vector<LensletReading> lenslets;
 };
+
+/// InputError naming the design file when its array is too small for the measuring bands:
+/// fewer than 4 x 12 lenslets once those within 1.6 lenslets of its edge are left out
+/// (Design II's 6 x 5 has 2; the hypothesis bands read by eye serve it: its pitch tolerance
+/// is about 8 %, 80 of their 0.1 % steps).
+void check_pitch_readable(const optics::Design& design);
 
 /// Reads one photograph (linear; any channels) of page `page` of `sheet`, printed for
 /// `design`. InputError naming `name` where it cannot measure (see the header comment).

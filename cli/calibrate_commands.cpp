@@ -256,6 +256,7 @@ void add_pitch_command(CLI::App& calibrate) {
         if (!opt->out.empty() && std::filesystem::path(opt->out).extension() != ".toml")
             throw InputError(SourceLocation{opt->out, 0, 0, "--out"}, "expected a .toml file");
         const optics::Design design = optics::load_design(opt->design);
+        calibrate::check_pitch_readable(design);
         const print::PrinterProfile printer = printer_for(design, opt->printer);
         const print::MoireSheet sheet =
             print::moire_sheet(design, printer, moire_options(design, opt->pitch, opt->pitch_y));

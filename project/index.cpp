@@ -2,11 +2,14 @@
 
 #include <algorithm>
 #include <fstream>
+#include <functional>
 #include <optional>
 #include <string>
 #include <system_error>
 
 
+#include "calibrate/pitch.hpp"
+#include "calibrate/registration.hpp"
 #include "core/error.hpp"
 #include "core/files.hpp"
 #include "core/text.hpp"
@@ -71,8 +74,19 @@ std::optional<std::string> registration_text(const fs::path& out) {
     return text + " The whole report: logs/calibrate_registration.txt.";
 }
 
+// Whether a calibrate:: precondition on the design holds.
+bool measurable(const std::function<void()>& check) {
+    try {
+        check();
+        return true;
+    } catch (const InputError&) {
+        return false;
+    }
+}
+
 std::vector<Section> instructions(const Project& project, const fs::path& out) {
     const optics::Design design = optics::load_design(project.design);
+    const bool pitch_measurable = measurable([&] { calibrate::check_pitch_readable(design); });
     const print::PrinterProfile printer = print::load_printer(project.printer);
     const std::string film_printer = printer.name + " (" + format_number(printer.dpi_x.value) + " x " +
                                      format_number(printer.dpi_y.value) + " dpi)";
@@ -102,6 +116,13 @@ std::vector<Section> instructions(const Project& project, const fs::path& out) {
                  "are for it (calibration/design.toml, its pitch line says how far it is from the design's; every "
                  "lenslet's reading in calibration/pitch).",
              {"calibration/pitch/profile_x.png", "calibration/design.toml"}});
+    else if (made(out, "print/moire.pdf") && !pitch_measurable)
+        print_first.items.push_back(
+            {"Print moire.pdf on transparency film with " + film_printer +
+                 ", at 100 % (no scaling, no colour adjustment). Lay the lens array on it: the band whose fringes "
+                 "vanish or are widest has the array's true pitch (this array is too small for rfd calibrate pitch). "
+                 "If it is not the design's, put it into the design's lattice and run rfd make again.",
+             {"print/moire.pdf", "print/moire.png"}});
     else if (made(out, "print/moire.pdf"))
         print_first.items.push_back(
             {"Print moire.pdf on transparency film with " + film_printer +
@@ -162,6 +183,11 @@ std::vector<Section> instructions(const Project& project, const fs::path& out) {
     Section check{"5. Check where the pattern sits", {}};
     if (const std::optional<std::string> measured = registration_text(out))
         check.items.push_back({*measured, {"calibration/registration.json"}});
+    else if (!measurable([&] { calibrate::check_registration_readable(design); }))
+        check.items.push_back({"This array is too small for rfd calibrate registration: look at the display lit "
+                               "from behind and move the pattern until the picture is sharp and the markers sit "
+                               "centred under the corner lenslets.",
+                               {}});
     else
         check.items.push_back(
             {"Light the display from behind with one small lamp far away (or the sun), photograph it from the "

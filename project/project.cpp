@@ -1,8 +1,11 @@
 #include "project/project.hpp"
 
 #include <algorithm>
+#include <functional>
 #include <system_error>
 
+#include "calibrate/pitch.hpp"
+#include "calibrate/registration.hpp"
 #include "core/config.hpp"
 #include "core/error.hpp"
 #include "core/names.hpp"
@@ -149,7 +152,16 @@ std::vector<fs::path> photographs(ConfigTable& table, const std::string& key, co
     return photos;
 }
 
-Calibration read_calibration(ConfigTable& table, const fs::path& folder) {
+// `check` (a calibrate:: precondition on the design) refusing, as an error on `key`.
+void require(ConfigTable& table, const std::string& key, const std::function<void()>& check) {
+    try {
+        check();
+    } catch (const InputError& error) {
+        table.fail(key, error.what());
+    }
+}
+
+Calibration read_calibration(ConfigTable& table, const fs::path& folder, const optics::Design& design) {
     Calibration c;
     c.wedge_photos = photographs(table, "wedge_photos", folder);
     if (table.has("light")) c.light = table.choice("light", {"back", "reflected"});
@@ -163,6 +175,9 @@ Calibration read_calibration(ConfigTable& table, const fs::path& folder) {
     if (c.wedge_photos.empty() && c.moire_photos.empty() && c.display_photos.empty())
         table.fail("wedge_photos", "the table names no photographs: expected wedge_photos, moire_photos or "
                                    "display_photos");
+    if (!c.moire_photos.empty()) require(table, "moire_photos", [&] { calibrate::check_pitch_readable(design); });
+    if (!c.display_photos.empty())
+        require(table, "display_photos", [&] { calibrate::check_registration_readable(design); });
     if (!c.turned_photos.empty() && c.display_photos.empty())
         table.fail("turned_photos", "expected display_photos too: the turned photographs pair with upright ones");
     if (c.display_photos.empty() && (table.has("display_light_tilt_deg") || table.has("display_light_turn_deg")))
@@ -243,7 +258,7 @@ Project load_project(const fs::path& file) {
         make->finish();
     }
     if (auto calibration = root.optional_table("calibration")) {
-        project.calibration = read_calibration(*calibration, folder);
+        project.calibration = read_calibration(*calibration, folder, design);
         calibration->finish();
     }
     root.finish();

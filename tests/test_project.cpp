@@ -370,7 +370,10 @@ TEST(ProjectPlan, MoireAndDisplayPhotographsMeasureThePitchAndTheRegistration) {
     for (const char* photo : {"moire.jpg", "up.jpg", "turned.jpg"}) write(dir / photo, "a photograph");
     const std::string photos = "\n[calibration]\nmoire_photos = [\"moire.jpg\"]\nmoire_page = 2\n"
                                "display_photos = [\"up.jpg\"]\nturned_photos = [\"turned.jpg\"]\n";
-    write(dir / "p.toml", kProject + photos);
+    // Design I: Design II's 6 x 5 array is too small for either (below).
+    std::string project_text = kProject;
+    project_text.replace(project_text.find("design2"), 7, "design1");
+    write(dir / "p.toml", project_text + photos);
     const std::vector<Step> steps = plan(load_project(dir / "p.toml"));
     std::vector<std::string> order;
     std::map<std::string, std::string> lines;
@@ -383,20 +386,20 @@ TEST(ProjectPlan, MoireAndDisplayPhotographsMeasureThePitchAndTheRegistration) {
     ASSERT_LT(at("tolerance"), at("calibrate_registration"));
     ASSERT_LT(at("calibrate_registration"), static_cast<long>(order.size()));
     EXPECT_THAT(lines["calibrate_pitch"],
-                AllOf(HasSubstr("calibrate pitch /"), HasSubstr("design2.toml"), HasSubstr("moire.jpg"),
+                AllOf(HasSubstr("calibrate pitch /"), HasSubstr("design1.toml"), HasSubstr("moire.jpg"),
                       HasSubstr("--page 2"), HasSubstr("--out calibration/design.toml")));
     for (const char* step : {"pattern", "optimize", "sheet_front_pdf", "compare", "tolerance", "preview", "verdict",
                              "calibrate_registration"})
         EXPECT_THAT(lines[step], HasSubstr(" calibration/design.toml ")) << step;
     for (const char* step : {"moire", "holder"}) {
-        EXPECT_THAT(lines[step], HasSubstr("design2.toml")) << step;
+        EXPECT_THAT(lines[step], HasSubstr("design1.toml")) << step;
         EXPECT_THAT(lines[step], Not(HasSubstr("calibration/design.toml"))) << step;
     }
     EXPECT_THAT(lines["calibrate_registration"],
                 AllOf(HasSubstr("calibrate registration calibration/design.toml pattern_optimized.exr /"),
                       HasSubstr("up.jpg --turned /"), HasSubstr("turned.jpg --tolerance predict/tolerance"),
                       HasSubstr("--out calibration/registration.json"), Not(HasSubstr("--light-tilt"))));
-    write(dir / "p.toml", kProject + photos + "display_light_tilt_deg = 5\ndisplay_light_turn_deg = 90\n");
+    write(dir / "p.toml", project_text + photos + "display_light_tilt_deg = 5\ndisplay_light_turn_deg = 90\n");
     for (const Step& step : plan(load_project(dir / "p.toml"))) {
         if (step.name == "calibrate_registration") {
             EXPECT_THAT(command_line(step), HasSubstr("--light-tilt 5 --light-turn 90"));
@@ -404,9 +407,16 @@ TEST(ProjectPlan, MoireAndDisplayPhotographsMeasureThePitchAndTheRegistration) {
     }
 
     const auto error_for = [&](const std::string& table) {
-        write(dir / "p.toml", kProject + "\n[calibration]\n" + table);
+        write(dir / "p.toml", project_text + "\n[calibration]\n" + table);
         return error_of([&] { load_project(dir / "p.toml"); });
     };
+    // Design II's array: neither measurable, said when the project is read.
+    write(dir / "p.toml", kProject + "\n[calibration]\nmoire_photos = [\"moire.jpg\"]\n");
+    EXPECT_THAT(error_of([&] { load_project(dir / "p.toml"); }),
+                AllOf(HasSubstr("calibration.moire_photos"), HasSubstr("too small for the moire sheet")));
+    write(dir / "p.toml", kProject + "\n[calibration]\ndisplay_photos = [\"up.jpg\"]\n");
+    EXPECT_THAT(error_of([&] { load_project(dir / "p.toml"); }),
+                AllOf(HasSubstr("calibration.display_photos"), HasSubstr("14 lenslets away from its corner markers")));
     EXPECT_THAT(error_for("light = \"back\"\n"), HasSubstr("names no photographs"));
     EXPECT_THAT(error_for("moire_photos = [\"moire.jpg\"]\nmoire_page = 0\n"), HasSubstr("calibration.moire_page"));
     EXPECT_THAT(error_for("moire_photos = [\"moire.jpg\"]\nturned_photos = [\"turned.jpg\"]\n"),
