@@ -2,14 +2,11 @@
 
 #include <algorithm>
 #include <fstream>
-#include <functional>
 #include <optional>
 #include <string>
 #include <system_error>
 
 
-#include "calibrate/pitch.hpp"
-#include "calibrate/registration.hpp"
 #include "core/error.hpp"
 #include "core/files.hpp"
 #include "core/text.hpp"
@@ -74,19 +71,8 @@ std::optional<std::string> registration_text(const fs::path& out) {
     return text + " The whole report: logs/calibrate_registration.txt.";
 }
 
-// Whether a calibrate:: precondition on the design holds.
-bool measurable(const std::function<void()>& check) {
-    try {
-        check();
-        return true;
-    } catch (const InputError&) {
-        return false;
-    }
-}
-
 std::vector<Section> instructions(const Project& project, const fs::path& out) {
     const optics::Design design = optics::load_design(project.design);
-    const bool pitch_measurable = measurable([&] { calibrate::check_pitch_readable(design); });
     const print::PrinterProfile printer = print::load_printer(project.printer);
     const std::string film_printer = printer.name + " (" + format_number(printer.dpi_x.value) + " x " +
                                      format_number(printer.dpi_y.value) + " dpi)";
@@ -116,7 +102,7 @@ std::vector<Section> instructions(const Project& project, const fs::path& out) {
                  "are for it (calibration/design.toml, its pitch line says how far it is from the design's; every "
                  "lenslet's reading in calibration/pitch).",
              {"calibration/pitch/profile_x.png", "calibration/design.toml"}});
-    else if (made(out, "print/moire.pdf") && !pitch_measurable)
+    else if (made(out, "print/moire.pdf") && !project.pitch_refusal.empty())
         print_first.items.push_back(
             {"Print moire.pdf on transparency film with " + film_printer +
                  ", at 100 % (no scaling, no colour adjustment). Lay the lens array on it: the band whose fringes "
@@ -183,7 +169,7 @@ std::vector<Section> instructions(const Project& project, const fs::path& out) {
     Section check{"5. Check where the pattern sits", {}};
     if (const std::optional<std::string> measured = registration_text(out))
         check.items.push_back({*measured, {"calibration/registration.json"}});
-    else if (!measurable([&] { calibrate::check_registration_readable(design); }))
+    else if (!project.registration_refusal.empty())
         check.items.push_back({"This array is too small for rfd calibrate registration: look at the display lit "
                                "from behind and move the pattern until the picture is sharp and the markers sit "
                                "centred under the corner lenslets.",

@@ -152,16 +152,17 @@ std::vector<fs::path> photographs(ConfigTable& table, const std::string& key, co
     return photos;
 }
 
-// `check` (a calibrate:: precondition on the design) refusing, as an error on `key`.
-void require(ConfigTable& table, const std::string& key, const std::function<void()>& check) {
+// What a calibrate:: precondition on the design says when it refuses; empty when it holds.
+std::string refusal(const std::function<void()>& check) {
     try {
         check();
+        return "";
     } catch (const InputError& error) {
-        table.fail(key, error.what());
+        return error.what();
     }
 }
 
-Calibration read_calibration(ConfigTable& table, const fs::path& folder, const optics::Design& design) {
+Calibration read_calibration(ConfigTable& table, const fs::path& folder, const Project& project) {
     Calibration c;
     c.wedge_photos = photographs(table, "wedge_photos", folder);
     if (table.has("light")) c.light = table.choice("light", {"back", "reflected"});
@@ -175,9 +176,9 @@ Calibration read_calibration(ConfigTable& table, const fs::path& folder, const o
     if (c.wedge_photos.empty() && c.moire_photos.empty() && c.display_photos.empty())
         table.fail("wedge_photos", "the table names no photographs: expected wedge_photos, moire_photos or "
                                    "display_photos");
-    if (!c.moire_photos.empty()) require(table, "moire_photos", [&] { calibrate::check_pitch_readable(design); });
-    if (!c.display_photos.empty())
-        require(table, "display_photos", [&] { calibrate::check_registration_readable(design); });
+    if (!c.moire_photos.empty() && !project.pitch_refusal.empty()) table.fail("moire_photos", project.pitch_refusal);
+    if (!c.display_photos.empty() && !project.registration_refusal.empty())
+        table.fail("display_photos", project.registration_refusal);
     if (!c.turned_photos.empty() && c.display_photos.empty())
         table.fail("turned_photos", "expected display_photos too: the turned photographs pair with upright ones");
     if (c.display_photos.empty() && (table.has("display_light_tilt_deg") || table.has("display_light_turn_deg")))
@@ -216,6 +217,8 @@ Project load_project(const fs::path& file) {
         head.fail("design", "rfd make builds Designs I and II; " + design.name +
                                 " is Design " + std::string(optics::to_string(design.kind)) +
                                 " (use rfd pattern encode-angular and rfd simulate for it)");
+    project.pitch_refusal = refusal([&] { calibrate::check_pitch_readable(design); });
+    project.registration_refusal = refusal([&] { calibrate::check_registration_readable(design); });
     // A bundled printer is passed on by name, so the pattern records the name users know.
     const std::string printer = head.optional_string("printer").value_or("epson_stylus_pro_4800");
     if (is_file(folder / printer)) project.printer = (folder / printer).lexically_normal().string();
@@ -258,7 +261,7 @@ Project load_project(const fs::path& file) {
         make->finish();
     }
     if (auto calibration = root.optional_table("calibration")) {
-        project.calibration = read_calibration(*calibration, folder, design);
+        project.calibration = read_calibration(*calibration, folder, project);
         calibration->finish();
     }
     root.finish();

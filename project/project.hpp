@@ -101,6 +101,10 @@ struct Project {
     Outputs outputs;
     std::optional<Optimization> optimization;  ///< nullopt: [optimize] enabled = false, the direct encoding
     Calibration calibration;
+    /// Why the design's pitch or registration cannot be measured from photographs (an array
+    /// too small: calibrate::check_pitch_readable, check_registration_readable); empty when
+    /// it can.
+    std::string pitch_refusal, registration_refusal;
 };
 
 /// A project-file key declared as an option (core/options.hpp) in the library that owns
