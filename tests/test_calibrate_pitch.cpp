@@ -115,8 +115,8 @@ TEST(MoireSheet, MeasuringBandsCrossUnderTheArray) {
 // Frontal and hand-held photographs (tilted 30 deg, blurred, vignetted, noisy, the sun 10 deg
 // off the axis), the array 0.1 % too large or 0.23 % too small and turned: the pitch within
 // 0.01 % along both axes, the turn within 0.02 deg, each within four of its stated
-// uncertainties (and 0.002 %).
-TEST(PitchCalibration, RecoversThePitchAndTurnFromPhotographs) {
+// uncertainties (and 0.002 %). (Suite PitchAccuracy: label `accuracy`, HACKING.md.)
+TEST(PitchAccuracy, RecoversThePitchAndTurnFromPhotographs) {
     const MoireFixture& f = moire_fixture();
     struct Case {
         const char* name;

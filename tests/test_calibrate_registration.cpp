@@ -125,8 +125,8 @@ TEST(DisplayPhoto, DesignIIMacroPixelsAreEven) {
 }
 
 // Head-on sun, frontal camera: one photograph measures the shift and the turn, and which way
-// up the display is.
-TEST(Registration, ReadsTheShiftAndTurnFromAPhotograph) {
+// up the display is. (Suite RegistrationAccuracy: label `accuracy`, HACKING.md.)
+TEST(RegistrationAccuracy, ReadsTheShiftAndTurnFromAPhotograph) {
     const RegistrationFixture& f = registration_fixture();
     const optics::Mounting mounting{{0.12, -0.07}, degrees_to_radians(0.1), 0.0};
     Camera camera = display_camera();

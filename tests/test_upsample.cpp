@@ -489,7 +489,8 @@ TEST(Upsample, MovingHighlightBeatsLinearBlending) {
 // and the highlight masks catch only the top of so broad a lobe.
 float broad_dome_scene(int x, int y, const Eigen::Vector3d& l) { return glossy_dome(x, y, l, 2.0, 25.0); }
 
-TEST(Upsample, BroadHighlightFollowsItsSamples) {
+// (Suite UpsampleAccuracy: label `accuracy`, HACKING.md.)
+TEST(UpsampleAccuracy, BroadHighlightFollowsItsSamples) {
     // The dome's lobe is about 23 degrees wide in light directions, against inputs 9 degrees
     // apart: linear blending is nearly right, and moving the masked top of the lobe is not.
     // Where the fitted lobe is at least as wide as an edge, the edge's mean is taken
