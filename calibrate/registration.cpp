@@ -28,10 +28,10 @@ constexpr double kLightRadius = 0.4;      // of the pitch: a lenslet's light on 
 constexpr double kSearchStepMm = 0.02;    // the shift's first search
 constexpr int kGainTerms = 6;            // gain: 1, u, v, u^2, uv, v^2
 constexpr int kGroups = 8;
-constexpr double kTurnMargin = 0.05;
+constexpr double kTurnMargin = 0.05;       // the best quarter turn's correlation over the next's
 constexpr double kDistinctShiftMm = 0.06;   // shifts this far apart are different readings
 constexpr std::size_t kMinReadLenslets = 16;  // readings a fit needs (shift, turn, scale, light falloff)
-constexpr double kAmbiguousChi2 = 25.0;     // a second shift fitting within 5 noise sigmas      // the best quarter turn's correlation over the next's
+constexpr double kAmbiguousChi2 = 25.0;     // a second shift fitting within 5 noise sigmas
 
 // The array's lenslets and its outline (cell corners of the outermost lenslets).
 struct ArrayShape {
@@ -563,10 +563,11 @@ double PatternMap::at(const Eigen::Vector2d& point) const {
     return (1 - fy) * ((1 - fx) * row[0] + fx * row[1]) + fy * ((1 - fx) * row[width_] + fx * row[width_ + 1]);
 }
 
-void check_registration_readable(const optics::Design& design) {
-    // An array too small to spare its corners (Design II's 6 x 5 leaves 14 lenslets) does not
-    // hold enough readings to fit the shift, turn, scale and light falloff.
-    const ArrayShape shape = array_shape(design);
+namespace {
+
+// An array too small to spare its corners (Design II's 6 x 5 leaves 14 lenslets) does not
+// hold enough readings to fit the shift, turn, scale and light falloff.
+void check_readable(const ArrayShape& shape, const optics::Design& design) {
     const auto readable = static_cast<std::size_t>(std::count_if(
         shape.cells.begin(), shape.cells.end(), [&](const optics::CellIndex& c) { return !near_marker(shape.lattice, c); }));
     if (readable < kMinReadLenslets)
@@ -577,12 +578,16 @@ void check_registration_readable(const optics::Design& design) {
                                      readable, kMinReadLenslets));
 }
 
+}  // namespace
+
+void check_registration_readable(const optics::Design& design) { check_readable(array_shape(design), design); }
+
 RegistrationReading read_registration_photo(const Image& photo, const std::string& name,
                                             const optics::Design& design, const PatternMap& map,
                                             std::optional<int> quarter_turns) {
     RFD_CHECK(!quarter_turns || (*quarter_turns >= 0 && *quarter_turns < 4));
     const ArrayShape shape = array_shape(design);
-    check_registration_readable(design);
+    check_readable(shape, design);
     const Image luminance = photo_luminance(photo);
     const Outline outline = find_outline(luminance, name);
     // The quarter turns to try: the one given, or all.
