@@ -87,6 +87,36 @@ Eigen::Vector2d apply(const Eigen::Matrix3d& homography, const Eigen::Vector2d& 
     return p.hnormalized();
 }
 
+std::optional<EstimatedPose> estimate_pose(const Eigen::Matrix3d& page_to_pixels, int width, int height,
+                                           double min_tilt_deg) {
+    Eigen::Matrix3d to_centre;
+    to_centre << 1, 0, -0.5 * (width - 1), 0, 1, -0.5 * (height - 1), 0, 0, 1;
+    const Eigen::Matrix3d h = to_centre * page_to_pixels;
+    // With K = diag(f, f, 1), K^-1 h's first two columns are orthogonal and of equal length:
+    // a u + b = 0 twice for u = 1 / f^2, solved together by least squares.
+    const double a1 = h(0, 0) * h(0, 1) + h(1, 0) * h(1, 1), b1 = h(2, 0) * h(2, 1);
+    const double a2 = h(0, 0) * h(0, 0) + h(1, 0) * h(1, 0) - h(0, 1) * h(0, 1) - h(1, 1) * h(1, 1);
+    const double b2 = h(2, 0) * h(2, 0) - h(2, 1) * h(2, 1);
+    const double u = -(a1 * b1 + a2 * b2) / (a1 * a1 + a2 * a2);
+    if (!(u > 0.0) || !std::isfinite(u)) return std::nullopt;
+    EstimatedPose pose;
+    pose.focal = 1.0 / std::sqrt(u);
+    const Eigen::Matrix3d m = Eigen::Vector3d(1.0 / pose.focal, 1.0 / pose.focal, 1.0).asDiagonal() * h;
+    // The scale, its sign putting the page in front of the camera where the picture's middle sees it.
+    double lambda = 2.0 / (m.col(0).norm() + m.col(1).norm());
+    const Eigen::Vector3d middle = (page_to_pixels.inverse() * Eigen::Vector3d(0.5 * (width - 1), 0.5 * (height - 1), 1.0));
+    if ((m * (middle / middle.z())).z() < 0.0) lambda = -lambda;
+    Eigen::Matrix3d rotation;  // columns: the page's x, y and normal in the camera's frame
+    rotation.col(0) = (lambda * m.col(0)).normalized();
+    rotation.col(1) = (lambda * m.col(1)).normalized();
+    rotation.col(2) = rotation.col(0).cross(rotation.col(1));
+    const Eigen::Vector3d centre = -rotation.transpose() * (lambda * m.col(2));
+    pose.centre = Eigen::Vector3d(centre.x(), centre.y(), -std::abs(centre.z()));
+    pose.tilt_deg = radians_to_degrees(std::acos(std::min(1.0, std::abs(rotation(2, 2)))));
+    if (!(pose.tilt_deg >= min_tilt_deg)) return std::nullopt;
+    return pose;
+}
+
 Image photograph(const Image& transmittance, double px_per_mm, const Camera& camera) {
     RFD_CHECK(transmittance.channels() == 1 && px_per_mm > 0.0);
     RFD_CHECK(camera.width > 0 && camera.height > 0 && camera.focal > 0.0);

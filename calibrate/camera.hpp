@@ -14,6 +14,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 
 #include <Eigen/Core>
 
@@ -79,6 +80,22 @@ Eigen::Vector3d camera_centre(const CameraPose& pose);
 Eigen::Matrix3d page_to_pixels(const Camera& camera);
 /// `page` point through homography H.
 Eigen::Vector2d apply(const Eigen::Matrix3d& homography, const Eigen::Vector2d& page);
+
+/// Where a photograph was taken from, told by its page-to-pixel homography alone.
+struct EstimatedPose {
+    Eigen::Vector3d centre;  ///< the centre of projection, page frame (z < 0)
+    double focal = 0.0;      ///< pixels
+    double tilt_deg = 0.0;   ///< between the line of sight and the page's normal
+};
+
+/// The inverse of page_to_pixels for a camera of unknown focal length: square pixels, the
+/// principal point at the middle of a `width` x `height` picture. The focal length follows
+/// from the homography's first two columns imaging orthogonal vectors of equal length (Zhang,
+/// "A flexible new technique for camera calibration", 2000, with one unknown), then the pose.
+/// nullopt for a photograph within `min_tilt_deg` of frontal: there the focal length and the
+/// distance trade against each other and the homography cannot tell them apart.
+std::optional<EstimatedPose> estimate_pose(const Eigen::Matrix3d& page_to_pixels, int width, int height,
+                                           double min_tilt_deg);
 
 /// A photograph of a sheet whose transmittance (one channel, 1: bare film) is sampled at
 /// `px_per_mm`, lit evenly from behind: linear pixel values, one channel, noise added, not yet

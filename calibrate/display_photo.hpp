@@ -20,6 +20,7 @@
 #include "core/image.hpp"
 #include "optics/design.hpp"
 #include "optics/display.hpp"
+#include "print/moire.hpp"
 #include "print/printer.hpp"
 
 namespace rfd::calibrate {
@@ -40,7 +41,7 @@ struct DisplayScene {
     /// The light's direction of travel, from behind toward the camera (z > 0, the display's
     /// frame).
     Eigen::Vector3d light = Eigen::Vector3d::UnitZ();
-    double light_radius_rad = 0.00465;  ///< the sun's disc
+    double light_radius_rad = print::kSunRadius;  ///< the sun's disc
     double holder = 0.02;               ///< the holder's brightness over bare diffuser's
     int rays_per_side = 12;             ///< per lenslet
 };

@@ -15,7 +15,6 @@ namespace rfd::calibrate {
 namespace {
 
 constexpr double kPagePixelsPerMm = 10.0;  // finer than a photograph's pixel on the page
-constexpr double kSunRadius = 0.00465;     // rad: the sun's disc
 
 // The sheet as the lenslets see it, in the array's frame: the lines of the page's bands (the
 // labels and header lie beside the array, never under a lenslet that reads a band).
@@ -79,7 +78,7 @@ Image simulated_moire_photo(const optics::Design& design, const print::MoireShee
     options.rays_per_side = scene.rays_per_side;
     options.pixels_per_pitch = 16.0;
     const optics::DiffuserImage diffuser =
-        simulator.simulate(sheet_under_array, {{scene.light.normalized(), {1.0, 1.0, 1.0}, kSunRadius}}, options);
+        simulator.simulate(sheet_under_array, {{scene.light.normalized(), {1.0, 1.0, 1.0}, print::kSunRadius}}, options);
     const double diffuser_transmittance = optics::DiffuserScatter{}.transmittance;
 
     // The page as the camera sees it: the sheet against the light, and over it the diffuser,

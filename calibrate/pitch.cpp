@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <limits>
 #include <numbers>
 
 #include <Eigen/Dense>
@@ -13,6 +14,7 @@
 #include "core/error.hpp"
 #include "core/text.hpp"
 #include "core/units.hpp"
+#include "optics/display.hpp"
 #include "relight/vision.hpp"
 
 namespace rfd::calibrate {
@@ -35,6 +37,12 @@ constexpr double kTurnPrior = 0.003;        // its rows within +-0.17 deg of the
 constexpr double kReadableDepth = 4.0;      // the profile's depth, in noise standard deviations
 constexpr int kLightTerms = 5;              // E = 1 + u + v + u^2 + uv + v^2 terms
 constexpr double kOutlierSigmas = 5.0;
+// An array laid whole on each band (print::MoireSheet::whole_array):
+constexpr double kWholeInset = 0.25;        // its region kept this many lenslets inside the dark's edge
+constexpr double kMinTiltDeg = 10.0;        // the camera's height needs a tilted photograph
+constexpr int kMinWholeLenslets = 24;       // twice the fit's parameters
+constexpr int kSpotRays = 48;               // rays per side of a lenslet, for the traced spot
+constexpr int kSpotBins = 24;               // the traced spot's components
 
 // The page resampled on a grid of `px_per_mm` over a rectangle.
 struct PageRaster {
@@ -170,6 +178,13 @@ struct ImageLattice {
     Eigen::Vector2d origin;
 };
 
+// The spot along the lines' normal as a sum of Gaussians (weight, centre, standard deviation;
+// mm), all scaled by the fitted spot factor; null: one centred Gaussian whose deviation is the
+// factor itself, in periods.
+struct SpotComponent {
+    double weight = 1.0, centre = 0.0, sigma = 1.0;
+};
+
 // The lenslets one axis fits: position label in the design's array frame (relative to a
 // reference lenslet), the light falloff's terms where their light is seen, value, and the
 // band's line period and centre line.
@@ -192,6 +207,7 @@ struct AxisData {
     }
     std::vector<double> value, period, origin;
     std::vector<std::size_t> lenslet;  // index into the reading's lenslets
+    const std::vector<SpotComponent>* spot = nullptr;  // traced; null: a Gaussian
 };
 
 // The lines as a lenslet's spot sees them: a line of width w (periods) centred on phase 0,
@@ -200,18 +216,27 @@ struct AxisData {
 struct Coverage {
     double value = 0.0, d_phase = 0.0, d_width = 0.0, d_log_spot = 0.0;
 };
-Coverage line_coverage(double phase, double width, double spot) {
+// A traced spot's components (`parts`, mm; the line period `period` mm) are each such a
+// Gaussian, scaled by `spot`.
+Coverage line_coverage(double phase, double width, double spot, const std::vector<SpotComponent>* parts = nullptr,
+                       double period = 1.0) {
     constexpr double kInvSqrt2Pi = 0.3989422804014327;
     const auto cdf = [](double x) { return 0.5 * std::erfc(-x / std::numbers::sqrt2); };
     const auto pdf = [&](double x) { return kInvSqrt2Pi * std::exp(-0.5 * x * x); };
+    static const std::vector<SpotComponent> kGaussian{SpotComponent{}};
+    const std::vector<SpotComponent>& components = parts ? *parts : kGaussian;
+    const double unit = parts ? period : 1.0;
     const double d = phase - std::round(phase);
     Coverage c;
-    for (int n = -2; n <= 2; ++n) {  // the neighbouring lines reach a wide spot
-        const double a = (0.5 * width - (d + n)) / spot, b = (-0.5 * width - (d + n)) / spot;
-        c.value += cdf(a) - cdf(b);
-        c.d_phase += (pdf(b) - pdf(a)) / spot;
-        c.d_width += 0.5 * (pdf(a) + pdf(b)) / spot;
-        c.d_log_spot += b * pdf(b) - a * pdf(a);
+    for (const SpotComponent& part : components) {
+        const double sigma = spot * part.sigma / unit, shift = part.centre / part.sigma;
+        for (int n = -2; n <= 2; ++n) {  // the neighbouring lines reach a wide spot
+            const double a = (0.5 * width - (d + n)) / sigma - shift, b = (-0.5 * width - (d + n)) / sigma - shift;
+            c.value += part.weight * (cdf(a) - cdf(b));
+            c.d_phase += part.weight * (pdf(b) - pdf(a)) / sigma;
+            c.d_width += part.weight * 0.5 * (pdf(a) + pdf(b)) / sigma;
+            c.d_log_spot += part.weight * ((b + shift) * pdf(b) - (a + shift) * pdf(a));
+        }
     }
     return c;
 }
@@ -241,8 +266,9 @@ struct AxisModel {
         for (int t = 0; t < kLightTerms; ++t) e += p(kLight + t) * data->light[k][static_cast<std::size_t>(t)];
         return e;
     }
-    static double profile(const Eigen::VectorXd& p, double phase) {
-        const double covered = line_coverage(phase, p(kWidth), std::exp(p(kLogSpot))).value;
+    double profile(const Eigen::VectorXd& p, double phase) const {
+        const double covered =
+            line_coverage(phase, p(kWidth), std::exp(p(kLogSpot)), data->spot, data->period.front()).value;
         return p(kBright) - (p(kBright) - p(kDark)) * covered;
     }
     double predict(const Eigen::VectorXd& p, std::size_t k) const { return light(p, k) * profile(p, phase(p, k)); }
@@ -256,7 +282,8 @@ struct AxisModel {
             const std::size_t k = rows[r];
             const auto row = static_cast<Eigen::Index>(r);
             const double e = light(p, k);
-            const Coverage c = line_coverage(phase(p, k), p(kWidth), std::exp(p(kLogSpot)));
+            const Coverage c =
+                line_coverage(phase(p, k), p(kWidth), std::exp(p(kLogSpot)), data->spot, data->period[k]);
             const double depth = p(kBright) - p(kDark), g = p(kBright) - depth * c.value;
             const double d_phase = -e * depth * c.d_phase / data->period[k];
             jacobian(row, 0) = d_phase;
@@ -280,7 +307,8 @@ double fit_levels(const AxisModel& model, Eigen::VectorXd& p) {
     Eigen::Vector2d right = Eigen::Vector2d::Zero();
     double values2 = 0.0;
     for (const std::size_t k : model.rows) {
-        const double covered = line_coverage(model.phase(p, k), p(kWidth), std::exp(p(kLogSpot))).value;
+        const double covered = line_coverage(model.phase(p, k), p(kWidth), std::exp(p(kLogSpot)),
+                                             model.data->spot, model.data->period[k]).value;
         const Eigen::Vector2d basis(1.0 - covered, covered);
         normal += basis * basis.transpose();
         right += basis * model.data->value[k];
@@ -325,22 +353,63 @@ Eigen::Vector2d coherent_row(const AxisData& data, double offset, const Eigen::V
     return best;
 }
 
-// Fits one axis; fills `fit` and the lenslets' phases and fitted values. `guess` is the row
-// of the lattice of lenslet images, `scale` the design's expected length of it.
-void fit_axis(AxisData& data, double offset, const Eigen::Vector2d& guess, double scale, double line_fraction,
-              bool along_x, AxisFit& fit, std::vector<LensletReading>& lenslets, const std::string& name) {
-    fit.along_x = along_x;
-    if (static_cast<int>(data.value.size()) < kMinLenslets) return;  // this axis's band not under the array
-    data.set_light_terms();
-    Eigen::VectorXd p = Eigen::VectorXd::Zero(kParameters);
-    const Eigen::Vector2d row = coherent_row(data, offset, guess, scale);
+// The row with the smoothest readings in the order of their phases near `guess` (phase
+// dispersion minimisation, Stellingwerf 1978): the sum of squared steps between readings
+// neighbouring in phase, on the grid of coherent_row at half its step. A few lenslets'
+// coherence can peak beside the true row, where the fit then settles in a wrong minimum.
+Eigen::Vector2d smoothest_row(const AxisData& data, double offset, const Eigen::Vector2d& guess, double scale) {
+    const Eigen::Vector2d along = guess.normalized(), across(-along.y(), along.x());
+    double span_along = 0.0, span_across = 0.0;
+    for (const Eigen::Vector2d& a : data.label) {
+        span_along = std::max(span_along, std::abs(a.dot(along)));
+        span_across = std::max(span_across, std::abs(a.dot(across)));
+    }
+    const double period = data.period.front();
+    const double step_along = 0.05 * period / std::max(span_along, period);
+    const double step_across = 0.05 * period / std::max(span_across, period);
+    const int n_along = static_cast<int>(std::ceil(kPitchPrior / step_along));
+    const int n_across = static_cast<int>(std::ceil(kTurnPrior / step_across));
+    std::vector<std::pair<double, double>> ordered(data.value.size());
+    Eigen::Vector2d best = guess;
+    double best_length = HUGE_VAL;
+    for (int i = -n_along; i <= n_along; ++i)
+        for (int j = -n_across; j <= n_across; ++j) {
+            const Eigen::Vector2d row = (scale + i * step_along) * along + j * step_across * across;
+            for (std::size_t k = 0; k < data.value.size(); ++k) {
+                const double phi = (offset + row.dot(data.label[k]) - data.origin[k]) / data.period[k];
+                ordered[k] = {phi - std::floor(phi), data.value[k]};
+            }
+            std::sort(ordered.begin(), ordered.end());
+            double length = 0.0;
+            for (std::size_t k = 0; k < ordered.size(); ++k) {
+                const double step = ordered[(k + 1) % ordered.size()].second - ordered[k].second;
+                length += step * step;
+            }
+            if (length < best_length) best_length = length, best = row;
+        }
+    return best;
+}
+
+// The fit from a starting row: the lines' offset searched, then Levenberg-Marquardt, outliers
+// (over kOutlierSigmas robust deviations) dropped, and again. Returns the parameters and the
+// lenslets used; `rms` the residual over all lenslets.
+struct AxisSolution {
+    Eigen::VectorXd p;
+    std::vector<char> used;
+    double rms = HUGE_VAL;
+};
+AxisSolution solve_axis(const AxisData& data, double offset, const Eigen::Vector2d& row, double line_fraction) {
+    AxisSolution out;
+    Eigen::VectorXd& p = out.p;
+    p = Eigen::VectorXd::Zero(kParameters);
     p(1) = row.x();
     p(2) = row.y();
     p(kWidth) = line_fraction;
-    p(kLogSpot) = std::log(kStartSpot);
+    p(kLogSpot) = data.spot ? 0.0 : std::log(kStartSpot);  // a traced spot as traced
     // Where the lines are: of offsets a hundredth of a period apart, the one whose lines,
     // a little blurred, explain the readings best.
-    std::vector<char> used(data.value.size(), 1);
+    std::vector<char>& used = out.used;
+    used.assign(data.value.size(), 1);
     {
         const AxisModel all(data, used);
         double best_error = HUGE_VAL, best_offset = offset;
@@ -352,19 +421,14 @@ void fit_axis(AxisData& data, double offset, const Eigen::Vector2d& guess, doubl
         p(0) = best_offset;
         fit_levels(all, p);
     }
-    double mean = 0.0;
-    for (const double v : data.value) mean += v;
-    mean /= static_cast<double>(data.value.size());
-
-    Eigen::VectorXd residual;
     for (int pass = 0; pass < 2; ++pass) {
         AxisModel model(data, used);
         Eigen::LevenbergMarquardt<AxisModel> solver(model);
         solver.parameters.maxfev = 400;
         solver.minimize(p);
-        residual.resize(model.values());
-        model(p, residual);
         if (pass == 1) break;
+        Eigen::VectorXd residual(model.values());
+        model(p, residual);
         std::vector<double> magnitudes(static_cast<std::size_t>(residual.size()));
         for (Eigen::Index r = 0; r < residual.size(); ++r)
             magnitudes[static_cast<std::size_t>(r)] = std::abs(residual(r));
@@ -374,7 +438,35 @@ void fit_axis(AxisData& data, double offset, const Eigen::Vector2d& guess, doubl
         for (std::size_t k = 0; k < data.value.size(); ++k)
             if (std::abs(model.predict(p, k) - data.value[k]) > kOutlierSigmas * sigma) used[k] = 0;
     }
+    const AxisModel model(data, std::vector<char>(data.value.size(), 1));
+    double sum = 0.0;
+    for (std::size_t k = 0; k < data.value.size(); ++k) sum += std::pow(model.predict(p, k) - data.value[k], 2);
+    out.rms = std::sqrt(sum / static_cast<double>(data.value.size()));
+    return out;
+}
+
+// Fits one axis; fills `fit` and the lenslets' phases and fitted values. `guess` is the row
+// of the lattice of lenslet images, `scale` the design's expected length of it. A few
+// lenslets (`few`: a whole small array) are fitted from the smoothest row too, and the better
+// fit kept.
+void fit_axis(AxisData& data, double offset, const Eigen::Vector2d& guess, double scale, double line_fraction,
+              bool along_x, bool few, AxisFit& fit, std::vector<LensletReading>& lenslets, const std::string& name) {
+    fit.along_x = along_x;
+    if (static_cast<int>(data.value.size()) < kMinLenslets) return;  // this axis's band not under the array
+    data.set_light_terms();
+    AxisSolution solution = solve_axis(data, offset, coherent_row(data, offset, guess, scale), line_fraction);
+    if (few) {
+        AxisSolution other = solve_axis(data, offset, smoothest_row(data, offset, guess, scale), line_fraction);
+        if (other.rms < solution.rms) solution = std::move(other);
+    }
+    Eigen::VectorXd& p = solution.p;
+    const std::vector<char>& used = solution.used;
+    double mean = 0.0;
+    for (const double v : data.value) mean += v;
+    mean /= static_cast<double>(data.value.size());
+    Eigen::VectorXd residual;
     AxisModel model(data, used);
+    residual.resize(model.values());
     model(p, residual);
     Eigen::MatrixXd jacobian(model.values(), kParameters);
     model.df(p, jacobian);
@@ -412,7 +504,7 @@ void fit_axis(AxisData& data, double offset, const Eigen::Vector2d& guess, doubl
     fit.outliers = static_cast<int>(data.value.size()) - fit.lenslets;
     fit.rms = std::sqrt(residual.squaredNorm() / n) / mean;
     fit.profile.clear();
-    for (int k = 0; k < 64; ++k) fit.profile.push_back(AxisModel::profile(p, k / 64.0));
+    for (int k = 0; k < 64; ++k) fit.profile.push_back(model.profile(p, k / 64.0));
     const auto [lo, hi] = std::minmax_element(fit.profile.begin(), fit.profile.end());
     const double depth = *hi - *lo;
     fit.contrast = *hi > 0.0 ? depth / *hi : 0.0;
@@ -431,11 +523,16 @@ void fit_axis(AxisData& data, double offset, const Eigen::Vector2d& guess, doubl
         seen[static_cast<std::size_t>(std::min(kPhaseBins - 1.0, (phi - std::floor(phi)) * kPhaseBins))] = true;
     }
     const auto bins = std::count(seen.begin(), seen.end(), true);
-    if (bins < kMinPhaseBins)
+    // A small array's few lenslets fill fewer bins even at random phases (30 fill 15.7 of 20
+    // on average): four fifths of that, and at most kMinPhaseBins.
+    const double at_random =
+        kPhaseBins * (1.0 - std::pow(1.0 - 1.0 / kPhaseBins, static_cast<double>(model.rows.size())));
+    const auto needed = std::min<std::ptrdiff_t>(kMinPhaseBins, static_cast<std::ptrdiff_t>(0.8 * at_random));
+    if (bins < needed)
         throw InputError(SourceLocation{name},
                          format_text("the lenslets over the %s measuring band read only %td of %d phases of its "
-                                     "lines: turn the array a degree or two and photograph it again",
-                                     along_x ? "x" : "rows", bins, kPhaseBins));
+                                     "lines (%td needed): turn the array a degree or two and photograph it again",
+                                     along_x ? "x" : "rows", bins, kPhaseBins, needed));
     // Lines too blurred or too dark to read: the profile no stronger than the noise.
     const double noise = std::sqrt(variance);
     if (!(depth > kReadableDepth * noise))
@@ -446,19 +543,115 @@ void fit_axis(AxisData& data, double offset, const Eigen::Vector2d& guess, doubl
                                      along_x ? "x" : "rows", depth, kReadableDepth, noise));
 }
 
+// A whole array: of the lattice points read inside the darker region (which also holds the
+// dark around the array, and the band's lines beside it), the design's count_x x count_y
+// block of points read whole whose ring of points around it is darkest (the holder, where no
+// light comes through), each point in it brighter than a lenslet image can be (the bare
+// sheet: 1.4 times the 70th percentile of the readings) counting as ten rings' light. A hexagonal array's rows are
+// offset by half a pitch: its block is counted in columns i + floor(j / 2). InputError when
+// the region does not hold a whole block.
+void keep_the_array(std::vector<LensletReading>& lenslets, std::vector<Eigen::Vector2d>& labels,
+                    const Eigen::Matrix2d& design_basis, const optics::Lattice& lattice, const std::string& name) {
+    const bool hex = lattice.kind() == optics::LatticeKind::Hexagonal;
+    std::vector<Eigen::Vector2i> cells;
+    Eigen::Vector2i low = Eigen::Vector2i::Constant(std::numeric_limits<int>::max()), high = -low;
+    for (const Eigen::Vector2d& label : labels) {
+        const Eigen::Vector2d n = design_basis.inverse() * label;
+        const int j = static_cast<int>(std::lround(n.y()));
+        const int i = static_cast<int>(std::lround(n.x())) + (hex ? static_cast<int>(std::floor(0.5 * j)) : 0);
+        cells.emplace_back(i, j);
+        low = low.cwiseMin(cells.back());
+        high = high.cwiseMax(cells.back());
+    }
+    std::vector<double> values;
+    for (const LensletReading& l : lenslets) values.push_back(l.value);
+    std::sort(values.begin(), values.end());
+    const double bright = 1.4 * values[static_cast<std::size_t>(0.7 * static_cast<double>(values.size() - 1))];
+    const int width = lattice.count_x(), height = lattice.count_y();
+    Eigen::Vector2i best(0, 0);
+    double best_score = HUGE_VAL;
+    std::size_t best_count = 0;
+    for (int j0 = low.y(); j0 + height - 1 <= high.y(); ++j0)
+        for (int i0 = low.x(); i0 + width - 1 <= high.x(); ++i0) {
+            double ring = 0.0;
+            std::size_t count = 0, ring_count = 0, too_bright = 0;
+            for (std::size_t k = 0; k < cells.size(); ++k) {
+                const int i = cells[k].x() - i0, j = cells[k].y() - j0;
+                if (i >= 0 && i < width && j >= 0 && j < height)
+                    ++count, too_bright += lenslets[k].value > bright ? 1 : 0;
+                else if (i >= -1 && i <= width && j >= -1 && j <= height)
+                    ring += lenslets[k].value, ++ring_count;
+            }
+            if (count < best_count) continue;  // a whole block in view is the array's
+            const double score = (ring_count ? ring / static_cast<double>(ring_count) : 0.0) +
+                                 10.0 * static_cast<double>(too_bright);
+            if (count > best_count || score < best_score) best_score = score, best = {i0, j0}, best_count = count;
+        }
+    if (best_count < static_cast<std::size_t>(width) * static_cast<std::size_t>(height))
+        throw InputError(SourceLocation{name},
+                         format_text("the array's %d x %d lenslet images are not all in view in the darker region "
+                                     "(%zu found): photograph the whole array on the band, lit from behind",
+                                     width, height, best_count));
+    std::vector<LensletReading> kept;
+    std::vector<Eigen::Vector2d> kept_labels;
+    for (std::size_t k = 0; k < cells.size(); ++k)
+        if (cells[k].x() >= best.x() && cells[k].x() < best.x() + width && cells[k].y() >= best.y() &&
+            cells[k].y() < best.y() + height)
+            kept.push_back(lenslets[k]), kept_labels.push_back(labels[k]);
+    lenslets = std::move(kept);
+    labels = std::move(kept_labels);
+}
+
+// The spot a reading disc of radius `core` (mm on the diffuser) sees: the sun's rays through
+// the design's exact optics that land on the diffuser within it of the lenslet image's middle,
+// where they cross the pattern, along `normal`, binned into Gaussian components (mm). Through
+// Design II's corrective pair the disc sees the lenslet's middle, whose spot is a fifth of the
+// whole lenslet's (0.022 against 0.107 mm): the lines' profile is sharper than the whole spot
+// says, and the fit's Gaussian would bias the pitch.
+std::vector<SpotComponent> traced_spot(const optics::Design& design, double core, const Eigen::Vector2d& normal) {
+    const optics::DisplaySimulator simulator(design);
+    optics::SimulationOptions options;
+    options.model = optics::Model::Exact;
+    options.rays_per_side = kSpotRays;
+    const optics::RepeatedRays rays =
+        simulator.trace_lenslet({{Eigen::Vector3d::UnitZ(), {1.0, 1.0, 1.0}, print::kSunRadius}}, options);
+    Eigen::Vector2d middle = Eigen::Vector2d::Zero();
+    double total = 0.0;
+    for (const optics::LensletRay& ray : rays.rays) middle += ray.reaching * ray.on_diffuser, total += ray.reaching;
+    if (!(total > 0.0)) return {};
+    middle /= total;
+    std::vector<std::pair<double, double>> along;  // position along the normal, weight
+    double sum = 0.0, weight = 0.0;
+    for (const optics::LensletRay& ray : rays.rays)
+        if (ray.reaching > 0.0 && (ray.on_diffuser - middle).norm() < core) {
+            along.emplace_back(normal.dot(ray.on_pattern), ray.reaching);
+            sum += ray.reaching * along.back().first, weight += ray.reaching;
+        }
+    if (!(weight > 0.0)) return {};
+    double low = HUGE_VAL, high = -HUGE_VAL;
+    for (auto& [x, w] : along) x -= sum / weight, low = std::min(low, x), high = std::max(high, x);
+    const double bin = std::max(1e-4, (high - low) / kSpotBins);
+    std::vector<SpotComponent> parts(kSpotBins);
+    for (int b = 0; b < kSpotBins; ++b) parts[static_cast<std::size_t>(b)] = {0.0, low + (b + 0.5) * bin, 0.6 * bin};
+    for (const auto& [x, w] : along)
+        parts[static_cast<std::size_t>(std::clamp(static_cast<int>((x - low) / bin), 0, kSpotBins - 1))].weight +=
+            w / weight;
+    std::erase_if(parts, [](const SpotComponent& c) { return c.weight <= 0.0; });
+    return parts;
+}
+
 }  // namespace
 
 void check_pitch_readable(const optics::Design& design) {
     const optics::Lattice& lattice = print::moire_lattice(design);
-    // The lenslets the reader keeps: those over kEdgeLenslets pitches inside the array's edge.
-    const int edge = static_cast<int>(std::ceil(kEdgeLenslets));
-    const int inside = std::max(0, lattice.count_x() - 2 * edge) * std::max(0, lattice.count_y() - 2 * edge);
-    if (inside < 4 * kMinLenslets)
+    // An array too small for the bands' cross is laid whole on each band and read whole.
+    const int count = lattice.count_x() * lattice.count_y();
+    if (count < kMinWholeLenslets)
         throw InputError(SourceLocation{design.file},
                          format_text("the lens array (%d x %d lenslets) is too small for the moire sheet's measuring "
-                                     "bands (%d lenslets away from its edge, %d needed): read the sheet's hypothesis "
-                                     "bands by eye (the band whose fringes vanish has the array's pitch)",
-                                     lattice.count_x(), lattice.count_y(), inside, 4 * kMinLenslets));
+                                     "bands (%d lenslets, %d needed): read the sheet's hypothesis bands by eye (the "
+                                     "band whose fringes vanish has the array's pitch)",
+                                     lattice.count_x(), lattice.count_y(), count, kMinWholeLenslets));
 }
 
 PitchReading read_pitch_photo(const Image& photo, const std::string& name, const optics::Design& design,
@@ -473,6 +666,30 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
     reading.name = name;
     reading.mirrored = where.mirrored;
     reading.mm_per_pixel = where.mm_per_pixel;
+    // An array laid whole on a band is read whole. Its few lenslet images lie on the diffuser,
+    // `height` above the sheet, and the photograph sees them magnified about the camera's foot
+    // by kappa = Z / (Z - height), Z the camera's height: too little lattice for its spectrum
+    // to give that magnification to the 0.5 % the reading needs (a 1 % error biases the
+    // pitch by 0.012 %), so it comes from the camera's pose, which a tilted photograph's
+    // homography tells.
+    const bool whole = sheet.whole_array;
+    Eigen::Vector2d foot = Eigen::Vector2d::Zero();
+    double kappa = 1.0;
+    if (whole) {
+        const optics::Plane* diffuser = design.diffuser_plane();
+        const double height = diffuser ? diffuser->z - design.pattern_plane().z : 0.0;
+        const std::optional<EstimatedPose> pose =
+            estimate_pose(where.page_to_photo, luminance.width(), luminance.height(), kMinTiltDeg);
+        if (!pose)
+            throw InputError(SourceLocation{name},
+                             format_text("the photograph is within %.0f deg of frontal: the array's lenslet images lie "
+                                         "%.1f mm above the sheet and the camera's height, which tells how much "
+                                         "larger they look, shows only in a tilted photograph: take it again from "
+                                         "20 to 40 deg off the vertical",
+                                         kMinTiltDeg, height));
+        foot = pose->centre.head<2>();
+        kappa = -pose->centre.z() / (-pose->centre.z() - height);
+    }
 
     // The array's design frame: A1 along a row, A2 to the next row; on the page (y down) the
     // nominal images of these (the lattice search starts from them).
@@ -491,7 +708,8 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
     from -= Eigen::Vector2d::Constant(5.0);
     to += Eigen::Vector2d::Constant(5.0);
     const PageRaster coarse = resample(luminance, where.page_to_photo, from, to, kCoarsePixelsPerMm);
-    const std::vector<std::uint8_t> region = diffuser_region(coarse, 1.5 * px, kEdgeLenslets * std::max(px, py), name);
+    const std::vector<std::uint8_t> region = diffuser_region(
+        coarse, 1.5 * px, whole ? kWholeInset * std::min(px, py) : kEdgeLenslets * std::max(px, py), name);
     // The lenslet images' lattice shows in their edges and gaps; the moire modulates their
     // brightness slowly, which would add peaks beside the lattice's: each pixel over the mean
     // around it (a lenslet wide) keeps the edges and drops the modulation.
@@ -510,7 +728,7 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
     const RegionSpectrum spectrum(coarse, contrast, region);
 
     const double cell_pixels = lattice.cell_area() * kCoarsePixelsPerMm * kCoarsePixelsPerMm;
-    if (static_cast<double>(spectrum.pixels()) < 4.0 * kMinLenslets * cell_pixels)
+    if (static_cast<double>(spectrum.pixels()) < (whole ? kMinWholeLenslets : 4.0 * kMinLenslets) * cell_pixels)
         throw InputError(SourceLocation{name}, "no lens array found over the bands (the darker region is " +
                                                    format_fixed(static_cast<double>(spectrum.pixels()) / cell_pixels, 0) +
                                                    " lenslets large)");
@@ -531,11 +749,46 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
     }
     ImageLattice images;
     images.basis = reciprocal.inverse();
+    if (whole) {
+        // The spectrum's turn, the pose's magnification, the design's cells.
+        const double turn = std::atan2(images.basis(1, 0), images.basis(0, 0));
+        images.basis = kappa * Eigen::Rotation2Dd(turn).toRotationMatrix() * page_basis;
+        reciprocal = images.basis.inverse();
+        for (int i = 0; i < 2; ++i) peak[static_cast<std::size_t>(i)] = spectrum.at(reciprocal.row(i).transpose());
+    }
     const Eigen::Vector2d phases(-std::arg(peak[0]) / kTwoPi, -std::arg(peak[1]) / kTwoPi);
+    // The lattice points (i, j) whose middle lies in the region, for a lattice origin.
+    struct LatticePoint {
+        int i, j;
+        Eigen::Vector2d at;
+    };
+    const auto points_in_region = [&](const Eigen::Vector2d& origin) {
+        const Eigen::Matrix2d to_index = images.basis.inverse();
+        Eigen::Vector2d n_low = Eigen::Vector2d::Constant(HUGE_VAL), n_high = -n_low;
+        for (const Eigen::Vector2d& corner :
+             {coarse.page(x0, y0), coarse.page(x1, y0), coarse.page(x0, y1), coarse.page(x1, y1)}) {
+            const Eigen::Vector2d n = to_index * (corner - origin);
+            n_low = n_low.cwiseMin(n);
+            n_high = n_high.cwiseMax(n);
+        }
+        std::vector<LatticePoint> points;
+        for (int j = static_cast<int>(std::floor(n_low.y())); j <= static_cast<int>(std::ceil(n_high.y())); ++j)
+            for (int i = static_cast<int>(std::floor(n_low.x())); i <= static_cast<int>(std::ceil(n_high.x())); ++i) {
+                const Eigen::Vector2d at = origin + images.basis * Eigen::Vector2d(i, j);
+                const int cx = static_cast<int>(std::floor((at.x() - coarse.origin.x()) * kCoarsePixelsPerMm));
+                const int cy = static_cast<int>(std::floor((at.y() - coarse.origin.y()) * kCoarsePixelsPerMm));
+                if (cx < 0 || cy < 0 || cx >= coarse.image.width() || cy >= coarse.image.height()) continue;
+                if (region[static_cast<std::size_t>(cy) * static_cast<std::size_t>(coarse.image.width()) +
+                           static_cast<std::size_t>(cx)])
+                    points.push_back({i, j, at});
+            }
+        return points;
+    };
     // The transform's phase places the lattice up to half a period along each basis vector
     // (a lenslet image may be bright in the middle or at its rim, where images overlap). Of
     // the four candidates, the one whose reading discs see single lenslets: their readings
-    // then differ most from one lenslet to the next (a disc across two mixes them).
+    // then differ most from one lenslet to the next (a disc across two mixes them). Sampled
+    // every 2.5 lenslets over a large array; over a whole small one, at every lenslet.
     const double core = kCoreFraction * std::min(images.basis.col(0).norm(),
                                                  std::abs(images.basis.determinant()) / images.basis.col(0).norm());
     const double step = std::max(where.mm_per_pixel, core / 8.0);
@@ -546,52 +799,47 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
         const Eigen::Vector2d origin = images.basis * (phases + shift);
         double sum = 0.0, sum2 = 0.0;
         int cells = 0;
-        for (int y = y0; y <= y1; y += stride)
-            for (int x = x0; x <= x1; x += stride) {
-                if (!region[static_cast<std::size_t>(y) * static_cast<std::size_t>(coarse.image.width()) +
-                            static_cast<std::size_t>(x)])
-                    continue;
-                const Eigen::Vector2d n = (images.basis.inverse() * (coarse.page(x, y) - origin)).array().round();
-                const double mean =
-                    disc_statistics(luminance, where.page_to_photo, origin + images.basis * n, core, step).first;
-                if (std::isfinite(mean)) sum += mean, sum2 += mean * mean, ++cells;
-            }
+        const auto add = [&](const Eigen::Vector2d& at) {
+            const double mean = disc_statistics(luminance, where.page_to_photo, at, core, step).first;
+            if (std::isfinite(mean)) sum += mean, sum2 += mean * mean, ++cells;
+        };
+        if (whole)
+            for (const LatticePoint& point : points_in_region(origin)) add(point.at);
+        else
+            for (int y = y0; y <= y1; y += stride)
+                for (int x = x0; x <= x1; x += stride)
+                    if (region[static_cast<std::size_t>(y) * static_cast<std::size_t>(coarse.image.width()) +
+                               static_cast<std::size_t>(x)])
+                        add(origin + images.basis *
+                                         (images.basis.inverse() * (coarse.page(x, y) - origin)).array().round().matrix());
         if (cells < 2) continue;
         const double mean = sum / cells, variation = (sum2 / cells - mean * mean) / (mean * mean);
         if (variation > best_variation) best_variation = variation, images.origin = origin;
     }
 
     // Every lenslet image inside the region, read over its central part.
-    const Eigen::Matrix2d to_index = images.basis.inverse();
-    Eigen::Vector2d n_low = Eigen::Vector2d::Constant(HUGE_VAL), n_high = -n_low;
-    for (const Eigen::Vector2d& corner : {coarse.page(x0, y0), coarse.page(x1, y0), coarse.page(x0, y1), coarse.page(x1, y1)}) {
-        const Eigen::Vector2d n = to_index * (corner - images.origin);
-        n_low = n_low.cwiseMin(n);
-        n_high = n_high.cwiseMax(n);
-    }
     std::vector<Eigen::Vector2d> labels;
-    for (int j = static_cast<int>(std::floor(n_low.y())); j <= static_cast<int>(std::ceil(n_high.y())); ++j)
-        for (int i = static_cast<int>(std::floor(n_low.x())); i <= static_cast<int>(std::ceil(n_high.x())); ++i) {
-            const Eigen::Vector2d at = images.origin + images.basis * Eigen::Vector2d(i, j);
-            const int cx = static_cast<int>(std::floor((at.x() - coarse.origin.x()) * kCoarsePixelsPerMm));
-            const int cy = static_cast<int>(std::floor((at.y() - coarse.origin.y()) * kCoarsePixelsPerMm));
-            if (cx < 0 || cy < 0 || cx >= coarse.image.width() || cy >= coarse.image.height()) continue;
-            if (!region[static_cast<std::size_t>(cy) * static_cast<std::size_t>(coarse.image.width()) + static_cast<std::size_t>(cx)]) continue;
+    for (const LatticePoint& point : points_in_region(images.origin)) {
+            const Eigen::Vector2d at = point.at;
             const double value = disc_statistics(luminance, where.page_to_photo, at, core, step).first;
             if (!std::isfinite(value)) continue;
             LensletReading l;
             l.page = at;
             l.value = value;
             reading.lenslets.push_back(l);
-            labels.push_back(design_basis * Eigen::Vector2d(i, j));
-        }
+            labels.push_back(design_basis * Eigen::Vector2d(point.i, point.j));
+    }
+
+    if (reading.lenslets.empty()) throw InputError(SourceLocation{name}, "no lenslet images found");
+    if (whole) keep_the_array(reading.lenslets, labels, design_basis, lattice, name);
 
     // Each lenslet's measuring band: its light seen well inside the band (the light lies up
     // to a lenslet from where the lenslet focuses, so the band's edges are left out).
-    if (reading.lenslets.empty()) throw InputError(SourceLocation{name}, "no lenslet images found");
     // The light of a lenslet is seen up to a millimetre or two from where it focuses (the
-    // diffuser's parallax, the light's slant), and a lenslet beside bare film mixes it in.
-    const double margin = std::max(px, py) + kMarginMm;
+    // diffuser's parallax, the light's slant), and a lenslet of a large array beside bare film
+    // mixes it in. A whole array's images are its own (its corrective pair), and where it
+    // focuses is where its image is seen with the parallax undone.
+    const double margin = (whole ? 0.0 : std::max(px, py)) + kMarginMm;
     AxisData along_x, along_y;
     Eigen::Vector2d low = Eigen::Vector2d::Constant(HUGE_VAL), high = -low;
     for (const LensletReading& l : reading.lenslets) low = low.cwiseMin(l.page), high = high.cwiseMax(l.page);
@@ -609,8 +857,9 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
             const print::MoireBand& band = sheet.measuring[b];
             // Well inside: the band holds the square about it.
             bool inside = band.page == page;
+            const Eigen::Vector2d focus = whole ? Eigen::Vector2d(foot + (l.page - foot) / kappa) : l.page;
             for (const double dx : {-margin, margin})
-                for (const double dy : {-margin, margin}) inside = inside && band.inside(l.page.x() + dx, l.page.y() + dy);
+                for (const double dy : {-margin, margin}) inside = inside && band.inside(focus.x() + dx, focus.y() + dy);
             if (!inside) continue;
             l.band = static_cast<int>(b);
             l.along_x = band.along_x;
@@ -639,8 +888,16 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
         const Eigen::Vector2d n = band.normal();
         AxisFit& fit = band.along_x ? reading.x : reading.y;
         fit.normal_angle = std::atan2(n.y(), n.x());
-        fit_axis(band.along_x ? along_x : along_y, n.dot(reference_page), (n.transpose() * image_map).transpose(), 1.0,
-                 band.line_fraction, band.along_x, fit, reading.lenslets, name);
+        // A whole array's reading discs see the lenslets' middles: their spot traced (Designs I
+        // and II, which the display simulator models).
+        std::vector<SpotComponent> spot;
+        AxisData& data = band.along_x ? along_x : along_y;
+        if (whole && (design.kind == optics::DesignKind::I || design.kind == optics::DesignKind::II)) {
+            spot = traced_spot(design, core / kappa, n);
+            if (!spot.empty()) data.spot = &spot;
+        }
+        fit_axis(data, n.dot(reference_page), (n.transpose() * image_map).transpose(), 1.0,
+                 band.line_fraction, band.along_x, whole, fit, reading.lenslets, name);
     }
     for (const print::MoireBand& band : sheet.measuring)
         if (band.page == page) ++(band.along_x ? reading.x.bands : reading.y.bands);

@@ -29,11 +29,25 @@
 // delete-a-group jackknife's over 8 groups of lenslets when larger (sharp lines inform only
 // near their edges, which the fit's own understates).
 //
+// An array too small for the bands to cross under it (Design II's 6 x 5) is laid whole on each
+// band in turn (print::MoireSheet::whole_array) and read whole, outer lenslets too. Its
+// lenslet images lie on the diffuser above the sheet and look larger by kappa = Z / (Z - h),
+// Z the camera's height over the sheet and h the diffuser's; its 30 images are too few for
+// the spectrum to give that to the 0.5 % the reading needs, so the lattice is kappa times the
+// design's cells, turned as the spectrum says, with Z from the photograph's pose
+// (calibrate/camera.hpp: a tilted photograph). Its reading discs see the middle of each
+// lenslet (the corrective pair images the lenslet on the diffuser), whose spot is traced
+// through the exact optics; the 6 x 5 block is the one ringed by the darkest points (the
+// holder); where each lenslet focuses is where its image is, the parallax undone; and the fit
+// starts from the smoothest row too (phase dispersion), keeping the better fit: a few lenslets'
+// coherence can peak beside the true row.
+//
 // Where it stops: marks not all in view, no darker diffuser region, fewer than 12 lenslets
 // inside both bands, lenslets reading fewer than 16 of 20 phases of a band's lines (an array
-// turned against the slant), or lines no deeper than 4 times the noise (blurred, dark, the
-// array not over the bands): InputError, saying which. Arrays too small to fill the bands
-// away from their edges (Design II's 6 x 5) are refused before any photograph is read
+// turned against the slant; fewer for a few lenslets, which fill fewer even at random), or
+// lines no deeper than 4 times the noise (blurred, dark, the array not over the bands); a
+// whole array photographed within 10 deg of frontal, or not all in view: InputError, saying
+// which. Arrays of fewer than 24 lenslets are refused before any photograph is read
 // (check_pitch_readable).
 //
 // Example: PitchReading reading = read_pitch_photo(photo, "photo.jpg", design, sheet);
@@ -85,9 +99,8 @@ struct PitchReading {
 };
 
 /// InputError naming the design file when its array is too small for the measuring bands:
-/// fewer than 4 x 12 lenslets once those within 1.6 lenslets of its edge are left out
-/// (Design II's 6 x 5 has 2; the hypothesis bands read by eye serve it: its pitch tolerance
-/// is about 8 %, 80 of their 0.1 % steps).
+/// fewer than 24 lenslets (twice the fit's parameters; the hypothesis bands read by eye serve
+/// it).
 void check_pitch_readable(const optics::Design& design);
 
 /// Reads one photograph (linear; any channels) of page `page` of `sheet`, printed for

@@ -41,6 +41,14 @@ constexpr double kBaseDrift = 0.2;
 constexpr double kSlantPeriods = 2.0;
 constexpr double kMaxSlant = 0.0524;
 constexpr double kMaxDrift = 0.45;
+// An array laid whole on each band in turn (too small for the cross) has few lenslets. Its
+// drift is a quarter period per lenslet: 0.45 puts the mirror alias (drift 1 - d) 1.3 % of
+// Design II's pitch away, a quarter 6.9 %. And it is read in the middle of each lenslet
+// image, which through Design II's corrective pair sees the middle of the lenslet (a spot a
+// fifth of the whole lenslet's): lines drawn for half the whole spot read best there (0.28 mm
+// for Design II; 0.55 and 0.18 mm read 5 and 3 times worse: docs/results.md).
+constexpr double kWholeArrayDrift = 0.25;
+constexpr double kWholeArraySpot = 0.5;
 constexpr int kMaxMeasuringPeriods = 40;  // lines per lenslet: keeps the phase unambiguous over +-1 %
 constexpr double kFallbackSpot = 0.02;    // mm, for designs the display simulator does not model
 
@@ -113,7 +121,6 @@ bool MoireBand::inked(double x, double y) const {
 }
 
 Eigen::Vector2d lenslet_spot(const optics::Design& design) {
-    constexpr double kSunRadius = 0.00465;  // rad: the sun's disc, the calibration's light
     if (design.kind != optics::DesignKind::I && design.kind != optics::DesignKind::II)
         return Eigen::Vector2d::Constant(kFallbackSpot);
     const optics::DisplaySimulator simulator(design);
@@ -134,11 +141,37 @@ Eigen::Vector2d lenslet_spot(const optics::Design& design) {
     return (sum2 / weight - mean.cwiseProduct(mean)).cwiseMax(0.0).cwiseSqrt();
 }
 
-double measuring_period(double spacing, int count, double spot, double dot) {
-    const double target = std::max(kMeasuringSpots * spot, kMeasuringDots * dot);
+double measuring_period(double spacing, int count, double spot, double dot, bool whole_array) {
+    const double target = std::max(kMeasuringSpots * (whole_array ? kWholeArraySpot : 1.0) * spot, kMeasuringDots * dot);
     const int whole = std::clamp(static_cast<int>(std::floor(spacing / target)), 1, kMaxMeasuringPeriods);
-    const double drift = std::min(kMaxDrift, kBaseDrift + kMeasuringFringes / count);
+    const double drift = whole_array ? kWholeArrayDrift : std::min(kMaxDrift, kBaseDrift + kMeasuringFringes / count);
     return spacing / (whole + drift);
+}
+
+namespace {
+
+// The measuring block's size, and whether its bands cross under the array (moire_sheet).
+struct MeasuringBlock {
+    double band_width = 0.0, measuring_height = 0.0, block_height = 0.0, rows_width = 0.0, first = 0.0, last = 0.0;
+    bool cross = false;
+};
+MeasuringBlock measuring_block(const optics::Lattice& lattice, const Paper& paper, const SheetMarks& marks) {
+    MeasuringBlock b;
+    const double band_left = paper.margin + kLabelColumn;
+    b.band_width = std::min(2.0 * lattice.half_extent().x(), paper.width - paper.margin - band_left);
+    b.measuring_height = std::max(kMeasuringHeight, 4.0 * lattice.pitch_y());
+    b.first = paper.margin + kMoireHeader;
+    b.last = paper.height - paper.margin - marks.strip;
+    b.block_height = std::min(b.last - b.first, std::max(2.0 * b.measuring_height + kBandGap, 2.0 * lattice.half_extent().y()));
+    b.rows_width = std::min(b.measuring_height, b.band_width);
+    b.cross = b.band_width >= 3.0 * b.rows_width && b.block_height >= 3.0 * b.measuring_height;
+    return b;
+}
+
+}  // namespace
+
+bool lays_array_whole(const optics::Design& design, const Paper& paper) {
+    return !measuring_block(moire_lattice(design), paper, sheet_marks(paper)).cross;
 }
 
 MoireSheet moire_sheet(const optics::Design& design, const PrinterProfile& printer, const MoireOptions& options) {
@@ -155,11 +188,10 @@ MoireSheet moire_sheet(const optics::Design& design, const PrinterProfile& print
     MoireSheet sheet;
     sheet.marks = sheet_marks(paper);
     const double band_left = paper.margin + kLabelColumn;
-    const double band_width = std::min(2.0 * lattice.half_extent().x(), paper.width - paper.margin - band_left);
+    const MeasuringBlock block = measuring_block(lattice, paper, sheet.marks);
+    const double band_width = block.band_width, measuring_height = block.measuring_height;
     const double band_height = std::max({options.band_height, 4.0 * options.x.to, 4.0 * y_range.to * row_factor});
-    const double measuring_height = std::max(kMeasuringHeight, 4.0 * lattice.pitch_y());
-    const double first = paper.margin + kMoireHeader;
-    const double last = paper.height - paper.margin - sheet.marks.strip;
+    const double first = block.first, last = block.last;
     if (band_width < 4.0 * options.x.to || first + measuring_height > last || first + band_height > last)
         throw InputError(SourceLocation{printer.file, 0, 0, "paper"},
                          "a calibration band (" + format_fixed(band_width, 1) + " x " +
@@ -169,25 +201,43 @@ MoireSheet moire_sheet(const optics::Design& design, const PrinterProfile& print
     // span the array's width (the x scale), the rows band's its height (the row spacing), and
     // both keep off the array's edge (its outer lenslets lack neighbours): a cross, the x band
     // across the block's middle and the rows band down it, the square where they meet left
-    // bare, as are the four corners. An array too small for a cross gets the two bands one
-    // above the other, to be photographed on each in turn.
-    const double block_height = std::min(last - first, std::max(2.0 * measuring_height + kBandGap,
-                                                                2.0 * lattice.half_extent().y()));
-    const double rows_width = std::min(measuring_height, band_width);
-    const bool cross = band_width >= 3.0 * rows_width && block_height >= 3.0 * measuring_height;
+    // bare, as are the four corners. An array too small for a cross is laid whole on each of
+    // two bands in turn, one above the other, each reaching a lenslet beyond the array on
+    // every side so that its outer lenslets read lines too when it is laid by hand.
+    double block_height = block.block_height;
+    const double rows_width = block.rows_width;
+    const bool cross = block.cross;
+    sheet.whole_array = !cross;
     const Eigen::Vector2d spot = options.spot_mm.value_or(lenslet_spot(design));
-    MoireBand x_measure{true, lattice.pitch_x(),
-                        measuring_period(lattice.pitch_x(), lattice.count_x(), spot.x(), printer.dpi_x.dot_mm()), 0,
-                        cross ? first + 0.5 * (block_height - measuring_height) : first, band_left, band_width,
-                        measuring_height};
-    MoireBand y_measure{false, lattice.pitch_y(),
-                        measuring_period(lattice.pitch_y(), lattice.count_y(), spot.y(), printer.dpi_y.dot_mm()), 0,
-                        cross ? first : first + measuring_height + kBandGap,
-                        cross ? band_left + 0.5 * (band_width - rows_width) : band_left, rows_width,
-                        cross ? block_height : measuring_height};
+    const double x_period = measuring_period(lattice.pitch_x(), lattice.count_x(), spot.x(), printer.dpi_x.dot_mm(), !cross);
+    const double y_period = measuring_period(lattice.pitch_y(), lattice.count_y(), spot.y(), printer.dpi_y.dot_mm(), !cross);
+    MoireBand x_measure{true, lattice.pitch_x(), x_period}, y_measure{false, lattice.pitch_y(), y_period};
     if (cross) {
+        x_measure.top = first + 0.5 * (block_height - measuring_height);
+        x_measure.left = band_left;
+        x_measure.width = band_width;
+        x_measure.height = measuring_height;
+        y_measure.top = first;
+        y_measure.left = band_left + 0.5 * (band_width - rows_width);
+        y_measure.width = rows_width;
+        y_measure.height = block_height;
         x_measure.hole = {y_measure.left, x_measure.top, y_measure.width, x_measure.height};
         y_measure.hole = x_measure.hole;
+    } else {
+        const double width = std::min(2.0 * (lattice.half_extent().x() + lattice.pitch_x()),
+                                      paper.width - paper.margin - band_left);
+        const double height = std::max(measuring_height, 2.0 * (lattice.half_extent().y() + lattice.pitch_y()));
+        block_height = 2.0 * height + kBandGap;
+        if (first + block_height > last)
+            throw InputError(SourceLocation{printer.file, 0, 0, "paper"},
+                             "the measuring bands (" + format_fixed(width, 1) + " x " + format_fixed(height, 1) +
+                                 " mm each) do not fit the printable area of " + paper.name + " paper");
+        for (MoireBand* band : {&x_measure, &y_measure}) {
+            band->top = band == &x_measure ? first : first + height + kBandGap;
+            band->left = band_left;
+            band->width = width;
+            band->height = height;
+        }
     }
     for (MoireBand* band : {&x_measure, &y_measure}) {
         band->line_fraction = kMeasuringLineFraction;
@@ -254,6 +304,10 @@ void draw_moire_page(cairo_t* cr, const MoireSheet& sheet, const optics::Design&
             cairo_set_font_size(cr, 2.0);
             cairo_move_to(cr, paper.margin, band.top + 0.5 * band.height + 3.0);
             cairo_show_text(cr, ("(lines " + format_fixed(band.period, 5) + " mm)").c_str());
+            if (sheet.whole_array) {  // a photograph of the whole array on each band in turn
+                cairo_move_to(cr, paper.margin, band.top + 0.5 * band.height + 5.5);
+                cairo_show_text(cr, "(the whole array on it)");
+            }
         } else if (!band.along_x && hex) {
             cairo_set_font_size(cr, 2.0);
             cairo_move_to(cr, paper.margin, band.top + 0.5 * band.height + 3.0);

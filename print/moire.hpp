@@ -104,7 +104,13 @@ struct MoireSheet {
     std::vector<MoireBand> measuring;  ///< x, rows
     SheetMarks marks;
     int pages = 1;
+    /// The measuring bands do not cross: the array (too small for a cross) is laid whole on
+    /// each in turn and photographed there.
+    bool whole_array = false;
 };
+
+/// The calibration's light: the sun, a disc of this angular radius, rad.
+inline constexpr double kSunRadius = 0.00465;
 
 /// The standard deviation of a lenslet's spot on the pattern plane along x and y, mm, under
 /// the sun (a disc 0.53 deg across) on the axis, traced exactly (Designs I and II; 0.02 mm
@@ -115,8 +121,14 @@ Eigen::Vector2d lenslet_spot(const optics::Design& design);
 /// band, a spot of `spot` mm and printer dots of `dot` mm: spacing / (n + drift), n lines per
 /// lenslet (about 5 spots or 12 dots a line, 1 to 40), drift 0.2 + 2 / count (at most 0.45):
 /// from one lenslet to the next the phase steps by a fifth of a period, and over the array it
-/// drifts by two more periods, so the lenslets read every phase.
-double measuring_period(double spacing, int count, double spot, double dot);
+/// drifts by two more periods, so the lenslets read every phase. An array laid whole on the
+/// band (`whole_array`) drifts by a quarter period per lenslet and gets lines for half the
+/// spot (print/moire.cpp says why).
+double measuring_period(double spacing, int count, double spot, double dot, bool whole_array = false);
+
+/// Whether the sheet for `design` on `paper` lays the array whole on each measuring band in
+/// turn (MoireSheet::whole_array: the array too small for the bands to cross under it).
+bool lays_array_whole(const optics::Design& design, const Paper& paper);
 
 /// The bands for `options` on the printer's paper. InputError when the design has no lenslet
 /// array or a band does not fit the printable area.

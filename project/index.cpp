@@ -12,6 +12,7 @@
 #include "core/text.hpp"
 #include "optics/design.hpp"
 #include "predict/summaries.hpp"
+#include "print/moire.hpp"
 #include "print/printer.hpp"
 #include "holders/profile.hpp"
 #include "project/preview.hpp"
@@ -108,6 +109,17 @@ std::vector<Section> instructions(const Project& project, const fs::path& out) {
                  ", at 100 % (no scaling, no colour adjustment). Lay the lens array on it: the band whose fringes "
                  "vanish or are widest has the array's true pitch (this array is too small for rfd calibrate pitch). "
                  "If it is not the design's, put it into the design's lattice and run rfd make again.",
+             {"print/moire.pdf", "print/moire.png"}});
+    else if (made(out, "print/moire.pdf") && print::lays_array_whole(design, printer.paper))
+        print_first.items.push_back(
+            {"Print moire.pdf on transparency film with " + film_printer +
+                 ", at 100 % (no scaling, no colour adjustment). Lay it in the holder's pattern pocket with the whole "
+                 "lens array on its \"measure x\" band, light it from behind and photograph it from 20 to 40 degrees "
+                 "off the vertical with its four corner discs in view; then the same with the array on the "
+                 "\"measure rows\" band. Two or three such pairs, the array laid down again each time, read finer "
+                 "than one (docs/usage.md, \"Calibrating from photographs\"). Name the photographs in the project's "
+                 "[calibration] moire_photos: rfd make then measures the array's true pitch and builds everything "
+                 "for it.",
              {"print/moire.pdf", "print/moire.png"}});
     else if (made(out, "print/moire.pdf"))
         print_first.items.push_back(
