@@ -43,6 +43,8 @@ constexpr double kMinTiltDeg = 10.0;        // the camera's height needs a tilte
 constexpr int kMinWholeLenslets = 24;       // twice the fit's parameters
 constexpr double kWholeFloorX = 1e-4;       // its scale's least uncertainty along a row
 constexpr double kWholeFloorRows = 3.5e-4;  // and across the rows (fit_axis says why)
+constexpr double kWholeMaxContrast = 1.05;  // a fit whose profile dips below no light,
+constexpr double kWholeMaxResidual = 0.04;  // or misses the readings by this much, settled wrong
 constexpr int kSpotRays = 48;               // rays per side of a lenslet, for the traced spot
 constexpr int kSpotBins = 24;               // the traced spot's components
 
@@ -522,6 +524,15 @@ void fit_axis(AxisData& data, double offset, const Eigen::Vector2d& guess, doubl
     const auto [lo, hi] = std::minmax_element(fit.profile.begin(), fit.profile.end());
     const double depth = *hi - *lo;
     fit.contrast = *hi > 0.0 ? depth / *hi : 0.0;
+    // A whole small array's fit that settled wrong shows it: a profile that dips below no light
+    // or readings far off it (good fits over the simulated arrays of docs/results.md: residual
+    // 0.5-2.3 %, contrast at most 1.00; one that settled wrong: 6.3 %, 1.14).
+    if (few && (fit.contrast > kWholeMaxContrast || fit.rms > kWholeMaxResidual))
+        throw InputError(SourceLocation{name},
+                         format_text("the lenslets over the %s measuring band do not fit the lines' profile "
+                                     "(residual %.1f %%, contrast %.2f): the array's lenslet images were probably "
+                                     "not found; lay the array down again and take another photograph",
+                                     along_x ? "x" : "rows", 100.0 * fit.rms, fit.contrast));
     for (std::size_t k = 0; k < data.value.size(); ++k) {
         LensletReading& l = lenslets[data.lenslet[k]];
         l.phase = model.phase(p, k);
