@@ -324,10 +324,13 @@ double fit_levels(const AxisModel& model, Eigen::VectorXd& p) {
     return values2 - levels.dot(right);
 }
 
-// The row (m1, m2) with the most coherent readings near `guess`, c held at `offset`: along
-// the guess, its length within +-kPitchPrior; across it, within +-kTurnPrior; on a grid fine
-// enough that the phase moves by a tenth of a period between its points anywhere in the bands.
-Eigen::Vector2d coherent_row(const AxisData& data, double offset, const Eigen::Vector2d& guess, double scale) {
+// The row (m1, m2) near `guess` that scores highest, c held at `offset`: along the guess,
+// its length within +-kPitchPrior; across it, within +-kTurnPrior; on a grid fine enough that
+// the phase moves by `step` of a period between its points anywhere in the bands. `score`
+// takes each lenslet's phase (periods) and returns the row's score.
+template <typename Score>
+Eigen::Vector2d best_row(const AxisData& data, double offset, const Eigen::Vector2d& guess, double scale, double step,
+                         Score score) {
     const Eigen::Vector2d along = guess.normalized(), across(-along.y(), along.x());
     double span_along = 0.0, span_across = 0.0;
     for (const Eigen::Vector2d& a : data.label) {
@@ -335,63 +338,55 @@ Eigen::Vector2d coherent_row(const AxisData& data, double offset, const Eigen::V
         span_across = std::max(span_across, std::abs(a.dot(across)));
     }
     const double period = data.period.front();
-    const double step_along = 0.1 * period / std::max(span_along, period);
-    const double step_across = 0.1 * period / std::max(span_across, period);
+    const double step_along = step * period / std::max(span_along, period);
+    const double step_across = step * period / std::max(span_across, period);
     const int n_along = static_cast<int>(std::ceil(kPitchPrior / step_along));
     const int n_across = static_cast<int>(std::ceil(kTurnPrior / step_across));
-    double mean = 0.0;
-    for (const double v : data.value) mean += v;
-    mean /= static_cast<double>(data.value.size());
+    std::vector<double> phases(data.value.size());
     Eigen::Vector2d best = guess;
-    double best_power = -1.0;
+    double best_score = -HUGE_VAL;
     for (int i = -n_along; i <= n_along; ++i)
         for (int j = -n_across; j <= n_across; ++j) {
             const Eigen::Vector2d row = (scale + i * step_along) * along + j * step_across * across;
-            std::complex<double> sum = 0.0;
-            for (std::size_t k = 0; k < data.value.size(); ++k) {
-                const double phi = (offset + row.dot(data.label[k]) - data.origin[k]) / data.period[k];
-                sum += (data.value[k] - mean) * std::polar(1.0, kTwoPi * phi);
-            }
-            if (std::norm(sum) > best_power) best_power = std::norm(sum), best = row;
+            for (std::size_t k = 0; k < data.value.size(); ++k)
+                phases[k] = (offset + row.dot(data.label[k]) - data.origin[k]) / data.period[k];
+            const double value = score(phases);
+            if (value > best_score) best_score = value, best = row;
         }
     return best;
 }
 
-// The row with the smoothest readings in the order of their phases near `guess` (phase
-// dispersion minimisation, Stellingwerf 1978): the sum of squared steps between readings
-// neighbouring in phase, on the grid of coherent_row at half its step. A few lenslets'
-// coherence can peak beside the true row, where the fit then settles in a wrong minimum.
+// The row with the most coherent readings: the power of their Fourier sum at the lines'
+// frequency, on a grid of a tenth of a period.
+Eigen::Vector2d coherent_row(const AxisData& data, double offset, const Eigen::Vector2d& guess, double scale) {
+    double mean = 0.0;
+    for (const double v : data.value) mean += v;
+    mean /= static_cast<double>(data.value.size());
+    return best_row(data, offset, guess, scale, 0.1, [&](const std::vector<double>& phases) {
+        std::complex<double> sum = 0.0;
+        for (std::size_t k = 0; k < phases.size(); ++k)
+            sum += (data.value[k] - mean) * std::polar(1.0, kTwoPi * phases[k]);
+        return std::norm(sum);
+    });
+}
+
+// The row with the smoothest readings in the order of their phases (phase dispersion
+// minimisation, Stellingwerf 1978): the least sum of squared steps between readings
+// neighbouring in phase, on a grid of a twentieth of a period. A few lenslets' coherence can
+// peak beside the true row, where the fit then settles in a wrong minimum.
 Eigen::Vector2d smoothest_row(const AxisData& data, double offset, const Eigen::Vector2d& guess, double scale) {
-    const Eigen::Vector2d along = guess.normalized(), across(-along.y(), along.x());
-    double span_along = 0.0, span_across = 0.0;
-    for (const Eigen::Vector2d& a : data.label) {
-        span_along = std::max(span_along, std::abs(a.dot(along)));
-        span_across = std::max(span_across, std::abs(a.dot(across)));
-    }
-    const double period = data.period.front();
-    const double step_along = 0.05 * period / std::max(span_along, period);
-    const double step_across = 0.05 * period / std::max(span_across, period);
-    const int n_along = static_cast<int>(std::ceil(kPitchPrior / step_along));
-    const int n_across = static_cast<int>(std::ceil(kTurnPrior / step_across));
     std::vector<std::pair<double, double>> ordered(data.value.size());
-    Eigen::Vector2d best = guess;
-    double best_length = HUGE_VAL;
-    for (int i = -n_along; i <= n_along; ++i)
-        for (int j = -n_across; j <= n_across; ++j) {
-            const Eigen::Vector2d row = (scale + i * step_along) * along + j * step_across * across;
-            for (std::size_t k = 0; k < data.value.size(); ++k) {
-                const double phi = (offset + row.dot(data.label[k]) - data.origin[k]) / data.period[k];
-                ordered[k] = {phi - std::floor(phi), data.value[k]};
-            }
-            std::sort(ordered.begin(), ordered.end());
-            double length = 0.0;
-            for (std::size_t k = 0; k < ordered.size(); ++k) {
-                const double step = ordered[(k + 1) % ordered.size()].second - ordered[k].second;
-                length += step * step;
-            }
-            if (length < best_length) best_length = length, best = row;
+    return best_row(data, offset, guess, scale, 0.05, [&](const std::vector<double>& phases) {
+        for (std::size_t k = 0; k < phases.size(); ++k)
+            ordered[k] = {phases[k] - std::floor(phases[k]), data.value[k]};
+        std::sort(ordered.begin(), ordered.end());
+        double length = 0.0;
+        for (std::size_t k = 0; k < ordered.size(); ++k) {
+            const double step = ordered[(k + 1) % ordered.size()].second - ordered[k].second;
+            length += step * step;
         }
-    return best;
+        return -length;
+    });
 }
 
 // The fit from a starting row: the lines' offset searched, then Levenberg-Marquardt, outliers
