@@ -45,6 +45,10 @@ constexpr double kWholeFloorX = 1e-4;       // its scale's least uncertainty alo
 constexpr double kWholeFloorRows = 3.5e-4;  // and across the rows (fit_axis says why)
 constexpr double kWholeMaxContrast = 1.05;  // a fit whose profile dips below no light,
 constexpr double kWholeMaxResidual = 0.04;  // or misses the readings by this much, settled wrong
+constexpr double kHolderDark = 0.1;         // a reading under this part of the brightest: the holder
+constexpr double kWholePhaseShare = 0.55;   // of the phase bins 30 random phases fill, needed
+constexpr int kWholeTurnSteps = 5;          // its lattice tried at up to this many steps either way
+constexpr double kWholeTurnStepDeg = 1.0;   // of this turn from the spectrum's (read_pitch_photo)
 constexpr int kSpotRays = 48;               // rays per side of a lenslet, for the traced spot
 constexpr int kSpotBins = 24;               // the traced spot's components
 
@@ -544,10 +548,16 @@ void fit_axis(AxisData& data, double offset, const Eigen::Vector2d& guess, doubl
     }
     const auto bins = std::count(seen.begin(), seen.end(), true);
     // A small array's few lenslets fill fewer bins even at random phases (30 fill 15.7 of 20
-    // on average): four fifths of that, and at most kMinPhaseBins.
+    // on average): four fifths of that, and at most kMinPhaseBins. A whole small array's phases
+    // follow its two steps, one per lenslet along a row and one per row, and at some turns of
+    // the array these nearly repeat: over 31 turns of Design II's array (docs/results.md)
+    // fits from 9 to 11 of 20 bins read as well as the others, from 8 one came out 1.8 %
+    // uncertain; so it needs kWholePhaseShare of the random fill (9 bins): 2 of those 31 turns
+    // refused for it rather than 8.
     const double at_random =
         kPhaseBins * (1.0 - std::pow(1.0 - 1.0 / kPhaseBins, static_cast<double>(model.rows.size())));
-    const auto needed = std::min<std::ptrdiff_t>(kMinPhaseBins, static_cast<std::ptrdiff_t>(0.8 * at_random));
+    const auto needed = few ? static_cast<std::ptrdiff_t>(std::ceil(kWholePhaseShare * at_random))
+                            : std::min<std::ptrdiff_t>(kMinPhaseBins, static_cast<std::ptrdiff_t>(0.8 * at_random));
     if (bins < needed)
         throw InputError(SourceLocation{name},
                          format_text("the lenslets over the %s measuring band read only %td of %d phases of its "
@@ -567,7 +577,8 @@ void fit_axis(AxisData& data, double offset, const Eigen::Vector2d& guess, doubl
 // dark around the array, and the band's lines beside it), the design's count_x x count_y
 // block of points read whole whose ring of points around it is darkest (the holder, where no
 // light comes through), each point in it brighter than a lenslet image can be (the bare
-// sheet: 1.4 times the 70th percentile of the readings) counting as ten rings' light. A hexagonal array's rows are
+// sheet: 1.4 times the 70th percentile of the readings that are not the holder's dark)
+// counting as ten rings' light. A hexagonal array's rows are
 // offset by half a pitch: its block is counted in columns i + floor(j / 2). InputError when
 // the region does not hold a whole block.
 void keep_the_array(std::vector<LensletReading>& lenslets, std::vector<Eigen::Vector2d>& labels,
@@ -583,8 +594,15 @@ void keep_the_array(std::vector<LensletReading>& lenslets, std::vector<Eigen::Ve
         low = low.cwiseMin(cells.back());
         high = high.cwiseMax(cells.back());
     }
+    // The percentile is taken over the light: points on the holder read nothing, and where
+    // they are many (the array laid near the band's edge) the percentile of all points fell
+    // below the brightest lenslets, which then counted as bare sheet and pushed the block a
+    // lenslet onto the holder.
+    double brightest = 0.0;
+    for (const LensletReading& l : lenslets) brightest = std::max(brightest, l.value);
     std::vector<double> values;
-    for (const LensletReading& l : lenslets) values.push_back(l.value);
+    for (const LensletReading& l : lenslets)
+        if (l.value >= kHolderDark * brightest) values.push_back(l.value);
     std::sort(values.begin(), values.end());
     const double bright = 1.4 * values[static_cast<std::size_t>(0.7 * static_cast<double>(values.size() - 1))];
     const int width = lattice.count_x(), height = lattice.count_y();
@@ -682,10 +700,10 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
     const bool hex = lattice.kind() == optics::LatticeKind::Hexagonal;
     const Image luminance = photo_luminance(photo);
     const SheetLocation where = find_sheet(luminance, sheet.marks, name);
-    PitchReading reading;
-    reading.name = name;
-    reading.mirrored = where.mirrored;
-    reading.mm_per_pixel = where.mm_per_pixel;
+    PitchReading start;
+    start.name = name;
+    start.mirrored = where.mirrored;
+    start.mm_per_pixel = where.mm_per_pixel;
     // An array laid whole on a band is read whole. Its few lenslet images lie on the diffuser,
     // `height` above the sheet, and the photograph sees them magnified about the camera's foot
     // by kappa = Z / (Z - height), Z the camera's height: too little lattice for its spectrum
@@ -767,161 +785,214 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
         reciprocal.row(i) = strongest_frequency(spectrum, nominal_reciprocal.row(i).transpose(), extent).transpose();
         peak[static_cast<std::size_t>(i)] = spectrum.at(reciprocal.row(i).transpose());
     }
-    ImageLattice images;
-    images.basis = reciprocal.inverse();
-    if (whole) {
-        // The spectrum's turn, the pose's magnification, the design's cells.
-        const double turn = std::atan2(images.basis(1, 0), images.basis(0, 0));
-        images.basis = kappa * Eigen::Rotation2Dd(turn).toRotationMatrix() * page_basis;
-        reciprocal = images.basis.inverse();
-        for (int i = 0; i < 2; ++i) peak[static_cast<std::size_t>(i)] = spectrum.at(reciprocal.row(i).transpose());
-    }
-    const Eigen::Vector2d phases(-std::arg(peak[0]) / kTwoPi, -std::arg(peak[1]) / kTwoPi);
-    // The lattice points (i, j) whose middle lies in the region, for a lattice origin.
-    struct LatticePoint {
-        int i, j;
-        Eigen::Vector2d at;
+    // The lenslet images read on a lattice: the readings, their labels in the design's array
+    // frame, the lattice, and the reading discs' radius.
+    struct LatticeReading {
+        PitchReading reading;
+        std::vector<Eigen::Vector2d> labels;
+        ImageLattice images;
+        double core = 0.0;
     };
-    const auto points_in_region = [&](const Eigen::Vector2d& origin) {
-        const Eigen::Matrix2d to_index = images.basis.inverse();
-        Eigen::Vector2d n_low = Eigen::Vector2d::Constant(HUGE_VAL), n_high = -n_low;
-        for (const Eigen::Vector2d& corner :
-             {coarse.page(x0, y0), coarse.page(x1, y0), coarse.page(x0, y1), coarse.page(x1, y1)}) {
-            const Eigen::Vector2d n = to_index * (corner - origin);
-            n_low = n_low.cwiseMin(n);
-            n_high = n_high.cwiseMax(n);
-        }
-        std::vector<LatticePoint> points;
-        for (int j = static_cast<int>(std::floor(n_low.y())); j <= static_cast<int>(std::ceil(n_high.y())); ++j)
-            for (int i = static_cast<int>(std::floor(n_low.x())); i <= static_cast<int>(std::ceil(n_high.x())); ++i) {
-                const Eigen::Vector2d at = origin + images.basis * Eigen::Vector2d(i, j);
-                const int cx = static_cast<int>(std::floor((at.x() - coarse.origin.x()) * kCoarsePixelsPerMm));
-                const int cy = static_cast<int>(std::floor((at.y() - coarse.origin.y()) * kCoarsePixelsPerMm));
-                if (cx < 0 || cy < 0 || cx >= coarse.image.width() || cy >= coarse.image.height()) continue;
-                if (region[static_cast<std::size_t>(cy) * static_cast<std::size_t>(coarse.image.width()) +
-                           static_cast<std::size_t>(cx)])
-                    points.push_back({i, j, at});
-            }
-        return points;
-    };
-    // The transform's phase places the lattice up to half a period along each basis vector
-    // (a lenslet image may be bright in the middle or at its rim, where images overlap). Of
-    // the four candidates, the one whose reading discs see single lenslets: their readings
-    // then differ most from one lenslet to the next (a disc across two mixes them). Sampled
-    // every 2.5 lenslets over a large array; over a whole small one, at every lenslet.
-    const double core = kCoreFraction * std::min(images.basis.col(0).norm(),
-                                                 std::abs(images.basis.determinant()) / images.basis.col(0).norm());
-    const double step = std::max(where.mm_per_pixel, core / 8.0);
-    const int stride = std::max(1, static_cast<int>(std::lround(2.5 * px * kCoarsePixelsPerMm)));
-    double best_variation = -1.0;
-    for (const Eigen::Vector2d& shift : {Eigen::Vector2d(0, 0), Eigen::Vector2d(0.5, 0), Eigen::Vector2d(0, 0.5),
-                                        Eigen::Vector2d(0.5, 0.5)}) {
-        const Eigen::Vector2d origin = images.basis * (phases + shift);
-        double sum = 0.0, sum2 = 0.0;
-        int cells = 0;
-        const auto add = [&](const Eigen::Vector2d& at) {
-            const double mean = disc_statistics(luminance, where.page_to_photo, at, core, step).first;
-            if (std::isfinite(mean)) sum += mean, sum2 += mean * mean, ++cells;
+    // Reads the lenslet images on the lattice of `basis` (its reciprocal vectors the rows of
+    // `reciprocal_rows`); a whole array's block of them.
+    const auto read_lattice = [&](const Eigen::Matrix2d& basis, const Eigen::Matrix2d& reciprocal_rows) {
+        PitchReading reading = start;
+        ImageLattice images;
+        images.basis = basis;
+        for (int i = 0; i < 2; ++i) peak[static_cast<std::size_t>(i)] = spectrum.at(reciprocal_rows.row(i).transpose());
+        const Eigen::Vector2d phases(-std::arg(peak[0]) / kTwoPi, -std::arg(peak[1]) / kTwoPi);
+        // The lattice points (i, j) whose middle lies in the region, for a lattice origin.
+        struct LatticePoint {
+            int i, j;
+            Eigen::Vector2d at;
         };
-        if (whole)
-            for (const LatticePoint& point : points_in_region(origin)) add(point.at);
-        else
-            for (int y = y0; y <= y1; y += stride)
-                for (int x = x0; x <= x1; x += stride)
-                    if (region[static_cast<std::size_t>(y) * static_cast<std::size_t>(coarse.image.width()) +
-                               static_cast<std::size_t>(x)])
-                        add(origin + images.basis *
-                                         (images.basis.inverse() * (coarse.page(x, y) - origin)).array().round().matrix());
-        if (cells < 2) continue;
-        const double mean = sum / cells, variation = (sum2 / cells - mean * mean) / (mean * mean);
-        if (variation > best_variation) best_variation = variation, images.origin = origin;
-    }
+        const auto points_in_region = [&](const Eigen::Vector2d& origin) {
+            const Eigen::Matrix2d to_index = images.basis.inverse();
+            Eigen::Vector2d n_low = Eigen::Vector2d::Constant(HUGE_VAL), n_high = -n_low;
+            for (const Eigen::Vector2d& corner :
+                 {coarse.page(x0, y0), coarse.page(x1, y0), coarse.page(x0, y1), coarse.page(x1, y1)}) {
+                const Eigen::Vector2d n = to_index * (corner - origin);
+                n_low = n_low.cwiseMin(n);
+                n_high = n_high.cwiseMax(n);
+            }
+            std::vector<LatticePoint> points;
+            const int i_low = static_cast<int>(std::floor(n_low.x())), i_high = static_cast<int>(std::ceil(n_high.x()));
+            for (int j = static_cast<int>(std::floor(n_low.y())); j <= static_cast<int>(std::ceil(n_high.y())); ++j)
+                for (int i = i_low; i <= i_high; ++i) {
+                    const Eigen::Vector2d at = origin + images.basis * Eigen::Vector2d(i, j);
+                    const int cx = static_cast<int>(std::floor((at.x() - coarse.origin.x()) * kCoarsePixelsPerMm));
+                    const int cy = static_cast<int>(std::floor((at.y() - coarse.origin.y()) * kCoarsePixelsPerMm));
+                    if (cx < 0 || cy < 0 || cx >= coarse.image.width() || cy >= coarse.image.height()) continue;
+                    if (region[static_cast<std::size_t>(cy) * static_cast<std::size_t>(coarse.image.width()) +
+                               static_cast<std::size_t>(cx)])
+                        points.push_back({i, j, at});
+                }
+            return points;
+        };
+        // The transform's phase places the lattice up to half a period along each basis vector
+        // (a lenslet image may be bright in the middle or at its rim, where images overlap). Of
+        // the four candidates, the one whose reading discs see single lenslets: their readings
+        // then differ most from one lenslet to the next (a disc across two mixes them). Sampled
+        // every 2.5 lenslets over a large array; over a whole small one, at every lenslet.
+        const double core = kCoreFraction * std::min(images.basis.col(0).norm(),
+                                                     std::abs(images.basis.determinant()) / images.basis.col(0).norm());
+        const double step = std::max(where.mm_per_pixel, core / 8.0);
+        const int stride = std::max(1, static_cast<int>(std::lround(2.5 * px * kCoarsePixelsPerMm)));
+        double best_variation = -1.0;
+        for (const Eigen::Vector2d& shift : {Eigen::Vector2d(0, 0), Eigen::Vector2d(0.5, 0), Eigen::Vector2d(0, 0.5),
+                                            Eigen::Vector2d(0.5, 0.5)}) {
+            const Eigen::Vector2d origin = images.basis * (phases + shift);
+            double sum = 0.0, sum2 = 0.0;
+            int cells = 0;
+            const auto add = [&](const Eigen::Vector2d& at) {
+                const double mean = disc_statistics(luminance, where.page_to_photo, at, core, step).first;
+                if (std::isfinite(mean)) sum += mean, sum2 += mean * mean, ++cells;
+            };
+            if (whole)
+                for (const LatticePoint& point : points_in_region(origin)) add(point.at);
+            else
+                for (int y = y0; y <= y1; y += stride)
+                    for (int x = x0; x <= x1; x += stride)
+                        if (region[static_cast<std::size_t>(y) * static_cast<std::size_t>(coarse.image.width()) +
+                                   static_cast<std::size_t>(x)])
+                            add(origin + images.basis * (images.basis.inverse() * (coarse.page(x, y) - origin))
+                                                            .array()
+                                                            .round()
+                                                            .matrix());
+            if (cells < 2) continue;
+            const double mean = sum / cells, variation = (sum2 / cells - mean * mean) / (mean * mean);
+            if (variation > best_variation) best_variation = variation, images.origin = origin;
+        }
 
-    // Every lenslet image inside the region, read over its central part.
-    std::vector<Eigen::Vector2d> labels;
-    for (const LatticePoint& point : points_in_region(images.origin)) {
-            const Eigen::Vector2d at = point.at;
-            const double value = disc_statistics(luminance, where.page_to_photo, at, core, step).first;
-            if (!std::isfinite(value)) continue;
-            LensletReading l;
-            l.page = at;
-            l.value = value;
-            reading.lenslets.push_back(l);
-            labels.push_back(design_basis * Eigen::Vector2d(point.i, point.j));
-    }
+        // Every lenslet image inside the region, read over its central part.
+        std::vector<Eigen::Vector2d> labels;
+        for (const LatticePoint& point : points_in_region(images.origin)) {
+                const Eigen::Vector2d at = point.at;
+                const double value = disc_statistics(luminance, where.page_to_photo, at, core, step).first;
+                if (!std::isfinite(value)) continue;
+                LensletReading l;
+                l.page = at;
+                l.value = value;
+                reading.lenslets.push_back(l);
+                labels.push_back(design_basis * Eigen::Vector2d(point.i, point.j));
+        }
 
-    if (reading.lenslets.empty()) throw InputError(SourceLocation{name}, "no lenslet images found");
-    if (whole) keep_the_array(reading.lenslets, labels, design_basis, lattice, name);
-
-    // Each lenslet's measuring band: its light seen well inside the band (the light lies up
-    // to a lenslet from where the lenslet focuses, so the band's edges are left out).
-    // The light of a lenslet is seen up to a millimetre or two from where it focuses (the
-    // diffuser's parallax, the light's slant), and a lenslet of a large array beside bare film
-    // mixes it in. A whole array's images are its own (its corrective pair), and where it
-    // focuses is where its image is seen with the parallax undone.
-    const double margin = (whole ? 0.0 : std::max(px, py)) + kMarginMm;
-    AxisData along_x, along_y;
-    Eigen::Vector2d low = Eigen::Vector2d::Constant(HUGE_VAL), high = -low;
-    for (const LensletReading& l : reading.lenslets) low = low.cwiseMin(l.page), high = high.cwiseMax(l.page);
-    const Eigen::Vector2d centre = 0.5 * (low + high);
-    // The reference lenslet: nearest the middle (labels are taken from it, so c is where it focuses).
-    std::size_t reference = 0;
-    for (std::size_t k = 0; k < reading.lenslets.size(); ++k)
-        if ((reading.lenslets[k].page - centre).squaredNorm() <
-            (reading.lenslets[reference].page - centre).squaredNorm())
-            reference = k;
-    const Eigen::Vector2d reference_label = labels[reference];
-    for (std::size_t k = 0; k < reading.lenslets.size(); ++k) {
-        LensletReading& l = reading.lenslets[k];
-        for (std::size_t b = 0; b < sheet.measuring.size(); ++b) {
-            const print::MoireBand& band = sheet.measuring[b];
-            // Well inside: the band holds the square about it.
-            bool inside = band.page == page;
-            const Eigen::Vector2d focus = whole ? Eigen::Vector2d(foot + (l.page - foot) / kappa) : l.page;
-            for (const double dx : {-margin, margin})
-                for (const double dy : {-margin, margin}) inside = inside && band.inside(focus.x() + dx, focus.y() + dy);
-            if (!inside) continue;
-            l.band = static_cast<int>(b);
-            l.along_x = band.along_x;
+        if (reading.lenslets.empty()) throw InputError(SourceLocation{name}, "no lenslet images found");
+        if (whole) keep_the_array(reading.lenslets, labels, design_basis, lattice, name);
+        return LatticeReading{std::move(reading), std::move(labels), images, core};
+    };
+    // Fits the bands' lines to the lenslets read.
+    const auto fit_lattice = [&](LatticeReading found) {
+        PitchReading& reading = found.reading;
+        const std::vector<Eigen::Vector2d>& labels = found.labels;
+        const ImageLattice& images = found.images;
+        const double core = found.core;
+        // Each lenslet's measuring band: its light seen well inside the band (the light lies up
+        // to a lenslet from where the lenslet focuses, so the band's edges are left out).
+        // The light of a lenslet is seen up to a millimetre or two from where it focuses (the
+        // diffuser's parallax, the light's slant), and a lenslet of a large array beside bare film
+        // mixes it in. A whole array's images are its own (its corrective pair), and where it
+        // focuses is where its image is seen with the parallax undone.
+        const double margin = (whole ? 0.0 : std::max(px, py)) + kMarginMm;
+        AxisData along_x, along_y;
+        Eigen::Vector2d low = Eigen::Vector2d::Constant(HUGE_VAL), high = -low;
+        for (const LensletReading& l : reading.lenslets) low = low.cwiseMin(l.page), high = high.cwiseMax(l.page);
+        const Eigen::Vector2d centre = 0.5 * (low + high);
+        // The reference lenslet: nearest the middle (labels are taken from it, so c is where it focuses).
+        std::size_t reference = 0;
+        for (std::size_t k = 0; k < reading.lenslets.size(); ++k)
+            if ((reading.lenslets[k].page - centre).squaredNorm() <
+                (reading.lenslets[reference].page - centre).squaredNorm())
+                reference = k;
+        const Eigen::Vector2d reference_label = labels[reference];
+        for (std::size_t k = 0; k < reading.lenslets.size(); ++k) {
+            LensletReading& l = reading.lenslets[k];
+            for (std::size_t b = 0; b < sheet.measuring.size(); ++b) {
+                const print::MoireBand& band = sheet.measuring[b];
+                // Well inside: the band holds the square about it.
+                bool inside = band.page == page;
+                const Eigen::Vector2d focus = whole ? Eigen::Vector2d(foot + (l.page - foot) / kappa) : l.page;
+                for (const double dx : {-margin, margin})
+                    for (const double dy : {-margin, margin})
+                        inside = inside && band.inside(focus.x() + dx, focus.y() + dy);
+                if (!inside) continue;
+                l.band = static_cast<int>(b);
+                l.along_x = band.along_x;
+                AxisData& data = band.along_x ? along_x : along_y;
+                data.label.push_back(labels[k] - reference_label);
+                data.where.push_back(l.page);
+                data.value.push_back(l.value);
+                data.period.push_back(band.period);
+                data.origin.push_back(
+                    band.normal().dot(Eigen::Vector2d(band.left + 0.5 * band.width, band.top + 0.5 * band.height)));
+                data.lenslet.push_back(k);
+            }
+        }
+        if (static_cast<int>(std::max(along_x.value.size(), along_y.value.size())) < kMinLenslets)
+            throw InputError(SourceLocation{name},
+                             format_text("only %zu and %zu lenslets lie inside the x and rows measuring bands "
+                                         "(at least %d needed in one): lay the array over them",
+                                         along_x.value.size(), along_y.value.size(), kMinLenslets));
+        // Start from the lattice of lenslet images: its rows give the directions (the parallax
+        // magnifies it about the camera's foot but does not turn it), the design the lengths.
+        // A band's lines measure their normal's row of the map: n^T M.
+        const Eigen::Matrix2d image_map = images.basis * design_basis.inverse();
+        const Eigen::Vector2d reference_page = reading.lenslets[reference].page;
+        for (const print::MoireBand& band : sheet.measuring) {
+            if (band.page != page) continue;
+            const Eigen::Vector2d n = band.normal();
+            AxisFit& fit = band.along_x ? reading.x : reading.y;
+            fit.normal_angle = std::atan2(n.y(), n.x());
+            // A whole array's reading discs see the lenslets' middles: their spot traced (Designs I
+            // and II, which the display simulator models).
+            std::vector<SpotComponent> spot;
             AxisData& data = band.along_x ? along_x : along_y;
-            data.label.push_back(labels[k] - reference_label);
-            data.where.push_back(l.page);
-            data.value.push_back(l.value);
-            data.period.push_back(band.period);
-            data.origin.push_back(
-                band.normal().dot(Eigen::Vector2d(band.left + 0.5 * band.width, band.top + 0.5 * band.height)));
-            data.lenslet.push_back(k);
+            if (whole && (design.kind == optics::DesignKind::I || design.kind == optics::DesignKind::II)) {
+                spot = traced_spot(design, core / kappa, n);
+                if (!spot.empty()) data.spot = &spot;
+            }
+            fit_axis(data, n.dot(reference_page), (n.transpose() * image_map).transpose(), 1.0,
+                     band.line_fraction, band.along_x, whole, fit, reading.lenslets, name);
+        }
+        for (const print::MoireBand& band : sheet.measuring)
+            if (band.page == page) ++(band.along_x ? reading.x.bands : reading.y.bands);
+        return reading;
+    };
+    if (!whole) return fit_lattice(read_lattice(reciprocal.inverse(), reciprocal));
+    // A whole small array's few lenslet images give the spectrum broad peaks, which the
+    // moire's modulation of their brightness pulls aside: its turn came out up to 3 deg off in
+    // hand-held photographs, enough for the reading discs of the outer lenslets to straddle two
+    // images (the fit then missed the readings by half their spread, and the photograph was
+    // refused). So the lattice is tried at turns a degree apart around the spectrum's, its
+    // magnification from the pose and its cells from the design, and the one whose discs see
+    // single images is kept: the least light varying inside the discs against the light they
+    // read (a lenslet image is evenly lit; a disc across two sees an edge).
+    const Eigen::Matrix2d spectrum_basis = reciprocal.inverse();
+    const double spectrum_turn = std::atan2(spectrum_basis(1, 0), spectrum_basis(0, 0));
+    std::optional<LatticeReading> best;
+    double best_spread = HUGE_VAL;
+    std::optional<InputError> first_error;
+    for (int k = 0; k <= 2 * kWholeTurnSteps; ++k) {
+        const int steps = (k + 1) / 2 * (k % 2 ? 1 : -1);  // 0, +1, -1, +2, ...
+        const double turn = spectrum_turn + degrees_to_radians(kWholeTurnStepDeg * steps);
+        const Eigen::Matrix2d basis = kappa * Eigen::Rotation2Dd(turn).toRotationMatrix() * page_basis;
+        try {
+            LatticeReading candidate = read_lattice(basis, basis.inverse());
+            const double step = std::max(where.mm_per_pixel, candidate.core / 8.0);
+            double variance = 0.0, light = 0.0;
+            for (const LensletReading& l : candidate.reading.lenslets) {
+                const auto [mean, spread] =
+                    disc_statistics(luminance, where.page_to_photo, l.page, candidate.core, step);
+                variance += spread, light += mean * mean;
+            }
+            const double spread = light > 0.0 ? variance / light : HUGE_VAL;
+            if (spread < best_spread) best_spread = spread, best = std::move(candidate);
+        } catch (const InputError& e) {
+            if (!first_error) first_error = e;
         }
     }
-    if (static_cast<int>(std::max(along_x.value.size(), along_y.value.size())) < kMinLenslets)
-        throw InputError(SourceLocation{name},
-                         format_text("only %zu and %zu lenslets lie inside the x and rows measuring bands (at least "
-                                     "%d needed in one): lay the array over them",
-                                     along_x.value.size(), along_y.value.size(), kMinLenslets));
-    // Start from the lattice of lenslet images: its rows give the directions (the parallax
-    // magnifies it about the camera's foot but does not turn it), the design the lengths.
-    // A band's lines measure their normal's row of the map: n^T M.
-    const Eigen::Matrix2d image_map = images.basis * design_basis.inverse();
-    const Eigen::Vector2d reference_page = reading.lenslets[reference].page;
-    for (const print::MoireBand& band : sheet.measuring) {
-        if (band.page != page) continue;
-        const Eigen::Vector2d n = band.normal();
-        AxisFit& fit = band.along_x ? reading.x : reading.y;
-        fit.normal_angle = std::atan2(n.y(), n.x());
-        // A whole array's reading discs see the lenslets' middles: their spot traced (Designs I
-        // and II, which the display simulator models).
-        std::vector<SpotComponent> spot;
-        AxisData& data = band.along_x ? along_x : along_y;
-        if (whole && (design.kind == optics::DesignKind::I || design.kind == optics::DesignKind::II)) {
-            spot = traced_spot(design, core / kappa, n);
-            if (!spot.empty()) data.spot = &spot;
-        }
-        fit_axis(data, n.dot(reference_page), (n.transpose() * image_map).transpose(), 1.0,
-                 band.line_fraction, band.along_x, whole, fit, reading.lenslets, name);
-    }
-    for (const print::MoireBand& band : sheet.measuring)
-        if (band.page == page) ++(band.along_x ? reading.x.bands : reading.y.bands);
-    return reading;
+    if (!best) throw *first_error;
+    return fit_lattice(std::move(*best));
 }
 
 PitchCalibration calibrate_pitch(const optics::Design& design, const std::vector<PitchReading>& readings,

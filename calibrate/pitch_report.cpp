@@ -38,10 +38,15 @@ std::string pitch_text(const PitchCalibration& calibration, const std::vector<Pi
     std::string out;
     for (std::size_t k = 0; k < readings.size(); ++k) {
         const PitchReading& r = readings[k];
-        out += format_text("%s: %.3f mm a pixel%s; rows turned %+.4f deg (+- %.4f) on the sheet, axes %+.4f deg off "
-                           "square\n",
+        // The axes' departure from square needs both bands in one photograph (a whole small
+        // array is photographed on each band in turn).
+        const double shear = calibration.shear_deg[k];
+        const std::string square =
+            std::isfinite(shear) ? format_text("axes %+.4f deg off square", shear)
+                                 : std::string("the ") + (r.x.lenslets > 0 ? "x" : "rows") + " band only";
+        out += format_text("%s: %.3f mm a pixel%s; rows turned %+.4f deg (+- %.4f) on the sheet, %s\n",
                            r.name.c_str(), r.mm_per_pixel, r.mirrored ? ", sheet seen from its back" : "",
-                           calibration.rotation_deg[k], calibration.sigma_rotation_deg[k], calibration.shear_deg[k]);
+                           calibration.rotation_deg[k], calibration.sigma_rotation_deg[k], square.c_str());
         for (const AxisFit* fit : {&r.x, &r.y})
             out += format_text("  %-4s bands: %d lenslets read in %d bands (%d outliers), line contrast %.2f, "
                                "residual %.2f %%\n",

@@ -34,6 +34,7 @@ using rfd::testing::bundled_design;
 using rfd::testing::error_of;
 using ::testing::AllOf;
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 struct MoireFixture {
     optics::Design design = bundled_design(1);
@@ -229,12 +230,21 @@ TEST(PitchCalibration, ReadsASmallArrayLaidWholeOnEachBand) {
     EXPECT_LT(calibration.sigma_scale_x, 1.01e-4);
     EXPECT_LT(calibration.sigma_scale_y, 3.55e-4);
     for (const double turn : calibration.rotation_deg) EXPECT_LT(std::abs(turn - 0.4), 0.02);
+    // Each photograph shows one band: the axes' departure from square is not measured there,
+    // and the report says which band it read instead of printing a NaN.
+    const std::string text = pitch_text(calibration, readings);
+    EXPECT_THAT(text, HasSubstr("x.jpg: 0."));
+    EXPECT_THAT(text, HasSubstr("the x band only"));
+    EXPECT_THAT(text, HasSubstr("the rows band only"));
+    EXPECT_THAT(text, Not(HasSubstr("nan")));
 }
 
-// Over eight arrays (pitch error, turn, placement and pose each different): at most two
-// refused (a refusal says why; it is not a wrong number), and each pair's errors and those of
-// all pairs together within four stated uncertainties. Their scatter is what the reader's
-// least uncertainty for a whole array is (pitch.cpp, fit_axis).
+// Over eight arrays (pitch error, turn, placement up to 2.3 mm off the band's middle, and
+// pose each different): every one read (the lattice of lenslet images turned 1-3 deg off by
+// the spectrum is found at the turn whose reading discs see single images: two were refused
+// before), and each pair's errors and those of all pairs together within four stated
+// uncertainties. Their scatter is what the reader's least uncertainty for a whole array is
+// (pitch.cpp, fit_axis).
 TEST(PitchAccuracy, ASmallArrayOverPlacementsAndPoses) {
     struct Case {
         double pitch_error, rotation_deg;
@@ -243,7 +253,7 @@ TEST(PitchAccuracy, ASmallArrayOverPlacementsAndPoses) {
     const std::vector<Case> cases = {{0.0015, 0.3, {0.0, 0.0}},    {0.002, 0.5, {0.31, 0.23}},
                                      {-0.002, 1.0, {-0.21, 0.11}}, {0.0015, 1.0, {0.07, -0.29}},
                                      {0.002, 0.3, {-0.37, -0.05}}, {-0.001, 0.7, {0.45, 0.41}},
-                                     {0.0005, -0.8, {0.6, -0.4}},  {0.001, 0.4, {-0.5, 0.3}}};
+                                     {0.0005, -0.8, {1.6, -1.6}},  {0.001, 0.4, {-0.5, 0.3}}};
     std::vector<PitchReading> all;
     int checked = 0, refused = 0;
     for (std::size_t k = 0; k < cases.size(); ++k) {
@@ -271,7 +281,29 @@ TEST(PitchAccuracy, ASmallArrayOverPlacementsAndPoses) {
         ++checked;
     }
     EXPECT_EQ(checked + refused, 8);
-    EXPECT_LE(refused, 2);
+    EXPECT_EQ(refused, 0);
+}
+
+// An array laid off the middle of its band, photographed from the side it lies toward: many
+// of the lattice points read around it fall on the holder and read nothing. The bare sheet's
+// brightness is then judged from the light alone; judged from all points it fell below the
+// brightest lenslets, which counted as bare sheet and pushed the block a lenslet onto the
+// holder (the fit then missed the readings by a third of their spread, and both were refused).
+TEST(PitchCalibration, FindsASmallArrayBesideItsHoldersDark) {
+    Camera phone = framing_camera(small_array_fixture().printer.paper, 520.0, 0.78, 4000);
+    phone.pose.tilt_deg = 29.6;
+    phone.pose.turn_deg = 50.0;
+    phone.pose.roll_deg = -4.0;
+    phone.blur = 1.2;
+    phone.vignetting = 0.3;
+    phone.photons = 2500.0;
+    phone.seed = 4;
+    const std::vector<PitchReading> readings = small_array_readings(phone, {1.58, -1.6}, -0.0015, -0.38);
+    const PitchCalibration r = calibrate_pitch(small_array_fixture().design, readings);
+    EXPECT_EQ(readings[0].x.lenslets, 30);
+    EXPECT_EQ(readings[1].y.lenslets, 30);
+    EXPECT_LT(std::abs(r.scale_x - (1.0 - 0.0015)), 4 * r.sigma_scale_x);
+    EXPECT_LT(std::abs(r.scale_y - (1.0 - 0.0015)), 4 * r.sigma_scale_y);
 }
 
 // A frontal photograph cannot tell the camera's height, which the small array's reading
