@@ -2,7 +2,7 @@
 # make studies: the research reproductions behind docs/results.md, on the bundled scenes:
 # the sampling study (thesis chapters 4-5), implicit relighting's eta trade-off (chapter 7),
 # feature-guided upsampling against linear blending (chapter 6) and the tone and pitch
-# calibrations' limits (rfd calibrate). About 11 minutes on two cores. Writes
+# calibrations' limits (rfd calibrate). About 14 minutes on two cores. Writes
 # OUTPUT_DIR/INDEX.md.
 # Usage: scripts/studies.sh RFD_BINARY OUTPUT_DIR
 set -euo pipefail
@@ -156,12 +156,69 @@ pitch_case() {  # NAME CAMERA_PIXELS SIMULATE ARGS...
   pitch_case off_the_bands 3000 --array-shift 0,150 --blur 1 --photons 3000
 } | tee "$pitch/summary.txt"
 
+# Design II's 6 x 5 array, laid whole on each measuring band in turn and photographed hand-held
+# on each (blur 1.2 px, 30 % vignetting, 2500 photons, JPEG 80, 4000 pixels): 16 placements
+# drawn at random (pitch errors within +-0.2 % per axis, turns within +-1 deg, the array up to
+# 2.5 mm off the band's middle, the camera 22-35 deg off the vertical from any side, rolled up
+# to 15 deg), then one placement turned from -1.5 to +1.5 deg in steps of 0.1. Per case the
+# pitch's and row spacing's error against the truth (%) with the stated uncertainty, or the
+# refusal. About 3 minutes.
+index_section pitch_small "Pitch calibration: Design II's small array"
+small="$out/pitch_small"
+mkdir -p "$small"
+small_case() {  # NAME PITCH_ERROR PITCH_ERROR_Y TURN SHIFT_X SHIFT_Y TILT CAMERA_TURN ROLL SEED
+  local name="$1" ex="$2" ey="$3" turn="$4" sx="$5" sy="$6" tilt="$7" azimuth="$8" roll="$9" seed="${10}"
+  for band in x rows; do
+    "$rfd" --quiet calibrate simulate-photo moire epson_stylus_pro_4800 --design designs/design2.toml \
+      --array-on "$band" --pitch-error "$ex" --pitch-error-y "$ey" --array-rotation "$turn" --array-shift "$sx,$sy" \
+      --camera-tilt "$tilt" --camera-turn "$azimuth" --camera-roll "$roll" --camera-distance 520 --frame-fill 0.78 \
+      --camera-pixels 4000 --blur 1.2 --vignetting 0.3 --photons 2500 --seed "$seed" \
+      --out "$small/${name}_$band.jpg" > /dev/null
+  done
+  if message=$("$rfd" --quiet calibrate pitch designs/design2.toml "$small/${name}_x.jpg" "$small/${name}_rows.jpg" 2>&1); then
+    echo "$message" | awk -v name="$name" -v ex="$ex" -v ey="$ey" '
+      /^pitch along a row/ { x = $(NF - 4) - 100 * ex; sx = $(NF - 1) }
+      /^row spacing/ { y = $(NF - 4) - 100 * ey; sy = $(NF - 1) }
+      END { printf "%-10s pitch %+.4f %% (+- %s), rows %+.4f %% (+- %s)\n", name, x, sx, y, sy }'
+  else
+    printf '%-10s refused: %s\n' "$name" "$(echo "$message" | tail -1 | sed "s|^rfd: error: $small/||")"
+  fi
+}
+{
+  k=0
+  while read -r ex ey turn sx sy tilt azimuth roll; do
+    k=$((k + 1))
+    small_case "placed_$k" "$ex" "$ey" "$turn" "$sx" "$sy" "$tilt" "$azimuth" "$roll" "$k"
+  done <<'CASES'
+-0.0007 -0.0014 0.3 -2.14 0.18 26.8 -159 0
+-0.00185 -0.00027 -0.86 -2.05 -0.38 32.7 -135 -8
+0.00051 0.00179 0.15 -0.52 2.38 22.6 129 -6
+-0.00142 -0.00153 -0.38 1.58 -1.6 29.6 50 -4
+0.00019 -0.00175 -0.88 -1.47 0.9 27.6 -67 3
+-0.00019 -0.0008 0.59 0.99 -1.28 29.5 9 11
+0.00092 -0.00085 0.96 -1.91 -0.41 31.8 -125 0
+-0.00184 0.00067 0.53 0.37 1.88 26.1 70 3
+0.00032 -0.00018 0.68 2.22 -0.13 30.6 -158 6
+0.00059 0.00197 0.64 -1.08 -0.57 30.7 -172 -1
+-0.00133 -0.00153 -0.88 1.34 -1.85 25.2 -39 11
+-0.00168 -0.0002 0.1 1.92 1.6 33.2 -80 -3
+-0.00056 0.00154 0.92 -1.75 -1.62 25 -96 0
+0.00036 -0.00095 -0.99 -0.41 -0.65 29.4 163 6
+0.00006 0.00047 0.35 -2.23 2 32.1 135 9
+-0.00043 -0.0004 -0.79 0.67 -2.19 22.9 -105 -10
+CASES
+  for turn in $(seq -1.5 0.1 1.5); do
+    small_case "turn_$turn" 0.0007 -0.0011 "$turn" 0.8 -0.6 28 -150 4 3
+  done
+} | tee "$small/summary.txt"
+
 index_entry capture/study/error_vs_images.png "the bottle's sampling study: error against image count for fixed patterns of 256 to 1025 directions and adaptive sampling (figure 5.5's analogue; study.txt: the table, study/: per-direction error maps)"
 index_entry capture/pattern_256.lp "a near-uniform pattern of 256 light directions for a real light stage (pattern.txt: how even)"
 index_entry implicit/eta/eta_psnr.png "implicit relighting on the snooker scene: PSNR of the held-out lights against eta (figure 7.3's trade-off; eta_sweep.txt: the numbers, eta/light_*.png: truth | eta 0 | best | largest)"
 index_entry implicit/designed_light.png "the scene relit from the trained model under a designed 8-degree light (designed_light_probe.png: the synthetic probe)"
 index_entry upsample/summary.txt "upsampling 256 stage lights of the spheres one level against linear blending: PSNR at 512 other directions, four point lights and four area lights"
 index_entry pitch/summary.txt "the lens array's pitch from simulated photographs of the moire sheet in Design I: the pitch's, row spacing's and turn's errors (or the refusal) as tilt, blur, noise, the sun's slant, resolution and placement push toward failure"
+index_entry pitch_small/summary.txt "Design II's 6 x 5 array laid whole on each band: the pitch's and row spacing's errors (or the refusal) over 16 random hand-held placements and 31 turns of the array"
 index_entry tone/summary.txt "the printer's tone curve from simulated photographs of its wedge: the curve's RMS error (or the refusal) as tilt, blur, noise, vignetting, the film's side and the light push toward failure"
 index_entry upsample/upsampled/point_lights "pictures per point light, the upsampled field relit | the stage's truth (linear/: the same for linear blending; area_lights/ under area lights)"
 
