@@ -780,18 +780,15 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
     const double extent = std::max(x1 - x0, y1 - y0) / kCoarsePixelsPerMm;
     const Eigen::Matrix2d nominal_reciprocal = page_basis.inverse();  // rows b1, b2
     Eigen::Matrix2d reciprocal;
-    std::array<std::complex<double>, 2> peak;
-    for (int i = 0; i < 2; ++i) {
+    for (int i = 0; i < 2; ++i)
         reciprocal.row(i) = strongest_frequency(spectrum, nominal_reciprocal.row(i).transpose(), extent).transpose();
-        peak[static_cast<std::size_t>(i)] = spectrum.at(reciprocal.row(i).transpose());
-    }
     // The lenslet images read on a lattice: the readings, their labels in the design's array
-    // frame, the lattice, and the reading discs' radius.
+    // frame, the lattice, and the reading discs' radius and sampling step.
     struct LatticeReading {
         PitchReading reading;
         std::vector<Eigen::Vector2d> labels;
         ImageLattice images;
-        double core = 0.0;
+        double core = 0.0, step = 0.0;
     };
     // Reads the lenslet images on the lattice of `basis` (its reciprocal vectors the rows of
     // `reciprocal_rows`); a whole array's block of them.
@@ -799,8 +796,8 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
         PitchReading reading = start;
         ImageLattice images;
         images.basis = basis;
-        for (int i = 0; i < 2; ++i) peak[static_cast<std::size_t>(i)] = spectrum.at(reciprocal_rows.row(i).transpose());
-        const Eigen::Vector2d phases(-std::arg(peak[0]) / kTwoPi, -std::arg(peak[1]) / kTwoPi);
+        const Eigen::Vector2d phases(-std::arg(spectrum.at(reciprocal_rows.row(0).transpose())) / kTwoPi,
+                                     -std::arg(spectrum.at(reciprocal_rows.row(1).transpose())) / kTwoPi);
         // The lattice points (i, j) whose middle lies in the region, for a lattice origin.
         struct LatticePoint {
             int i, j;
@@ -879,7 +876,7 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
 
         if (reading.lenslets.empty()) throw InputError(SourceLocation{name}, "no lenslet images found");
         if (whole) keep_the_array(reading.lenslets, labels, design_basis, lattice, name);
-        return LatticeReading{std::move(reading), std::move(labels), images, core};
+        return LatticeReading{std::move(reading), std::move(labels), images, core, step};
     };
     // Fits the bands' lines to the lenslets read.
     const auto fit_lattice = [&](LatticeReading found) {
@@ -978,11 +975,10 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
         const Eigen::Matrix2d basis = kappa * Eigen::Rotation2Dd(turn).toRotationMatrix() * page_basis;
         try {
             LatticeReading candidate = read_lattice(basis, basis.inverse());
-            const double step = std::max(where.mm_per_pixel, candidate.core / 8.0);
             double variance = 0.0, light = 0.0;
             for (const LensletReading& l : candidate.reading.lenslets) {
                 const auto [mean, spread] =
-                    disc_statistics(luminance, where.page_to_photo, l.page, candidate.core, step);
+                    disc_statistics(luminance, where.page_to_photo, l.page, candidate.core, candidate.step);
                 variance += spread, light += mean * mean;
             }
             const double spread = light > 0.0 ? variance / light : HUGE_VAL;
