@@ -191,8 +191,10 @@ void add_simulate_photo_command(CLI::App& calibrate) {
             PrintOptions print_options;
             print_options.printer = opt->printer;
             const print::PrintedTransparency printed = printed_pattern(*design, opt->pattern, print_options);
+            // As the sheet is printed: the corner lenslets' cells clear, with their markers.
+            const print::MarkedTransparency sheet(printed, *design, printed.tone());
             const optics::MisalignedTransparency mounted(
-                printed, {{opt->pattern_shift[0], opt->pattern_shift[1]}, degrees_to_radians(opt->pattern_rotation),
+                sheet, {{opt->pattern_shift[0], opt->pattern_shift[1]}, degrees_to_radians(opt->pattern_rotation),
                           opt->pattern_scale});
             calibrate::DisplayScene scene;
             scene.light = light;
@@ -323,7 +325,8 @@ void add_registration_command(CLI::App& calibrate) {
             }
         }
         const print::PrintedTransparency printed = printed_pattern(design, opt->pattern, opt->print);
-        const calibrate::PatternMap map(printed, design);
+        const print::MarkedTransparency sheet(printed, design, printed.tone());  // as printed, with its markers
+        const calibrate::PatternMap map(sheet, design);
         std::vector<calibrate::RegistrationReading> readings;
         for (const std::string& photo : opt->photos)
             readings.push_back(calibrate::read_registration_photo(read_image(photo), photo, design, map,

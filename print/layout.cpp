@@ -75,6 +75,50 @@ Eigen::Vector2d SheetLayout::page_mm(const Eigen::Vector2d& lattice_mm) const {
     return {(dot.x() + 0.5) * dot_x, (dot.y() + 0.5) * dot_y};
 }
 
+bool MarkerShape::in_cell(const Eigen::Vector2d& point) const {
+    // Convex cell: the point lies on the same side of every edge.
+    double sign = 0.0;
+    for (std::size_t k = 0; k < cell.size(); ++k) {
+        const Eigen::Vector2d edge = cell[(k + 1) % cell.size()] - cell[k], to = point - cell[k];
+        const double side = edge.x() * to.y() - edge.y() * to.x();
+        if (side * sign < 0.0) return false;
+        if (side != 0.0) sign = side;
+    }
+    return true;
+}
+
+bool MarkerShape::inked(const Eigen::Vector2d& point) const {
+    const Eigen::Vector2d d = point - centre;
+    const double half = 0.5 * line_width;
+    if (std::abs(d.norm() - radius) <= half) return true;
+    return (std::abs(d.y()) <= half && std::abs(d.x()) <= arm) || (std::abs(d.x()) <= half && std::abs(d.y()) <= arm);
+}
+
+std::vector<MarkerShape> marker_shapes(const optics::Design& design, double dot_x, double dot_y) {
+    std::vector<MarkerShape> shapes;
+    const auto lattice = marker_lattice(design);
+    if (!lattice) return shapes;
+    // Ring and crosshair inside 0.9 of the cell's inscribed circle, so the ink is symmetric
+    // about the lenslet's centre.
+    const double inradius = lattice->kind() == optics::LatticeKind::Hexagonal
+                                ? 0.5 * lattice->pitch_x()
+                                : 0.5 * std::min(lattice->pitch_x(), lattice->pitch_y());
+    const int nx = lattice->count_x(), ny = lattice->count_y();
+    // Row ends of a hexagonal lattice: the outermost lenslet of the first and last rows.
+    const optics::CellIndex corners[] = {{0, ny - 1}, {nx - 1, ny - 1}, {0, 0}, {nx - 1, 0}};
+    for (const optics::CellIndex cell : corners) {
+        MarkerShape m;
+        m.lenslet = cell;
+        m.centre = lattice->center(cell);
+        for (const Eigen::Vector2d& corner : lattice->cell_corners()) m.cell.push_back(m.centre + corner);
+        m.radius = 0.55 * inradius;
+        m.arm = 0.9 * inradius;
+        m.line_width = std::max(0.06 * inradius, 1.5 * std::max(dot_x, dot_y));
+        shapes.push_back(std::move(m));
+    }
+    return shapes;
+}
+
 SheetLayout layout_sheet(const optics::Design& design, const PrinterProfile& printer,
                          const patterns::PatternGeometry& pattern, const SheetInfo& info) {
     RFD_CHECK(pattern.width > 0 && pattern.height > 0);
@@ -120,24 +164,15 @@ SheetLayout layout_sheet(const optics::Design& design, const PrinterProfile& pri
     l.offset_x = (l.page_width - (columns - 1) * step_x - pattern.width) / 2;
     l.offset_y = (l.page_height - (rows - 1) * step_y - pattern.height) / 2;
 
-    if (const auto lattice = marker_lattice(design)) {
-        const double inradius = lattice->kind() == optics::LatticeKind::Hexagonal
-                                    ? 0.5 * lattice->pitch_x()
-                                    : 0.5 * std::min(lattice->pitch_x(), lattice->pitch_y());
-        const int nx = lattice->count_x(), ny = lattice->count_y();
-        // Row ends of a hexagonal lattice: the outermost lenslet of the first and last rows.
-        const optics::CellIndex corners[] = {{0, ny - 1}, {nx - 1, ny - 1}, {0, 0}, {nx - 1, 0}};
-        for (const optics::CellIndex cell : corners) {
-            Marker m;
-            m.lenslet = cell;
-            const Eigen::Vector2d centre = lattice->center(cell);
-            m.centre = l.page_mm(centre);
-            for (const Eigen::Vector2d& corner : lattice->cell_corners())
-                m.cell.push_back(l.page_mm(centre + corner));
-            m.radius = 0.55 * inradius;
-            m.line_width = std::max(0.06 * inradius, 1.5 * std::max(l.dot_x, l.dot_y));
-            l.markers.push_back(std::move(m));
-        }
+    for (const MarkerShape& shape : marker_shapes(design, l.dot_x, l.dot_y)) {
+        Marker m;
+        m.lenslet = shape.lenslet;
+        m.centre = l.page_mm(shape.centre);
+        for (const Eigen::Vector2d& corner : shape.cell) m.cell.push_back(l.page_mm(corner));
+        m.radius = shape.radius;
+        m.arm = shape.arm;
+        m.line_width = shape.line_width;
+        l.markers.push_back(std::move(m));
     }
     l.label = label_lines(design, printer, info);
     return l;
@@ -161,7 +196,7 @@ namespace {
 void draw_copy_marks(cairo_t* cr, const SheetLayout& layout) {
     // Markers: a ring and a crosshair, all within 0.9 of the cell's inradius.
     for (const Marker& m : layout.markers) {
-        const double arm = m.radius / 0.55 * 0.9;
+        const double arm = m.arm;
         cairo_set_line_width(cr, m.line_width);
         cairo_new_sub_path(cr);
         cairo_arc(cr, m.centre.x(), m.centre.y(), m.radius, 0.0, 2.0 * kPi);

@@ -33,11 +33,32 @@ typedef struct _cairo cairo_t;
 
 namespace rfd::print {
 
-/// A registration marker: the centre of a corner lenslet and the clear cell around it.
+/// A registration marker in the pattern's lattice frame (mm, y up, as optics::Transparency
+/// samples it): a corner lenslet's cell printed clear, and the ink of a ring and a crosshair
+/// centred on the lenslet.
+struct MarkerShape {
+    optics::CellIndex lenslet;
+    Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+    std::vector<Eigen::Vector2d> cell;    ///< corners of the lenslet's cell, in order
+    double radius = 0.0;                  ///< the ring's
+    double arm = 0.0;                     ///< the crosshair's half-length
+    double line_width = 0.0;
+
+    bool in_cell(const Eigen::Vector2d& point) const;
+    /// Whether `point` lies on the ring or the crosshair.
+    bool inked(const Eigen::Vector2d& point) const;
+};
+
+/// The markers of `design` printed with dots of dot_x x dot_y mm (lines at least 1.5 dots
+/// wide): on the corner cells of the array that layout.hpp's header names; none for Design IV.
+std::vector<MarkerShape> marker_shapes(const optics::Design& design, double dot_x, double dot_y);
+
+/// A registration marker on the page: the centre of a corner lenslet and the clear cell around it.
 struct Marker {
     Eigen::Vector2d centre;               ///< page frame, mm
     std::vector<Eigen::Vector2d> cell;    ///< corners of the lenslet's cell, page frame, mm
     double radius = 0.0;                  ///< the marker's ring radius, mm
+    double arm = 0.0;                     ///< the crosshair's half-length, mm
     double line_width = 0.0;              ///< mm
     optics::CellIndex lenslet;            ///< which corner lenslet
 };

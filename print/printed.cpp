@@ -179,4 +179,22 @@ void PrintedTransparency::sample(std::span<const Eigen::Vector2d> points, std::s
     }
 }
 
+MarkedTransparency::MarkedTransparency(const optics::Transparency& pattern, const optics::Design& design,
+                                       const ToneMap& tone)
+    : pattern_(pattern),
+      markers_(marker_shapes(design, tone.printer.dpi_x.dot_mm(), tone.printer.dpi_y.dot_mm())),
+      ink_(static_cast<float>(std::pow(tone.printer.ink_transmittance(), tone.sheets))) {}
+
+void MarkedTransparency::sample(std::span<const Eigen::Vector2d> points, std::span<float> out) const {
+    pattern_.sample(points, out);
+    const auto channels = static_cast<std::size_t>(pattern_.channels());
+    for (std::size_t k = 0; k < points.size(); ++k)
+        for (const MarkerShape& marker : markers_)
+            if (marker.in_cell(points[k])) {
+                const float value = marker.inked(points[k]) ? ink_ : 1.0f;
+                std::fill_n(out.begin() + static_cast<std::ptrdiff_t>(k * channels), channels, value);
+                break;
+            }
+}
+
 }  // namespace rfd::print

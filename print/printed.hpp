@@ -17,6 +17,7 @@
 #include "optics/design.hpp"
 #include "optics/display.hpp"
 #include "patterns/raster.hpp"
+#include "print/layout.hpp"
 #include "print/printer.hpp"
 
 namespace rfd::print {
@@ -89,6 +90,22 @@ private:
     patterns::PatternGeometry geometry_;
     ToneMap tone_;
     int channels_ = 0;
+};
+
+/// A pattern as its printed sheet carries it (layout.hpp): the corner lenslets' cells clear
+/// (transmittance 1), the markers' ring and crosshair in full ink on every sheet of the stack,
+/// the rest `pattern`'s. What a photograph of the assembled display sees: the marker cells
+/// lit wherever the light's spot misses the ink. Keeps a reference: `pattern` must outlive it.
+class MarkedTransparency final : public optics::Transparency {
+public:
+    MarkedTransparency(const optics::Transparency& pattern, const optics::Design& design, const ToneMap& tone);
+    int channels() const override { return pattern_.channels(); }
+    void sample(std::span<const Eigen::Vector2d> points, std::span<float> out) const override;
+
+private:
+    const optics::Transparency& pattern_;
+    std::vector<MarkerShape> markers_;
+    float ink_ = 0.0f;  // the stack's transmittance under full ink
 };
 
 }  // namespace rfd::print

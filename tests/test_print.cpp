@@ -144,6 +144,74 @@ TEST(PrintedTransparency, EachPointSeesItsDotAsPrinted) {
     EXPECT_LT(on_sheet, 4900);
 }
 
+// The sheet as printed, against the page rfd print sheet writes (cairo's drawing of the
+// markers): in each corner lenslet's cell a dot is ink where the page inks it and clear where
+// the page leaves it bare (dots within most of a dot of a line's edge, where the drawing is
+// anti-aliased, not compared); elsewhere the pattern's own value.
+TEST(MarkedTransparency, AgreesWithTheMarkersThePageInks) {
+    TempDir dir;
+    const optics::Design design = bundled_design(2);
+    const PrinterProfile printer = parse_printer(small_printer_toml(1200, 600), "test.toml");
+    const auto pattern_file = write_test_pattern(dir, design, printer, 0.4f);
+    const SheetReport report = write_sheet(dir / "sheet.tif", design, printer, pattern_file, SheetOptions{});
+    const Page page = read_page(dir / "sheet.tif");
+    const PrintedTransparency printed(design, printer, pattern_file, 1.0, 1);
+    const MarkedTransparency sheet(printed, design, printed.tone());
+    const std::vector<MarkerShape> markers = marker_shapes(design, printer.dpi_x.dot_mm(), printer.dpi_y.dot_mm());
+    ASSERT_EQ(markers.size(), 4u);
+    const auto g = patterns::pattern_geometry(design, printer.dpi_x, printer.dpi_y);
+    const int offset_x = report.layout.offset_x, offset_y = report.layout.offset_y;
+    const float ink = static_cast<float>(printer.ink_transmittance());
+    int compared = 0, inked = 0, disagree = 0;
+    std::vector<Eigen::Vector2d> points;
+    std::vector<bool> page_ink;
+    for (const MarkerShape& m : markers) {
+        const Eigen::Vector2d page_centre = report.layout.page_mm(m.centre);
+        ASSERT_TRUE(std::any_of(report.layout.markers.begin(), report.layout.markers.end(), [&](const Marker& drawn) {
+            return (drawn.centre - page_centre).norm() < 1e-9 && drawn.radius == m.radius && drawn.arm == m.arm;
+        }));
+        const Eigen::Vector2d dot = report.layout.page_dot(m.centre);
+        const int reach_x = static_cast<int>(m.arm / printer.dpi_x.dot_mm()) + 2;
+        const int reach_y = static_cast<int>(m.arm / printer.dpi_y.dot_mm()) + 2;
+        const double margin = 0.75 * std::max(printer.dpi_x.dot_mm(), printer.dpi_y.dot_mm());
+        for (int y = static_cast<int>(dot.y()) - reach_y; y <= static_cast<int>(dot.y()) + reach_y; ++y)
+            for (int x = static_cast<int>(dot.x()) - reach_x; x <= static_cast<int>(dot.x()) + reach_x; ++x) {
+                const Eigen::Vector2d mm = g.dot_centre(x - offset_x, y - offset_y);
+                if ((mm - m.centre).norm() > 0.95 * m.arm) continue;
+                // Away from every line's edge by most of a dot.
+                const Eigen::Vector2d d = mm - m.centre;
+                const double w = m.line_width, edge = std::min({std::abs(std::abs(d.norm() - m.radius) - 0.5 * w),
+                                                                std::abs(std::abs(d.x()) - 0.5 * w),
+                                                                std::abs(std::abs(d.y()) - 0.5 * w)});
+                if (edge < margin) continue;
+                points.push_back(mm);
+                page_ink.push_back(page.code(x, y) < 128);
+            }
+    }
+    // One call: the pattern file is read once.
+    const auto channels = static_cast<std::size_t>(sheet.channels());
+    std::vector<float> out(points.size() * channels);
+    sheet.sample(points, out);
+    for (std::size_t k = 0; k < points.size(); ++k) {
+        const bool model_ink = out[k * channels] == ink;
+        if (!model_ink) {
+            EXPECT_EQ(out[k * channels], 1.0f);
+        }
+        disagree += page_ink[k] != model_ink;
+        inked += model_ink;
+        ++compared;
+    }
+    EXPECT_GT(compared, 1000);
+    EXPECT_GT(inked, 100);
+    EXPECT_EQ(disagree, 0);
+    // Away from the marker cells: the pattern as printed.
+    const Eigen::Vector2d middle = optics::DesignOptics(design).lattice().center({2, 2});
+    std::vector<float> marked(static_cast<std::size_t>(sheet.channels())), plain(marked.size());
+    sheet.sample(std::span<const Eigen::Vector2d>(&middle, 1), marked);
+    printed.sample(std::span<const Eigen::Vector2d>(&middle, 1), plain);
+    EXPECT_EQ(marked, plain);
+}
+
 TEST(PrintedTransparency, APatternForAnotherResolutionIsRefused) {
     const TempDir dir;
     const optics::Design design = bundled_design(2);
