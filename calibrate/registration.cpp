@@ -13,6 +13,7 @@
 #include "core/parallel.hpp"
 #include "core/text.hpp"
 #include "core/units.hpp"
+#include "optics/display.hpp"
 #include "relight/vision.hpp"
 
 namespace rfd::calibrate {
@@ -25,13 +26,26 @@ constexpr double kCentroidRadius = 0.5;   // of the pitch: the window a lenslet 
 // middle (a square), one centroid pass each.
 constexpr std::array<double, 8> kGrowth{0.3, 0.4, 0.55, 0.7, 0.85, 1.0, 1.0, 1.0};
 constexpr double kLightRadius = 0.4;      // of the pitch: a lenslet's light on the diffuser, about
+constexpr int kTileRays = 32;             // per side of a lenslet, tracing Design II's tile
 constexpr double kSearchStepMm = 0.02;    // the shift's first search
 constexpr int kGainTerms = 6;            // gain: 1, u, v, u^2, uv, v^2
+constexpr int kSmallArrayGainTerms = 3;  // 1, u, v: a small array's light falls off little across it
+constexpr std::size_t kSmallArray = 100; // lenslets: fewer cannot spare readings for a curved falloff
 constexpr int kGroups = 8;
 constexpr double kTurnMargin = 0.05;       // the best quarter turn's correlation over the next's
 constexpr double kDistinctShiftMm = 0.06;   // shifts this far apart are different readings
 constexpr std::size_t kMinReadLenslets = 16;  // readings a fit needs (shift, turn, scale, light falloff)
 constexpr double kAmbiguousChi2 = 25.0;     // a second shift fitting within 5 noise sigmas
+// A lit piece of the display: at least this share of the photo and of its largest piece.
+constexpr double kMinPieceShare = 0.001;
+constexpr double kMinPieceOfLargest = 0.02;
+constexpr std::size_t kMinRefineLenslets = 9;  // a centroid pass needs (a homography from them)
+constexpr double kRunTurnDeg = 4.0;         // a straight run of the lit outline's hull
+constexpr double kHullSlackPixels = 2.0;    // how far the hull may poke out of its enclosing quadrilateral
+constexpr double kEdgeReachMm = 1.2;       // Design II's outer edges: profiles this far either side
+constexpr double kEdgeStepMm = 0.2;        // between profiles along a side
+constexpr std::size_t kMinEdgePoints = 10;  // crossings a side's line needs
+constexpr double kEdgeOutlierPixels = 0.5;  // the least distance from the line left out
 
 // The array's lenslets and its outline (cell corners of the outermost lenslets).
 struct ArrayShape {
@@ -39,10 +53,13 @@ struct ArrayShape {
     std::vector<Eigen::Vector2d> centres;
     std::vector<optics::CellIndex> cells;
     Eigen::Vector2d low, high;  // bounding box of the cells
-    // The corners of the largest quadrilateral on the lit footprint (every lenslet's light a
-    // disc of kLightRadius pitches), as the outline's: top left, top right, bottom right,
-    // bottom left when upright.
+    // The corners of the largest quadrilateral on the lit footprint, as the outline's: top
+    // left, top right, bottom right, bottom left when upright.
     std::array<Eigen::Vector2d, 4> corners;
+    // Whether each lenslet's light is an even tile over its cell and beyond (Design II: the
+    // corrective pair images the lenslet onto the diffuser), not a spot that moves with the
+    // light (Design I): the array's outer edges then place the lenslets (fit_outer_edges).
+    bool tiles = false;
 };
 
 std::optional<std::array<Eigen::Vector2d, 4>> quadrilateral_corners(std::vector<Eigen::Vector2d> points);
@@ -63,12 +80,26 @@ ArrayShape array_shape(const optics::Design& design) {
                 shape.high = shape.high.cwiseMax(c + corner);
             }
         }
-    // The footprint on the screen's axes (y down), its corners back on the array's.
+    // The footprint on the screen's axes (y down), its corners back on the array's: every
+    // lenslet's light a disc of kLightRadius pitches (Design I), or the box its rays land in
+    // on the diffuser, traced with the light on the axis (Design II's tiles).
     std::vector<Eigen::Vector2d> footprint;
-    const double radius = kLightRadius * lattice.pitch_x();
+    shape.tiles = design.kind == optics::DesignKind::II;
+    std::vector<Eigen::Vector2d> light;
+    if (shape.tiles) {
+        optics::SimulationOptions options;
+        options.model = optics::Model::Exact;
+        options.rays_per_side = kTileRays;
+        const optics::RepeatedRays rays = optics::DisplaySimulator(design).trace_lenslet({optics::DisplayLight{}}, options);
+        for (const Eigen::Vector2d& corner : {rays.reach_min, rays.reach_max, Eigen::Vector2d(rays.reach_min.x(), rays.reach_max.y()),
+                                              Eigen::Vector2d(rays.reach_max.x(), rays.reach_min.y())})
+            light.push_back(corner);
+    } else {
+        const double radius = kLightRadius * lattice.pitch_x();
+        for (int k = 0; k < 16; ++k) light.emplace_back(radius * std::cos(k * kPi / 8), radius * std::sin(k * kPi / 8));
+    }
     for (const Eigen::Vector2d& c : shape.centres)
-        for (int k = 0; k < 16; ++k)
-            footprint.emplace_back(c.x() + radius * std::cos(k * kPi / 8), -(c.y() + radius * std::sin(k * kPi / 8)));
+        for (const Eigen::Vector2d& d : light) footprint.emplace_back(c.x() + d.x(), -(c.y() + d.y()));
     const auto quadrilateral = quadrilateral_corners(footprint);
     RFD_CHECK(quadrilateral.has_value());
     for (std::size_t k = 0; k < 4; ++k) shape.corners[k] = Eigen::Vector2d((*quadrilateral)[k].x(), -(*quadrilateral)[k].y());
@@ -122,11 +153,13 @@ Eigen::Matrix3d fit_homography(const std::vector<Eigen::Vector2d>& from, const s
     return nt.inverse() * m * nf;
 }
 
-// The lit display: the largest region brighter than Otsu's threshold of the smoothed photo,
-// and the four corners of its convex hull (the quadrilateral of largest area on it), in
-// clockwise order on the screen starting from the one nearest the photo's +x axis direction.
+// The lit display: every sizeable region brighter than Otsu's threshold of the smoothed photo,
+// and the four corners of their convex hull (the largest quadrilateral on it, or for Design
+// II's tiles where its longest straight runs meet), in clockwise order on the screen starting
+// from the one nearest the photo's +x axis direction.
 struct Outline {
     std::array<Eigen::Vector2d, 4> corners;
+    double threshold = 0.0;  // Otsu's, between the lit display and the rest
     double dark = 0.0;  // the mean of the darker class: the holder
     double pixels = 0.0;
 };
@@ -135,12 +168,9 @@ double cross(const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Ve
     return (a - o).x() * (b - o).y() - (a - o).y() * (b - o).x();
 }
 
-// The corners of the largest quadrilateral on the convex hull of `points` (Andrew's monotone
-// chain, then from the hull's widest pair and the points farthest on either side, each corner
-// moved to the best place between its neighbours until none moves), in clockwise order on
-// the screen (y down) from the one whose direction from their middle has the smallest angle
-// (-pi .. pi): for an upright rectangle, top left, top right, bottom right, bottom left.
-std::optional<std::array<Eigen::Vector2d, 4>> quadrilateral_corners(std::vector<Eigen::Vector2d> points) {
+// The convex hull of `points` (Andrew's monotone chain), clockwise on the screen (y down);
+// empty when it has fewer than four corners.
+std::vector<Eigen::Vector2d> convex_hull(std::vector<Eigen::Vector2d> points) {
     std::sort(points.begin(), points.end(),
               [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
     std::vector<Eigen::Vector2d> hull(2 * points.size() + 1);
@@ -153,8 +183,29 @@ std::optional<std::array<Eigen::Vector2d, 4>> quadrilateral_corners(std::vector<
         while (k >= lower && cross(hull[k - 2], hull[k - 1], points[i - 1]) <= 0) --k;
         hull[k++] = points[i - 1];
     }
-    if (k < 5) return std::nullopt;
+    if (k < 5) return {};
     hull.resize(k - 1);
+    return hull;
+}
+
+// Four corners in clockwise order on the screen (y down) from the one whose direction from
+// their middle has the smallest angle (-pi .. pi): for an upright rectangle, top left, top
+// right, bottom right, bottom left.
+std::array<Eigen::Vector2d, 4> in_screen_order(std::array<Eigen::Vector2d, 4> corners) {
+    Eigen::Vector2d middle = Eigen::Vector2d::Zero();
+    for (const Eigen::Vector2d& c : corners) middle += 0.25 * c;
+    std::sort(corners.begin(), corners.end(), [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+        return std::atan2(a.y() - middle.y(), a.x() - middle.x()) < std::atan2(b.y() - middle.y(), b.x() - middle.x());
+    });
+    return corners;
+}
+
+// The corners of the largest quadrilateral on the convex hull of `points` (from the hull's
+// widest pair and the points farthest on either side, each corner moved to the best place
+// between its neighbours until none moves), in_screen_order.
+std::optional<std::array<Eigen::Vector2d, 4>> quadrilateral_corners(std::vector<Eigen::Vector2d> points) {
+    const std::vector<Eigen::Vector2d> hull = convex_hull(std::move(points));
+    if (hull.empty()) return std::nullopt;
     const std::size_t n = hull.size();
     std::array<std::size_t, 4> q{};
     double widest = -1.0;
@@ -181,15 +232,62 @@ std::optional<std::array<Eigen::Vector2d, 4>> quadrilateral_corners(std::vector<
         if (!moved) break;
     }
     std::array<Eigen::Vector2d, 4> corners;
-    Eigen::Vector2d middle = Eigen::Vector2d::Zero();
-    for (std::size_t c = 0; c < 4; ++c) corners[c] = hull[q[c]], middle += 0.25 * hull[q[c]];
-    std::sort(corners.begin(), corners.end(), [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-        return std::atan2(a.y() - middle.y(), a.x() - middle.x()) < std::atan2(b.y() - middle.y(), b.x() - middle.x());
-    });
-    return corners;
+    for (std::size_t c = 0; c < 4; ++c) corners[c] = hull[q[c]];
+    return in_screen_order(corners);
 }
 
-Outline find_outline(const Image& luminance, const std::string& name) {
+// The corners where the four longest straight runs of the convex hull of `points` meet (a
+// run: consecutive hull edges within kRunTurnDeg of its first), in_screen_order. Where the
+// array's corner tiles are partly dark the hull cuts the corners but keeps the sides, so
+// this finds the corners the largest quadrilateral on the hull misses. nullopt when the
+// runs do not make a convex quadrilateral around the hull.
+std::optional<std::array<Eigen::Vector2d, 4>> enclosing_corners(std::vector<Eigen::Vector2d> points) {
+    const std::vector<Eigen::Vector2d> hull = convex_hull(std::move(points));
+    if (hull.empty()) return std::nullopt;
+    const std::size_t n = hull.size();
+    // Start at the longest edge, so that no run wraps around the start.
+    std::size_t start = 0;
+    for (std::size_t i = 0; i < n; ++i)
+        if ((hull[(i + 1) % n] - hull[i]).squaredNorm() > (hull[(start + 1) % n] - hull[start]).squaredNorm()) start = i;
+    struct Run {
+        Eigen::Vector2d from, to;
+        std::size_t order;
+    };
+    std::vector<Run> runs;
+    const double tolerance = std::cos(degrees_to_radians(kRunTurnDeg));
+    for (std::size_t k = 0; k < n;) {
+        const std::size_t first = (start + k) % n;
+        const Eigen::Vector2d direction = (hull[(first + 1) % n] - hull[first]).normalized();
+        std::size_t last = k + 1;
+        while (last < n && (hull[(start + last + 1) % n] - hull[(start + last) % n]).normalized().dot(direction) > tolerance) ++last;
+        runs.push_back({hull[first], hull[(start + last) % n], runs.size()});
+        k = last;
+    }
+    if (runs.size() < 4) return std::nullopt;
+    std::partial_sort(runs.begin(), runs.begin() + 4, runs.end(),
+                      [](const Run& a, const Run& b) { return (a.to - a.from).squaredNorm() > (b.to - b.from).squaredNorm(); });
+    runs.resize(4);
+    std::sort(runs.begin(), runs.end(), [](const Run& a, const Run& b) { return a.order < b.order; });
+    std::array<Eigen::Vector2d, 4> corners;
+    for (std::size_t c = 0; c < 4; ++c) {
+        const Run& a = runs[c];
+        const Run& b = runs[(c + 1) % 4];
+        Eigen::Matrix2d m;
+        m.col(0) = a.to - a.from;
+        m.col(1) = b.from - b.to;
+        if (std::abs(m.determinant()) < 1e-9 * m.squaredNorm()) return std::nullopt;
+        const Eigen::Vector2d t = m.inverse() * (b.from - a.from);
+        corners[c] = a.from + t.x() * (a.to - a.from);
+    }
+    // Around the hull: every hull point on the inner side of every side.
+    for (std::size_t c = 0; c < 4; ++c)
+        for (const Eigen::Vector2d& h : hull)
+            if (cross(corners[c], corners[(c + 1) % 4], h) < -kHullSlackPixels * (corners[(c + 1) % 4] - corners[c]).norm())
+                return std::nullopt;
+    return in_screen_order(corners);
+}
+
+Outline find_outline(const Image& luminance, const std::string& name, bool tiles) {
     const int w = luminance.width(), h = luminance.height();
     const relight::PlaneSize size{w, h};
     std::vector<float> smooth(luminance.plane(0).begin(), luminance.plane(0).end());
@@ -208,24 +306,32 @@ Outline find_outline(const Image& luminance, const std::string& name) {
     for (const int label : labels)
         if (label > 0) area[static_cast<std::size_t>(label)] += 1.0;
     const auto largest = static_cast<int>(std::max_element(area.begin(), area.end()) - area.begin());
+    // Every lit region of a size a lenslet's light could have: an array whose picture is
+    // dark between its clear corner cells (the markers) is lit in several pieces.
+    const double piece = std::max(kMinPieceShare * w * h, kMinPieceOfLargest * area[static_cast<std::size_t>(largest)]);
+    std::vector<std::uint8_t> kept(area.size(), 0);
     Outline outline;
-    outline.pixels = largest > 0 ? area[static_cast<std::size_t>(largest)] : 0.0;
+    for (std::size_t label = 1; label < area.size(); ++label)
+        if (area[label] >= piece) kept[label] = 1, outline.pixels += area[label];
     outline.dark = dark_count > 0.0 ? dark_sum / dark_count : 0.0;
+    outline.threshold = threshold;
     if (largest == 0 || outline.pixels < 0.02 * w * h)
         throw InputError(SourceLocation{name}, "no lit display found: the photograph shows no bright region over 2 % of "
                                                "its area (is the display lit from behind and in view?)");
-    // The region's leftmost and rightmost pixel of every row: their hull is the region's.
+    // The regions' leftmost and rightmost pixel of every row: their hull is the regions'.
     std::vector<Eigen::Vector2d> points;
     for (int y = 0; y < h; ++y) {
         int first = -1, last = -1;
         for (int x = 0; x < w; ++x)
-            if (labels[static_cast<std::size_t>(y) * static_cast<std::size_t>(w) + static_cast<std::size_t>(x)] == largest) {
+            if (kept[static_cast<std::size_t>(labels[static_cast<std::size_t>(y) * static_cast<std::size_t>(w) + static_cast<std::size_t>(x)])]) {
                 if (first < 0) first = x;
                 last = x;
             }
         if (first >= 0) points.emplace_back(first, y), points.emplace_back(last, y);
     }
-    const auto quadrilateral = quadrilateral_corners(points);
+    // Design II's corner tiles may be partly dark: the sides then place the corners.
+    auto quadrilateral = tiles ? enclosing_corners(points) : std::nullopt;
+    if (!quadrilateral) quadrilateral = quadrilateral_corners(points);
     if (!quadrilateral) throw InputError(SourceLocation{name}, "the lit region has no corners");
     outline.corners = *quadrilateral;
     return outline;
@@ -310,6 +416,7 @@ Eigen::Matrix3d refine_homography(const Image& luminance, const ArrayShape& shap
         for (std::size_t k = 0; k < shape.centres.size(); ++k)
             if ((shape.centres[k] - middle).cwiseQuotient(half).cwiseAbs().maxCoeff() <= reach)
                 from.push_back(shape.centres[k]);
+        if (from.size() < kMinRefineLenslets) continue;  // too few to place a homography
         to.resize(from.size());
         weight.resize(from.size());
         parallel_for_chunks(from.size(), 256, [&](std::size_t begin, std::size_t end) {
@@ -336,12 +443,111 @@ Eigen::Matrix3d refine_homography(const Image& luminance, const ArrayShape& shap
     return array_to_photo;
 }
 
+// Design II's tiles: the outline's corners move where a corner tile is partly dark (the
+// marker's ring under the light's spot), so the array's four straight outer edges place it
+// instead. Across each side, every kEdgeStepMm, the photo's profile from the lit tile to the
+// holder gives the edge where it crosses half-way; a line fitted to each side's crossings
+// (the farthest left out, twice) and the corners where the lines meet give the homography.
+// Sides with fewer than kMinEdgePoints crossings keep the first homography.
+std::optional<Eigen::Vector2d> edge_crossing(const Image& luminance, const Eigen::Matrix3d& array_to_photo,
+                                             const Eigen::Vector2d& on_side, const Eigen::Vector2d& outward,
+                                             double threshold) {
+    constexpr int kSamples = 49;  // across +-kEdgeReachMm
+    std::array<double, kSamples> profile{};
+    for (int k = 0; k < kSamples; ++k) {
+        const double d = kEdgeReachMm * (2.0 * k / (kSamples - 1) - 1.0);
+        profile[static_cast<std::size_t>(k)] = photo_at_page(luminance, array_to_photo, on_side + d * outward);
+        if (!std::isfinite(profile[static_cast<std::size_t>(k)])) return std::nullopt;
+    }
+    const int quarter = kSamples / 5;
+    double inside = 0.0, outside = 0.0;
+    for (int k = 0; k < quarter; ++k)
+        inside += profile[static_cast<std::size_t>(k)] / quarter, outside += profile[static_cast<std::size_t>(kSamples - 1 - k)] / quarter;
+    if (!(inside > threshold && outside < threshold)) return std::nullopt;
+    const double half = 0.5 * (inside + outside);
+    // The last crossing from above half to below it, walking outward.
+    std::optional<double> at;
+    for (int k = 0; k + 1 < kSamples; ++k) {
+        const double a = profile[static_cast<std::size_t>(k)], b = profile[static_cast<std::size_t>(k + 1)];
+        if (a >= half && b < half) {
+            const double d = kEdgeReachMm * (2.0 * (k + (a - half) / (a - b)) / (kSamples - 1) - 1.0);
+            at = d;
+        }
+    }
+    if (!at) return std::nullopt;
+    return apply(array_to_photo, on_side + *at * outward);
+}
+
+// A line through `points` (total least squares), refitted twice without those farther than
+// three robust sigmas: a point and a unit direction. nullopt when too few are left.
+std::optional<std::pair<Eigen::Vector2d, Eigen::Vector2d>> robust_line(std::vector<Eigen::Vector2d> points) {
+    for (int pass = 0; pass < 3; ++pass) {
+        if (points.size() < kMinEdgePoints) return std::nullopt;
+        Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+        for (const Eigen::Vector2d& q : points) mean += q / static_cast<double>(points.size());
+        Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
+        for (const Eigen::Vector2d& q : points) scatter += (q - mean) * (q - mean).transpose();
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> solver(scatter);
+        const Eigen::Vector2d direction = solver.eigenvectors().col(1), normal = solver.eigenvectors().col(0);
+        if (pass == 2) return std::make_pair(mean, direction);
+        std::vector<double> distance;
+        for (const Eigen::Vector2d& q : points) distance.push_back(std::abs((q - mean).dot(normal)));
+        std::vector<double> sorted = distance;
+        std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
+        const double limit = std::max(kEdgeOutlierPixels, 3.0 * 1.4826 * sorted[sorted.size() / 2]);
+        std::vector<Eigen::Vector2d> kept;
+        for (std::size_t k = 0; k < points.size(); ++k)
+            if (distance[k] <= limit) kept.push_back(points[k]);
+        points = std::move(kept);
+    }
+    return std::nullopt;
+}
+
+Eigen::Matrix3d fit_outer_edges(const Image& luminance, const ArrayShape& shape, Eigen::Matrix3d array_to_photo,
+                                double threshold) {
+    const std::array<Eigen::Vector2d, 4>& corners = shape.corners;
+    Eigen::Vector2d middle = Eigen::Vector2d::Zero();
+    for (const Eigen::Vector2d& c : corners) middle += 0.25 * c;
+    for (int pass = 0; pass < 2; ++pass) {
+        std::array<std::optional<std::pair<Eigen::Vector2d, Eigen::Vector2d>>, 4> lines;
+        for (std::size_t side = 0; side < 4; ++side) {
+            const Eigen::Vector2d a = corners[side], b = corners[(side + 1) % 4];
+            const double length = (b - a).norm();
+            Eigen::Vector2d outward(-(b - a).y(), (b - a).x());
+            outward.normalize();
+            if (outward.dot(0.5 * (a + b) - middle) < 0.0) outward = -outward;
+            std::vector<Eigen::Vector2d> crossings;
+            for (double t = kEdgeReachMm; t <= length - kEdgeReachMm; t += kEdgeStepMm)
+                if (const auto q = edge_crossing(luminance, array_to_photo, a + t / length * (b - a), outward, threshold))
+                    crossings.push_back(*q);
+            lines[side] = robust_line(std::move(crossings));
+        }
+        std::array<Eigen::Vector2d, 4> photo_corners;
+        for (std::size_t c = 0; c < 4; ++c) {
+            const auto& before = lines[(c + 3) % 4];
+            const auto& after = lines[c];
+            photo_corners[c] = apply(array_to_photo, corners[c]);
+            if (!before || !after) continue;
+            // before.p + s before.d = after.p + u after.d
+            Eigen::Matrix2d m;
+            m.col(0) = before->second;
+            m.col(1) = -after->second;
+            if (std::abs(m.determinant()) < 1e-6) continue;
+            const Eigen::Vector2d su = m.inverse() * (after->first - before->first);
+            photo_corners[c] = before->first + su.x() * before->second;
+        }
+        array_to_photo = homography_from_points(corners, photo_corners);
+    }
+    return array_to_photo;
+}
+
 // The model of one quarter turn: lenslets' centres and readings; the fit's parameters
 // (b_x, b_y, rotation, pitch error) and the gain solved at each.
 struct FitData {
     std::vector<Eigen::Vector2d> centre;
     std::vector<double> value;
     std::vector<std::array<double, kGainTerms>> terms;
+    int gain_terms = kGainTerms;  // the first this many of each lenslet's terms
 };
 
 struct FitResult {
@@ -362,13 +568,14 @@ Eigen::Vector2d pattern_point(const Eigen::Vector4d& p, const Eigen::Vector2d& c
 Eigen::VectorXd residuals(const FitData& data, const PatternMap& map, const Eigen::Vector4d& p,
                           const std::vector<std::size_t>& use, std::vector<double>* fitted = nullptr) {
     const std::size_t n = use.size();
-    Eigen::MatrixXd a(static_cast<Eigen::Index>(n), kGainTerms + 1);
+    const int g = data.gain_terms;
+    Eigen::MatrixXd a(static_cast<Eigen::Index>(n), g + 1);
     Eigen::VectorXd b(static_cast<Eigen::Index>(n));
     for (std::size_t r = 0; r < n; ++r) {
         const std::size_t k = use[r];
         const double pattern = map.at(pattern_point(p, data.centre[k]));
-        for (int t = 0; t < kGainTerms; ++t) a(static_cast<Eigen::Index>(r), t) = data.terms[k][static_cast<std::size_t>(t)] * pattern;
-        a(static_cast<Eigen::Index>(r), kGainTerms) = 1.0;
+        for (int t = 0; t < g; ++t) a(static_cast<Eigen::Index>(r), t) = data.terms[k][static_cast<std::size_t>(t)] * pattern;
+        a(static_cast<Eigen::Index>(r), g) = 1.0;
         b(static_cast<Eigen::Index>(r)) = data.value[k];
     }
     const Eigen::VectorXd x = (a.transpose() * a).ldlt().solve(a.transpose() * b);
@@ -416,7 +623,7 @@ FitResult gauss_newton(const FitData& data, const PatternMap& map, Eigen::Vector
     }
     FitResult result;
     result.parameters = p;
-    const double dof = std::max(1.0, static_cast<double>(r.size()) - 4 - kGainTerms - 1);
+    const double dof = std::max(1.0, static_cast<double>(r.size()) - 4 - data.gain_terms - 1);
     result.covariance = (jacobian.transpose() * jacobian).inverse() * (r.squaredNorm() / dof);
     return result;
 }
@@ -433,8 +640,13 @@ struct TurnFit {
 };
 
 // A lenslet on a corner marker's clear cell or beside it: left out of the fit.
-bool near_marker(const optics::Lattice& lattice, const optics::CellIndex& cell) {
-    return (cell.i <= 1 || cell.i >= lattice.count_x() - 2) && (cell.j <= 1 || cell.j >= lattice.count_y() - 2);
+// Design II's tiles read their own cells while the light's spot stays inside them (lights a
+// few degrees off the axis): only the marker cells are left out there.
+bool near_marker(const ArrayShape& shape, const optics::CellIndex& cell) {
+    const int reach = shape.tiles ? 0 : 1;
+    const optics::Lattice& lattice = shape.lattice;
+    return (cell.i <= reach || cell.i >= lattice.count_x() - 1 - reach) &&
+           (cell.j <= reach || cell.j >= lattice.count_y() - 1 - reach);
 }
 
 // Reads the lenslets with the homography whose array corners go to the outline's corners
@@ -446,9 +658,14 @@ TurnFit fit_turn(const Image& luminance, const ArrayShape& shape, const Outline&
     for (std::size_t c = 0; c < 4; ++c) photo_corners[c] = outline.corners[(c + 4 - static_cast<std::size_t>(quarter_turns)) % 4];
     TurnFit turn;
     Eigen::Matrix3d to_photo = homography_from_points(array_corners, photo_corners);
-    to_photo = to_photo * translation(lattice_phase(luminance, shape, to_photo));
-    to_photo = refine_homography(luminance, shape, to_photo, outline.dark);
-    turn.array_to_photo = to_photo * translation(whole_lenslet_offset(luminance, shape, to_photo));
+    if (shape.tiles) {
+        to_photo = fit_outer_edges(luminance, shape, to_photo, outline.threshold);
+    } else {
+        to_photo = to_photo * translation(lattice_phase(luminance, shape, to_photo));
+        to_photo = refine_homography(luminance, shape, to_photo, outline.dark);
+        to_photo = to_photo * translation(whole_lenslet_offset(luminance, shape, to_photo));
+    }
+    turn.array_to_photo = to_photo;
 
     // Every lenslet away from the corner markers, read over its core.
     const optics::Lattice& lattice = shape.lattice;
@@ -463,7 +680,7 @@ TurnFit fit_turn(const Image& luminance, const ArrayShape& shape, const Outline&
     });
     for (std::size_t k = 0; k < shape.centres.size(); ++k) {
         const optics::CellIndex cell = shape.cells[k];
-        if (near_marker(lattice, cell) || !std::isfinite(values[k])) continue;
+        if (near_marker(shape, cell) || !std::isfinite(values[k])) continue;
         const Eigen::Vector2d u = (shape.centres[k] - middle).cwiseQuotient(half);
         turn.data.centre.push_back(shape.centres[k]);
         turn.data.value.push_back(values[k]);
@@ -471,6 +688,7 @@ TurnFit fit_turn(const Image& luminance, const ArrayShape& shape, const Outline&
         turn.cells.push_back(cell);
     }
     if (turn.data.value.size() < kMinReadLenslets) return turn;
+    if (turn.data.value.size() < kSmallArray) turn.data.gain_terms = kSmallArrayGainTerms;
 
     // The shift with the best correlation within half a pitch, then Gauss-Newton.
     const int steps = static_cast<int>(std::ceil(0.5 * pitch / kSearchStepMm));
@@ -565,11 +783,11 @@ double PatternMap::at(const Eigen::Vector2d& point) const {
 
 namespace {
 
-// An array too small to spare its corners (Design II's 6 x 5 leaves 14 lenslets) does not
-// hold enough readings to fit the shift, turn, scale and light falloff.
+// An array too small to spare its corners (under 16 lenslets left) does not hold enough
+// readings to fit the shift, turn, scale and light falloff.
 void check_readable(const ArrayShape& shape, const optics::Design& design) {
     const auto readable = static_cast<std::size_t>(std::count_if(
-        shape.cells.begin(), shape.cells.end(), [&](const optics::CellIndex& c) { return !near_marker(shape.lattice, c); }));
+        shape.cells.begin(), shape.cells.end(), [&](const optics::CellIndex& c) { return !near_marker(shape, c); }));
     if (readable < kMinReadLenslets)
         throw InputError(SourceLocation{design.file},
                          format_text("the array has %zu lenslets away from its corner markers, too few to measure the "
@@ -589,11 +807,14 @@ RegistrationReading read_registration_photo(const Image& photo, const std::strin
     const ArrayShape shape = array_shape(design);
     check_readable(shape, design);
     const Image luminance = photo_luminance(photo);
-    const Outline outline = find_outline(luminance, name);
-    // The quarter turns to try: the one given, or all.
+    const Outline outline = find_outline(luminance, name, shape.tiles);
+    // The quarter turns to try: the one given, or all. A small array's few readings can fit
+    // well the wrong way up (the gain and geometry absorb much of them): all are tried, and the
+    // one given must fit best.
+    const bool small = shape.centres.size() < kSmallArray;
     std::vector<int> tried;
     for (int q = 0; q < 4; ++q)
-        if (!quarter_turns || *quarter_turns == q) tried.push_back(q);
+        if (!quarter_turns || small || *quarter_turns == q) tried.push_back(q);
     std::vector<TurnFit> turns;
     for (const int q : tried) turns.push_back(fit_turn(luminance, shape, outline, q, map));
     std::vector<std::size_t> order(turns.size());
@@ -605,12 +826,21 @@ RegistrationReading read_registration_photo(const Image& photo, const std::strin
     reading.name = name;
     reading.quarter_turns = tried[order[0]];
     reading.correlation = best.fit.correlation;
-    reading.runner_up = order.size() > 1 ? turns[order[1]].fit.correlation : NAN;
+    reading.runner_up = !quarter_turns && order.size() > 1 ? turns[order[1]].fit.correlation : NAN;
     if (reading.correlation < kMinCorrelation)
         throw InputError(SourceLocation{name}, format_text("the lenslets' readings do not follow the pattern (correlation "
                                                            "%.2f, at least %.2f needed): is it this pattern, lit from "
-                                                           "behind by one small light, the photograph sharp?",
+                                                           "behind by one small light, the photograph sharp, the "
+                                                           "array's corners lit?",
                                                            reading.correlation, kMinCorrelation));
+    if (quarter_turns && reading.quarter_turns != *quarter_turns) {
+        const auto given = static_cast<std::size_t>(std::find(tried.begin(), tried.end(), *quarter_turns) - tried.begin());
+        throw InputError(SourceLocation{name},
+                         format_text("the display fits better turned by %d quarter turn(s) than by %d as given "
+                                     "(correlations %.3f and %.3f): is the photograph the right way up?",
+                                     reading.quarter_turns, *quarter_turns, reading.correlation,
+                                     turns[given].fit.correlation));
+    }
     if (reading.correlation < reading.runner_up + kTurnMargin)
         throw InputError(SourceLocation{name}, format_text("the pattern fits two ways up about as well (correlations "
                                                            "%.3f and %.3f): it is too symmetric to say which; say "

@@ -22,7 +22,13 @@
 // refine it (a weighted least-squares homography each time); the whole-lenslet offset of the
 // labels is the one that keeps the edge rows on light, not on the holder. So the display's
 // corners must be lit: a pattern dark at the array's edge is refused (its readings do not
-// follow it). Every lenslet is read over a disc a third of its pitch wide about its image.
+// follow it). Design II's macro-pixels are even tiles that fill their cells: the lit region
+// (every piece of it: the clear marker cells light the corners even where the picture is
+// dark) has straight outer edges, whose four longest runs on its hull, then lines fitted
+// across its sides, place the array instead. Every lenslet is read over a disc a third of its
+// pitch wide about its image; the marker cells (Design I: and their neighbours) are left out.
+// A small array (under 100 lenslets: Design II's 26 readings) fits a light falloff linear across it,
+// and is tried every way up: a photograph said to be upright must fit best so.
 // The photograph may not say which side of the display is up: it is given (upright, or
 // turned by half a turn), or each quarter turn is fitted and the best kept.
 // The fit: the pattern (its transmittance's mean over the channels, averaged on a grid of
@@ -94,7 +100,7 @@ struct RegistrationReading {
 };
 
 /// InputError naming the design file when its array is too small to measure the registration
-/// from: fewer than 16 lenslets away from its corner markers (Design II's 6 x 5 has 14).
+/// from: fewer than 16 lenslets away from its corner markers (Design II's 6 x 5 has 26).
 void check_registration_readable(const optics::Design& design);
 
 /// Reads one photograph (linear; any channels) of `design` assembled with the pattern `map`

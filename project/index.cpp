@@ -188,7 +188,11 @@ std::vector<Section> instructions(const Project& project, const fs::path& out) {
                                {}});
     else
         check.items.push_back(
-            {"Light the display from behind with one small lamp far away (or the sun), photograph it from the "
+            {std::string("Light the display from behind with one small lamp far away (or the sun)") +
+                 (design.kind == optics::DesignKind::II
+                      ? " 2 to 9 degrees off its axis, not along its rows or columns (so that the corner markers show)"
+                      : "") +
+                 ", photograph it from the "
              "front with the whole display in the frame, then turn the display by half a turn in its plane, the "
              "lamp and camera where they were, and photograph it again; name them in the project's [calibration] "
              "display_photos and turned_photos: rfd make then says how far the pattern is from where it belongs "

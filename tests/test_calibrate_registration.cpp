@@ -18,6 +18,7 @@
 #include "calibrate/registration.hpp"
 #include "core/units.hpp"
 #include "optics/design_optics.hpp"
+#include "print/printed.hpp"
 #include "optics/misalignment.hpp"
 #include "tests/support/bundled.hpp"
 #include "tests/support/cameras.hpp"
@@ -61,10 +62,12 @@ private:
     std::vector<Wave> waves_;
 };
 
+// The pattern as its sheet is printed: the markers' cells clear, with their ink.
 struct RegistrationFixture {
     optics::Design design = bundled_design(1);
     Texture pattern{7};
-    PatternMap map{pattern, design};
+    print::MarkedTransparency sheet{pattern, design, {print::load_printer("epson_stylus_pro_4800"), 1.0, 1.0, 1}};
+    PatternMap map{sheet, design};
 };
 
 const RegistrationFixture& registration_fixture() {
@@ -77,7 +80,7 @@ Camera display_camera() { return framing_camera(display_paper(registration_fixtu
 // Through the display's exact optics, 8 x 8 rays a lenslet (each lenslet's reading is their mean).
 Image photo_of(const optics::Mounting& mounting, DisplayScene scene, const Camera& camera) {
     const RegistrationFixture& f = registration_fixture();
-    const optics::MisalignedTransparency mounted(f.pattern, mounting);
+    const optics::MisalignedTransparency mounted(f.sheet, mounting);
     scene.rays_per_side = 8;
     return simulated_display_photo(f.design, mounted, scene, camera);
 }
@@ -170,6 +173,62 @@ TEST(Registration, ATurnedPairCancelsTheLight) {
     EXPECT_NEAR(m.rotation_deg, -0.06, 0.02);
     EXPECT_NEAR(m.spot.x(), spot.x(), 0.02);
     EXPECT_NEAR(m.spot.y(), spot.y(), 0.02);
+}
+
+// Design II's 6 x 5 array: 26 macro-pixels away from the markers, each even. The markers'
+// clear cells light the array's corners (partly: each shows the spot's surroundings magnified,
+// the ring among them), and its straight outer edges place it. A hand-held pair turned by half
+// a turn, the light 2 to 9 deg off the axis: the shift within 0.02 mm. With the light on the
+// axis the spot sits on the markers' crosshair, the corners go dark and the photograph is
+// refused. The same photograph said to be upside down is refused, though that way up fits its
+// 26 readings at a correlation near 0.8.
+struct DesignTwoFixture {
+    optics::Design design = bundled_design(2);
+    Texture pattern{11};
+    print::MarkedTransparency sheet{pattern, design, {print::load_printer("epson_stylus_pro_4800"), 1.0, 1.0, 1}};
+    PatternMap map{sheet, design};
+};
+
+TEST(RegistrationAccuracy, DesignIIFromATurnedPairOfItsTwentySixMacroPixels) {
+    const DesignTwoFixture f;
+    const optics::Mounting mounting{{0.05, -0.03}, degrees_to_radians(0.1), 0.0};
+    const optics::MisalignedTransparency mounted(f.sheet, mounting);
+    int read = 0;
+    for (const double light_tilt : {0.0, 2.0, 4.0, 7.0, 9.0}) {
+        const double tilt = degrees_to_radians(light_tilt), turn = degrees_to_radians(30.0);
+        DisplayScene scene;
+        scene.light = Eigen::Vector3d(std::sin(tilt) * std::cos(turn), std::sin(tilt) * std::sin(turn), std::cos(tilt));
+        DisplayScene turned = scene;
+        turned.light.head<2>() *= -1.0;
+        Camera camera = rfd::testing::hand_held(framing_camera(display_paper(f.design), 450.0, 0.9, 2400));
+        const Image upright_photo = simulated_display_photo(f.design, mounted, scene, camera);
+        if (light_tilt == 0.0) {
+            EXPECT_THAT(error_of([&] { read_registration_photo(upright_photo, "head-on", f.design, f.map, 0); }),
+                        HasSubstr("head-on: "));
+            continue;
+        }
+        const RegistrationReading a = read_registration_photo(upright_photo, "upright", f.design, f.map, 0);
+        camera.pose.roll_deg += 180.0;
+        camera.seed = 2;
+        const RegistrationReading b =
+            read_registration_photo(simulated_display_photo(f.design, mounted, turned, camera), "turned", f.design, f.map, 2);
+        const Registration m = combine_registration(f.design, {a, b}, std::nullopt);
+        std::printf("design II, light %.0f deg: shift %+.4f %+.4f (+-%.4f %.4f) mm, turn %+.4f (+-%.4f) deg, "
+                    "corr %.3f %.3f, %zu lenslets\n",
+                    light_tilt, m.shift_mm.x() - 0.05, m.shift_mm.y() + 0.03, m.sigma_shift_mm.x(), m.sigma_shift_mm.y(),
+                    m.rotation_deg - 0.1, m.sigma_rotation_deg, a.correlation, b.correlation, a.lenslets.size());
+        EXPECT_EQ(a.lenslets.size(), 26u);
+        EXPECT_NEAR(m.shift_mm.x(), 0.05, 0.02);
+        EXPECT_NEAR(m.shift_mm.y(), -0.03, 0.02);
+        EXPECT_NEAR(m.rotation_deg, 0.1, 0.1);
+        EXPECT_NEAR(m.spot.norm(), spot_offset(f.design, scene.light).norm(), 0.02);
+        if (light_tilt == 4.0) {
+            EXPECT_THAT(error_of([&] { read_registration_photo(upright_photo, "upright", f.design, f.map, 2); }),
+                        HasSubstr("upright: the display fits better turned by 0 quarter turn(s) than by 2 as given"));
+        }
+        ++read;
+    }
+    EXPECT_EQ(read, 4);
 }
 
 }  // namespace
