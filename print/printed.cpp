@@ -183,18 +183,26 @@ MarkedTransparency::MarkedTransparency(const optics::Transparency& pattern, cons
                                        const ToneMap& tone)
     : pattern_(pattern),
       markers_(marker_shapes(design, tone.printer.dpi_x.dot_mm(), tone.printer.dpi_y.dot_mm())),
-      ink_(static_cast<float>(std::pow(tone.printer.ink_transmittance(), tone.sheets))) {}
+      ink_(static_cast<float>(std::pow(tone.printer.ink_transmittance(), tone.sheets))) {
+    for (const MarkerShape& marker : markers_) {
+        double reach2 = 0.0;
+        for (const Eigen::Vector2d& corner : marker.cell) reach2 = std::max(reach2, (corner - marker.centre).squaredNorm());
+        reach2_.push_back(reach2);
+    }
+}
 
 void MarkedTransparency::sample(std::span<const Eigen::Vector2d> points, std::span<float> out) const {
     pattern_.sample(points, out);
     const auto channels = static_cast<std::size_t>(pattern_.channels());
     for (std::size_t k = 0; k < points.size(); ++k)
-        for (const MarkerShape& marker : markers_)
-            if (marker.in_cell(points[k])) {
-                const float value = marker.inked(points[k]) ? ink_ : 1.0f;
-                std::fill_n(out.begin() + static_cast<std::ptrdiff_t>(k * channels), channels, value);
-                break;
-            }
+        for (std::size_t m = 0; m < markers_.size(); ++m) {
+            const MarkerShape& marker = markers_[m];
+            // Most points lie far from the four corner cells: a distance first.
+            if ((points[k] - marker.centre).squaredNorm() > reach2_[m] || !marker.in_cell(points[k])) continue;
+            const float value = marker.inked(points[k]) ? ink_ : 1.0f;
+            std::fill_n(out.begin() + static_cast<std::ptrdiff_t>(k * channels), channels, value);
+            break;
+        }
 }
 
 }  // namespace rfd::print

@@ -105,7 +105,8 @@ public:
 private:
     const optics::Transparency& pattern_;
     std::vector<MarkerShape> markers_;
-    float ink_ = 0.0f;  // the stack's transmittance under full ink
+    std::vector<double> reach2_;  // squared distance from each marker's centre to its cell's farthest corner
+    float ink_ = 0.0f;            // the stack's transmittance under full ink
 };
 
 }  // namespace rfd::print
