@@ -6,6 +6,7 @@
 #include <numeric>
 
 #include <Eigen/Dense>
+#include <Eigen/Geometry>
 
 #include "calibrate/camera.hpp"
 #include "calibrate/sheet_finder.hpp"
@@ -41,6 +42,7 @@ constexpr double kMinPieceShare = 0.001;
 constexpr double kMinPieceOfLargest = 0.02;
 constexpr std::size_t kMinRefineLenslets = 9;  // a centroid pass needs (a homography from them)
 constexpr double kRunTurnDeg = 4.0;         // a straight run of the lit outline's hull
+constexpr double kParallelSine = 1e-6;       // lines closer to parallel do not meet
 constexpr double kHullSlackPixels = 2.0;    // how far the hull may poke out of its enclosing quadrilateral
 constexpr double kEdgeReachMm = 1.2;       // Design II's outer edges: profiles this far either side
 constexpr double kEdgeStepMm = 0.2;        // between profiles along a side
@@ -168,6 +170,16 @@ double cross(const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Ve
     return (a - o).x() * (b - o).y() - (a - o).y() * (b - o).x();
 }
 
+// Where the line through `a` along `a_direction` meets the one through `b` along
+// `b_direction` (Eigen's hyperplanes); nullopt for lines within kParallelSine of parallel.
+std::optional<Eigen::Vector2d> meet(const Eigen::Vector2d& a, const Eigen::Vector2d& a_direction, const Eigen::Vector2d& b,
+                                    const Eigen::Vector2d& b_direction) {
+    using Line = Eigen::Hyperplane<double, 2>;
+    const Eigen::Vector2d u = a_direction.normalized(), v = b_direction.normalized();
+    if (std::abs(u.x() * v.y() - u.y() * v.x()) < kParallelSine) return std::nullopt;
+    return Line::Through(a, a + u).intersection(Line::Through(b, b + v));
+}
+
 // The convex hull of `points` (Andrew's monotone chain), clockwise on the screen (y down);
 // empty when it has fewer than four corners.
 std::vector<Eigen::Vector2d> convex_hull(std::vector<Eigen::Vector2d> points) {
@@ -272,12 +284,9 @@ std::optional<std::array<Eigen::Vector2d, 4>> enclosing_corners(std::vector<Eige
     for (std::size_t c = 0; c < 4; ++c) {
         const Run& a = runs[c];
         const Run& b = runs[(c + 1) % 4];
-        Eigen::Matrix2d m;
-        m.col(0) = a.to - a.from;
-        m.col(1) = b.from - b.to;
-        if (std::abs(m.determinant()) < 1e-9 * m.squaredNorm()) return std::nullopt;
-        const Eigen::Vector2d t = m.inverse() * (b.from - a.from);
-        corners[c] = a.from + t.x() * (a.to - a.from);
+        const auto corner = meet(a.from, a.to - a.from, b.from, b.to - b.from);
+        if (!corner) return std::nullopt;
+        corners[c] = *corner;
     }
     // Around the hull: every hull point on the inner side of every side.
     for (std::size_t c = 0; c < 4; ++c)
@@ -528,13 +537,8 @@ Eigen::Matrix3d fit_outer_edges(const Image& luminance, const ArrayShape& shape,
             const auto& after = lines[c];
             photo_corners[c] = apply(array_to_photo, corners[c]);
             if (!before || !after) continue;
-            // before.p + s before.d = after.p + u after.d
-            Eigen::Matrix2d m;
-            m.col(0) = before->second;
-            m.col(1) = -after->second;
-            if (std::abs(m.determinant()) < 1e-6) continue;
-            const Eigen::Vector2d su = m.inverse() * (after->first - before->first);
-            photo_corners[c] = before->first + su.x() * before->second;
+            if (const auto corner = meet(before->first, before->second, after->first, after->second))
+                photo_corners[c] = *corner;
         }
         array_to_photo = homography_from_points(corners, photo_corners);
     }
