@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 
 #include "calibrate/camera.hpp"
+#include "calibrate/marker_tiles.hpp"
 #include "calibrate/sheet_finder.hpp"
 #include "core/error.hpp"
 #include "core/parallel.hpp"
@@ -40,11 +41,13 @@ constexpr double kAmbiguousChi2 = 25.0;     // a second shift fitting within 5 n
 // A lit piece of the display: at least this share of the photo and of its largest piece.
 constexpr double kMinPieceShare = 0.001;
 constexpr double kMinPieceOfLargest = 0.02;
+constexpr double kTilePieceFraction = 0.1;  // of those, for Design II's tiles
 constexpr std::size_t kMinRefineLenslets = 9;  // a centroid pass needs (a homography from them)
 constexpr double kRunTurnDeg = 4.0;         // a straight run of the lit outline's hull
 constexpr double kParallelSine = 1e-6;       // lines closer to parallel do not meet
 constexpr double kHullSlackPixels = 2.0;    // how far the hull may poke out of its enclosing quadrilateral
 constexpr double kEdgeReachMm = 1.2;       // Design II's outer edges: profiles this far either side
+constexpr double kFirstEdgeReach = 0.9;    // around the markers, at first: of the pitch
 constexpr double kEdgeStepMm = 0.2;        // between profiles along a side
 constexpr std::size_t kMinEdgePoints = 10;  // crossings a side's line needs
 constexpr double kEdgeOutlierPixels = 0.5;  // the least distance from the line left out
@@ -317,7 +320,11 @@ Outline find_outline(const Image& luminance, const std::string& name, bool tiles
     const auto largest = static_cast<int>(std::max_element(area.begin(), area.end()) - area.begin());
     // Every lit region of a size a lenslet's light could have: an array whose picture is
     // dark between its clear corner cells (the markers) is lit in several pieces.
-    const double piece = std::max(kMinPieceShare * w * h, kMinPieceOfLargest * area[static_cast<std::size_t>(largest)]);
+    // Design II's corner tiles show their markers near the axis, mostly dark: a small piece of
+    // each (the outer corner) is lit.
+    const double share = tiles ? kTilePieceFraction : 1.0;
+    const double piece =
+        share * std::max(kMinPieceShare * w * h, kMinPieceOfLargest * area[static_cast<std::size_t>(largest)]);
     std::vector<std::uint8_t> kept(area.size(), 0);
     Outline outline;
     for (std::size_t label = 1; label < area.size(); ++label)
@@ -460,11 +467,11 @@ Eigen::Matrix3d refine_homography(const Image& luminance, const ArrayShape& shap
 // Sides with fewer than kMinEdgePoints crossings keep the first homography.
 std::optional<Eigen::Vector2d> edge_crossing(const Image& luminance, const Eigen::Matrix3d& array_to_photo,
                                              const Eigen::Vector2d& on_side, const Eigen::Vector2d& outward,
-                                             double threshold) {
-    constexpr int kSamples = 49;  // across +-kEdgeReachMm
+                                             double threshold, double reach) {
+    constexpr int kSamples = 49;  // across +-reach
     std::array<double, kSamples> profile{};
     for (int k = 0; k < kSamples; ++k) {
-        const double d = kEdgeReachMm * (2.0 * k / (kSamples - 1) - 1.0);
+        const double d = reach * (2.0 * k / (kSamples - 1) - 1.0);
         profile[static_cast<std::size_t>(k)] = photo_at_page(luminance, array_to_photo, on_side + d * outward);
         if (!std::isfinite(profile[static_cast<std::size_t>(k)])) return std::nullopt;
     }
@@ -472,6 +479,13 @@ std::optional<Eigen::Vector2d> edge_crossing(const Image& luminance, const Eigen
     double inside = 0.0, outside = 0.0;
     for (int k = 0; k < quarter; ++k)
         inside += profile[static_cast<std::size_t>(k)] / quarter, outside += profile[static_cast<std::size_t>(kSamples - 1 - k)] / quarter;
+    // A long profile may begin on a dark tile inside: the tile's light is its brightest fifth.
+    if (reach > kEdgeReachMm) {
+        std::array<double, kSamples> sorted = profile;
+        std::sort(sorted.begin(), sorted.end());
+        inside = 0.0;
+        for (int k = 0; k < quarter; ++k) inside += sorted[static_cast<std::size_t>(kSamples - 1 - k)] / quarter;
+    }
     if (!(inside > threshold && outside < threshold)) return std::nullopt;
     const double half = 0.5 * (inside + outside);
     // The last crossing from above half to below it, walking outward.
@@ -479,7 +493,7 @@ std::optional<Eigen::Vector2d> edge_crossing(const Image& luminance, const Eigen
     for (int k = 0; k + 1 < kSamples; ++k) {
         const double a = profile[static_cast<std::size_t>(k)], b = profile[static_cast<std::size_t>(k + 1)];
         if (a >= half && b < half) {
-            const double d = kEdgeReachMm * (2.0 * (k + (a - half) / (a - b)) / (kSamples - 1) - 1.0);
+            const double d = reach * (2.0 * (k + (a - half) / (a - b)) / (kSamples - 1) - 1.0);
             at = d;
         }
     }
@@ -513,11 +527,17 @@ std::optional<std::pair<Eigen::Vector2d, Eigen::Vector2d>> robust_line(std::vect
 }
 
 Eigen::Matrix3d fit_outer_edges(const Image& luminance, const ArrayShape& shape, Eigen::Matrix3d array_to_photo,
-                                double threshold) {
+                                double threshold, bool around_markers) {
     const std::array<Eigen::Vector2d, 4>& corners = shape.corners;
     Eigen::Vector2d middle = Eigen::Vector2d::Zero();
     for (const Eigen::Vector2d& c : corners) middle += 0.25 * c;
-    for (int pass = 0; pass < 2; ++pass) {
+    for (int pass = 0; pass < (around_markers ? 3 : 2); ++pass) {
+        // Around the markers (the light near their crosshair: the corner tiles mostly dark, the
+        // outline's corners off by up to most of a pitch) the first pass looks farther, and no
+        // side is read across its corner tiles.
+        const double reach = around_markers && pass == 0
+                                 ? kFirstEdgeReach * std::min(shape.lattice.pitch_x(), shape.lattice.pitch_y())
+                                 : kEdgeReachMm;
         std::array<std::optional<std::pair<Eigen::Vector2d, Eigen::Vector2d>>, 4> lines;
         for (std::size_t side = 0; side < 4; ++side) {
             const Eigen::Vector2d a = corners[side], b = corners[(side + 1) % 4];
@@ -525,9 +545,11 @@ Eigen::Matrix3d fit_outer_edges(const Image& luminance, const ArrayShape& shape,
             Eigen::Vector2d outward(-(b - a).y(), (b - a).x());
             outward.normalize();
             if (outward.dot(0.5 * (a + b) - middle) < 0.0) outward = -outward;
+            const int lenslets = side % 2 == 0 ? shape.lattice.count_x() : shape.lattice.count_y();
+            const double skip = around_markers ? std::max(kEdgeReachMm, length / lenslets) : kEdgeReachMm;
             std::vector<Eigen::Vector2d> crossings;
-            for (double t = kEdgeReachMm; t <= length - kEdgeReachMm; t += kEdgeStepMm)
-                if (const auto q = edge_crossing(luminance, array_to_photo, a + t / length * (b - a), outward, threshold))
+            for (double t = skip; t <= length - skip; t += kEdgeStepMm)
+                if (const auto q = edge_crossing(luminance, array_to_photo, a + t / length * (b - a), outward, threshold, reach))
                     crossings.push_back(*q);
             lines[side] = robust_line(std::move(crossings));
         }
@@ -655,21 +677,44 @@ bool near_marker(const ArrayShape& shape, const optics::CellIndex& cell) {
 
 // Reads the lenslets with the homography whose array corners go to the outline's corners
 // turned by `quarter_turns`, and fits.
-TurnFit fit_turn(const Image& luminance, const ArrayShape& shape, const Outline& outline, int quarter_turns,
-                 const PatternMap& map) {
-    const std::array<Eigen::Vector2d, 4>& array_corners = shape.corners;
+// The array-to-photo homography whose array corners go to the outline's corners turned by
+// `quarter_turns`, refined by the lenslet images (Design I) or the array's edges (Design II).
+Eigen::Matrix3d place_array(const Image& luminance, const ArrayShape& shape, const Outline& outline, int quarter_turns,
+                            bool around_markers = false) {
     std::array<Eigen::Vector2d, 4> photo_corners;
     for (std::size_t c = 0; c < 4; ++c) photo_corners[c] = outline.corners[(c + 4 - static_cast<std::size_t>(quarter_turns)) % 4];
-    TurnFit turn;
-    Eigen::Matrix3d to_photo = homography_from_points(array_corners, photo_corners);
-    if (shape.tiles) {
-        to_photo = fit_outer_edges(luminance, shape, to_photo, outline.threshold);
-    } else {
-        to_photo = to_photo * translation(lattice_phase(luminance, shape, to_photo));
-        to_photo = refine_homography(luminance, shape, to_photo, outline.dark);
-        to_photo = to_photo * translation(whole_lenslet_offset(luminance, shape, to_photo));
+    Eigen::Matrix3d to_photo = homography_from_points(shape.corners, photo_corners);
+    if (shape.tiles) return fit_outer_edges(luminance, shape, to_photo, outline.threshold, around_markers);
+    to_photo = to_photo * translation(lattice_phase(luminance, shape, to_photo));
+    to_photo = refine_homography(luminance, shape, to_photo, outline.dark);
+    return to_photo * translation(whole_lenslet_offset(luminance, shape, to_photo));
+}
+
+// The labelling of the outline's corners that turns the array by `quarter_turns` (counter-
+// clockwise, 0: upright) as the photograph shows it: the one whose array +y points most nearly
+// the photo's up turned so. The outline's corners start only roughly at its top left (a
+// square array seen turned and in perspective may start at another).
+int labelling_for(const ArrayShape& shape, const Outline& outline, int quarter_turns) {
+    const Eigen::Vector2d expected[] = {{0.0, -1.0}, {-1.0, 0.0}, {0.0, 1.0}, {1.0, 0.0}};  // photo y down
+    const Eigen::Vector2d middle = 0.5 * (shape.low + shape.high);
+    int best = quarter_turns;
+    double best_dot = -HUGE_VAL;
+    for (int r = 0; r < 4; ++r) {
+        std::array<Eigen::Vector2d, 4> photo_corners;
+        for (std::size_t c = 0; c < 4; ++c) photo_corners[c] = outline.corners[(c + 4 - static_cast<std::size_t>(r)) % 4];
+        const Eigen::Matrix3d to_photo = homography_from_points(shape.corners, photo_corners);
+        const Eigen::Vector2d up = (apply(to_photo, middle + Eigen::Vector2d::UnitY()) - apply(to_photo, middle)).normalized();
+        const double dot = up.dot(expected[quarter_turns]);
+        if (dot > best_dot) best_dot = dot, best = r;
     }
-    turn.array_to_photo = to_photo;
+    return best;
+}
+
+// Reads the lenslets with the array placed turned by `quarter_turns`, and fits.
+TurnFit fit_turn(const Image& luminance, const ArrayShape& shape, const Outline& outline, int quarter_turns,
+                 const PatternMap& map) {
+    TurnFit turn;
+    turn.array_to_photo = place_array(luminance, shape, outline, quarter_turns);
 
     // Every lenslet away from the corner markers, read over its core.
     const optics::Lattice& lattice = shape.lattice;
@@ -736,6 +781,19 @@ TurnFit fit_turn(const Image& luminance, const ArrayShape& shape, const Outline&
     const double spread = (measured.array() - mean).square().sum();
     turn.fit.correlation = spread > 0 ? std::sqrt(std::max(0.0, 1.0 - r.squaredNorm() / spread)) : 0.0;
     return turn;
+}
+
+// InputError naming the photograph when the shift is too uncertain along either axis.
+void check_shift_certain(const Eigen::Matrix4d& covariance, const std::string& name) {
+    for (int axis = 0; axis < 2; ++axis) {
+        const double sigma = std::sqrt(covariance(axis, axis));
+        if (!(sigma <= kMaxShiftSigmaMm))
+            throw InputError(SourceLocation{name}, format_text("the shift along %s is uncertain by %.3f mm (at most %.3f mm "
+                                                               "measures): the photograph is too blurred or too dark, or the "
+                                                               "pattern has too little detail along %s",
+                                                               axis == 0 ? "x" : "y", sigma, kMaxShiftSigmaMm,
+                                                               axis == 0 ? "x" : "y"));
+    }
 }
 
 }  // namespace
@@ -812,6 +870,32 @@ RegistrationReading read_registration_photo(const Image& photo, const std::strin
     check_readable(shape, design);
     const Image luminance = photo_luminance(photo);
     const Outline outline = find_outline(luminance, name, shape.tiles);
+    // With the light near the axis Design II's corner tiles show their markers, magnified:
+    // they place the spot on the pattern whatever the picture (marker_tiles.hpp). They look
+    // the same any way up, so the way up must be given.
+    if (shape.tiles && quarter_turns) {
+        const Eigen::Matrix3d to_photo =
+            place_array(luminance, shape, outline, labelling_for(shape, outline, *quarter_turns), true);
+        const std::optional<MarkerTileFit> markers = MarkerTiles(design).read(luminance, to_photo, map);
+        if (markers && markers->correlation >= kMinMarkerCorrelation &&
+            std::max(markers->covariance(0, 0), markers->covariance(1, 1)) <= kMaxMarkerSigmaMm * kMaxMarkerSigmaMm) {
+            RegistrationReading reading;
+            reading.name = name;
+            reading.quarter_turns = *quarter_turns;
+            reading.correlation = markers->correlation;
+            reading.runner_up = NAN;
+            reading.rms = markers->rms;
+            reading.apparent_shift = markers->parameters.head<2>();
+            reading.rotation_rad = markers->parameters(2);
+            reading.pitch_error = markers->parameters(3);
+            reading.covariance = markers->covariance;
+            reading.marker_bins = markers->bins;
+            reading.array_to_photo = to_photo;
+            reading.mm_per_pixel = mm_per_pixel_at(to_photo, 0.5 * (shape.low + shape.high));
+            check_shift_certain(reading.covariance, name);
+            return reading;
+        }
+    }
     // The quarter turns to try: the one given, or all. A small array's few readings can fit
     // well the wrong way up (the gain and geometry absorb much of them): all are tried, and the
     // one given must fit best.
@@ -886,15 +970,7 @@ RegistrationReading read_registration_photo(const Image& photo, const std::strin
             }
     }
     reading.covariance = covariance;
-    for (int axis = 0; axis < 2; ++axis) {
-        const double sigma = std::sqrt(covariance(axis, axis));
-        if (!(sigma <= kMaxShiftSigmaMm))
-            throw InputError(SourceLocation{name}, format_text("the shift along %s is uncertain by %.3f mm (at most %.3f mm "
-                                                               "measures): the photograph is too blurred or too dark, or the "
-                                                               "pattern has too little detail along %s",
-                                                               axis == 0 ? "x" : "y", sigma, kMaxShiftSigmaMm,
-                                                               axis == 0 ? "x" : "y"));
-    }
+    check_shift_certain(covariance, name);
     reading.array_to_photo = best.array_to_photo;
     reading.mm_per_pixel = mm_per_pixel_at(best.array_to_photo, 0.5 * (shape.low + shape.high));
     for (std::size_t k = 0; k < best.data.value.size(); ++k)
@@ -991,9 +1067,12 @@ std::string registration_text(const Registration& m, const std::vector<Registrat
                               const RegistrationTolerances& tolerances) {
     std::string text;
     for (const RegistrationReading& r : readings)
-        text += format_text("%s: %zu lenslets, %.3f mm a pixel, turned %d quarter turn(s), fit correlation %.3f%s, "
+        text += format_text("%s: %s, %.3f mm a pixel, turned %d quarter turn(s), fit correlation %.3f%s, "
                             "residual %.1f %%; reads shift %+.4f, %+.4f mm\n",
-                            r.name.c_str(), r.lenslets.size(), r.mm_per_pixel, r.quarter_turns, r.correlation,
+                            r.name.c_str(),
+                            r.marker_bins > 0 ? format_text("the 4 corner markers (%zu samples)", r.marker_bins).c_str()
+                                              : format_text("%zu lenslets", r.lenslets.size()).c_str(),
+                            r.mm_per_pixel, r.quarter_turns, r.correlation,
                             std::isfinite(r.runner_up) ? format_text(" (next way up %.3f)", r.runner_up).c_str() : "",
                             100.0 * r.rms, r.apparent_shift.x(), r.apparent_shift.y());
     if (m.light == "given")

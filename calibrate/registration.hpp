@@ -29,6 +29,10 @@
 // pitch wide about its image; the marker cells (Design I: and their neighbours) are left out.
 // A small array (under 100 lenslets: Design II's 26 readings) fits a light falloff linear across it,
 // and is tried every way up: a photograph said to be upright must fit best so.
+// With the light within about half a degree of Design II's axis its corner tiles show their
+// markers' crosshair magnified (marker_tiles.hpp): when they do, and the way up is given, they
+// are read instead, whatever the picture (its first pass of the sides looks a pitch far and
+// not across the corner tiles, which are mostly dark then).
 // The photograph may not say which side of the display is up: it is given (upright, or
 // turned by half a turn), or each quarter turn is fitted and the best kept.
 // The fit: the pattern (its transmittance's mean over the channels, averaged on a grid of
@@ -97,6 +101,9 @@ struct RegistrationReading {
     double mm_per_pixel = 0.0;      ///< on the display, at its centre
     Eigen::Matrix3d array_to_photo = Eigen::Matrix3d::Identity();  ///< where the lenslets' light is seen
     std::vector<RegistrationLenslet> lenslets;
+    /// Design II near the axis: the corner tiles' bins read as pictures of their markers
+    /// (marker_tiles.hpp), instead of the lenslets; 0 otherwise.
+    std::size_t marker_bins = 0;
 };
 
 /// InputError naming the design file when its array is too small to measure the registration

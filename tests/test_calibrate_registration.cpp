@@ -179,8 +179,9 @@ TEST(Registration, ATurnedPairCancelsTheLight) {
 // clear cells light the array's corners (partly: each shows the spot's surroundings magnified,
 // the ring among them), and its straight outer edges place it. A hand-held pair turned by half
 // a turn, the light 2 to 9 deg off the axis: the shift within 0.02 mm. With the light on the
-// axis the spot sits on the markers' crosshair, the corners go dark and the photograph is
-// refused. The same photograph said to be upside down is refused, though that way up fits its
+// axis the spot sits on the markers' crosshair and the corner tiles show it (mostly dark);
+// hand-held, this texture's outline then places them too poorly to read them
+// (test_calibrate_marker_tiles.cpp), and the photograph is refused. The same photograph said to be upside down is refused, though that way up fits its
 // 26 readings at a correlation near 0.8.
 struct DesignTwoFixture {
     optics::Design design = bundled_design(2);
