@@ -29,7 +29,7 @@
 // pitch wide about its image; the marker cells (Design I: and their neighbours) are left out.
 // A small array (under 100 lenslets: Design II's 26 readings) fits a light falloff linear across it,
 // and is tried every way up: a photograph said to be upright must fit best so.
-// With the light within about half a degree of Design II's axis its corner tiles show their
+// With the light within about a third of a degree of Design II's axis its corner tiles show their
 // markers' crosshair magnified (marker_tiles.hpp): when they do, and the way up is given, they
 // are read instead, whatever the picture (its first pass of the sides looks a pitch far and
 // not across the corner tiles, which are mostly dark then).

@@ -190,10 +190,10 @@ std::vector<Section> instructions(const Project& project, const fs::path& out) {
         check.items.push_back(
             {std::string("Light the display from behind with one small lamp far away (or the sun)") +
                  (design.kind == optics::DesignKind::II
-                      ? " on its axis, within half a degree: each corner macro-pixel then shows the dark cross of "
-                        "its marker magnified (tilt the display until all four do), which reads whatever the picture "
-                        "(a picture with detail inside its macro-pixels also reads with the lamp 2 to 9 degrees off "
-                        "the axis, not along the rows or columns)"
+                      ? " on its axis, within a third of a degree: each corner macro-pixel then shows the dark "
+                        "cross of its marker magnified (tilt the display until all four do), which reads whatever "
+                        "the picture (a picture with detail inside its macro-pixels also reads with the lamp 2 to 9 "
+                        "degrees off the axis, not along the rows or columns)"
                       : "") +
                  ", photograph it from the "
              "front with the whole display in the frame, then turn the display by half a turn in its plane, the "
