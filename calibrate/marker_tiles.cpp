@@ -7,6 +7,7 @@
 
 #include <Eigen/Dense>
 
+#include "calibrate/mounting_fit.hpp"
 #include "calibrate/sheet_finder.hpp"
 #include "core/error.hpp"
 #include "core/parallel.hpp"
@@ -43,12 +44,6 @@ void gaussian_blur_grid(std::vector<double>& grid, int columns, int rows, double
             }
         grid.swap(out);
     }
-}
-
-Eigen::Vector2d mounted_point(const Eigen::Vector4d& p, const Eigen::Vector2d& point) {
-    const double cs = std::cos(p(2)), sn = std::sin(p(2));
-    const Eigen::Vector2d d = point - p.head<2>();
-    return Eigen::Vector2d(cs * d.x() + sn * d.y(), -sn * d.x() + cs * d.y()) / (1.0 + p(3));
 }
 
 }  // namespace
@@ -166,7 +161,7 @@ std::optional<MarkerTileFit> MarkerTiles::read(const Image& luminance, const Eig
             for (const TileBin& bin : tiles_[k]) {
                 double sum = 0.0;
                 for (std::size_t ray = 0; ray < bin.points.size(); ++ray)
-                    sum += bin.weights[ray] * map.at(mounted_point(p, corners_[k] + bin.points[ray]));
+                    sum += bin.weights[ray] * map.at(pattern_point(p, corners_[k] + bin.points[ray]));
                 light[static_cast<std::size_t>(bin.grid)] = sum;
             }
             if (blur > 0.0) gaussian_blur_grid(light, columns_, rows_, blur);
@@ -194,34 +189,10 @@ std::optional<MarkerTileFit> MarkerTiles::read(const Image& luminance, const Eig
         const double s = spread_of(use);
         return s > 0 ? std::sqrt(std::max(0.0, 1.0 - r.squaredNorm() / s)) : 0.0;
     };
-    const auto gauss_newton = [&](Eigen::Vector4d p, const std::vector<std::size_t>& use, Eigen::Matrix4d* covariance) {
-        const Eigen::Vector4d step(1e-3, 1e-3, 1e-5, 1e-5);
-        Eigen::VectorXd r = residuals(p, use);
-        Eigen::MatrixXd jacobian(r.size(), 4);
-        for (int iteration = 0; iteration < 30; ++iteration) {
-            for (int i = 0; i < 4; ++i) {
-                Eigen::Vector4d plus = p, minus = p;
-                plus(i) += step(i);
-                minus(i) -= step(i);
-                jacobian.col(i) = (residuals(plus, use) - residuals(minus, use)) / (2.0 * step(i));
-            }
-            const Eigen::Vector4d delta = -(jacobian.transpose() * jacobian).ldlt().solve(jacobian.transpose() * r);
-            double scale = 1.0;
-            Eigen::VectorXd trial;
-            for (; scale > 1e-3; scale *= 0.5) {
-                trial = residuals(p + scale * delta, use);
-                if (trial.squaredNorm() <= r.squaredNorm()) break;
-            }
-            if (scale <= 1e-3) break;
-            p += scale * delta;
-            r = trial;
-            if ((scale * delta).cwiseQuotient(step).cwiseAbs().maxCoeff() < 1e-3) break;
-        }
-        if (covariance) {
-            const double dof = std::max(1.0, static_cast<double>(r.size()) - 4 - 2.0 * static_cast<double>(use.size()));
-            *covariance = (jacobian.transpose() * jacobian).inverse() * (r.squaredNorm() / dof);
-        }
-        return p;
+    // Gauss-Newton over tiles `use`, each with its gain and offset.
+    const auto fit_tiles = [&](const Eigen::Vector4d& start, const std::vector<std::size_t>& use) {
+        return fit_mounting([&](const Eigen::Vector4d& p) { return residuals(p, use); }, start,
+                            2.0 * static_cast<double>(use.size()));
     };
 
     // The spot's place on the markers: the best correlation over the search square, no turn.
@@ -250,7 +221,9 @@ std::optional<MarkerTileFit> MarkerTiles::read(const Image& luminance, const Eig
         if (c > best_correlation) best_correlation = c, best_blur = b;
     }
     blur = best_blur;
-    fit.parameters = gauss_newton(start, all, &fit.covariance);
+    const MountingFit all_tiles = fit_tiles(start, all);
+    fit.parameters = all_tiles.parameters;
+    fit.covariance = all_tiles.covariance;
     std::vector<double> fitted;
     const Eigen::VectorXd r = residuals(fit.parameters, all, &fitted);
     fit.correlation = correlation_of(r, all);
@@ -264,19 +237,9 @@ std::optional<MarkerTileFit> MarkerTiles::read(const Image& luminance, const Eig
         std::vector<std::size_t> use;
         for (std::size_t k = 0; k < kTiles; ++k)
             if (k != left) use.push_back(k);
-        estimates[left] = gauss_newton(fit.parameters, use, nullptr);
+        estimates[left] = fit_tiles(fit.parameters, use).parameters;
     }
-    Eigen::Vector4d centre = Eigen::Vector4d::Zero();
-    for (const Eigen::Vector4d& e : estimates) centre += e / kTiles;
-    Eigen::Matrix4d jackknife = Eigen::Matrix4d::Zero();
-    for (const Eigen::Vector4d& e : estimates) jackknife += (e - centre) * (e - centre).transpose();
-    jackknife *= (kTiles - 1.0) / kTiles;
-    for (int i = 0; i < 4; ++i)
-        if (jackknife(i, i) > fit.covariance(i, i)) {
-            const double ratio = std::sqrt(jackknife(i, i) / fit.covariance(i, i));
-            fit.covariance.row(i) *= ratio;
-            fit.covariance.col(i) *= ratio;
-        }
+    widen_by_jackknife(fit.covariance, estimates);
     return fit;
 }
 

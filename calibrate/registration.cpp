@@ -10,6 +10,7 @@
 
 #include "calibrate/camera.hpp"
 #include "calibrate/marker_tiles.hpp"
+#include "calibrate/mounting_fit.hpp"
 #include "calibrate/sheet_finder.hpp"
 #include "core/error.hpp"
 #include "core/parallel.hpp"
@@ -583,12 +584,6 @@ struct FitResult {
     std::vector<double> fitted;
 };
 
-Eigen::Vector2d pattern_point(const Eigen::Vector4d& p, const Eigen::Vector2d& c) {
-    const double cs = std::cos(p(2)), sn = std::sin(p(2));
-    const Eigen::Vector2d d = c - p.head<2>();
-    return Eigen::Vector2d(cs * d.x() + sn * d.y(), -sn * d.x() + cs * d.y()) / (1.0 + p(3));
-}
-
 // Residuals of the readings against gain x pattern + offset, the gain's terms and the offset
 // solved by least squares, over lenslets `use` (all when empty).
 Eigen::VectorXd residuals(const FitData& data, const PatternMap& map, const Eigen::Vector4d& p,
@@ -624,33 +619,11 @@ double correlation_at(const FitData& data, const PatternMap& map, const Eigen::V
 
 // Gauss-Newton from `start` over lenslets `use`; the covariance from the residuals.
 FitResult gauss_newton(const FitData& data, const PatternMap& map, Eigen::Vector4d p, const std::vector<std::size_t>& use) {
-    const Eigen::Vector4d step(1e-3, 1e-3, 1e-5, 1e-5);
-    Eigen::VectorXd r = residuals(data, map, p, use);
-    Eigen::MatrixXd jacobian(r.size(), 4);
-    for (int iteration = 0; iteration < 30; ++iteration) {
-        for (int i = 0; i < 4; ++i) {
-            Eigen::Vector4d plus = p, minus = p;
-            plus(i) += step(i);
-            minus(i) -= step(i);
-            jacobian.col(i) = (residuals(data, map, plus, use) - residuals(data, map, minus, use)) / (2.0 * step(i));
-        }
-        const Eigen::Vector4d delta = -(jacobian.transpose() * jacobian).ldlt().solve(jacobian.transpose() * r);
-        // Halve the step until the residual falls.
-        double scale = 1.0;
-        Eigen::VectorXd trial;
-        for (; scale > 1e-3; scale *= 0.5) {
-            trial = residuals(data, map, p + scale * delta, use);
-            if (trial.squaredNorm() <= r.squaredNorm()) break;
-        }
-        if (scale <= 1e-3) break;
-        p += scale * delta;
-        r = trial;
-        if ((scale * delta).cwiseQuotient(step).cwiseAbs().maxCoeff() < 1e-3) break;
-    }
+    const MountingFit fit =
+        fit_mounting([&](const Eigen::Vector4d& q) { return residuals(data, map, q, use); }, p, data.gain_terms + 1.0);
     FitResult result;
-    result.parameters = p;
-    const double dof = std::max(1.0, static_cast<double>(r.size()) - 4 - data.gain_terms - 1);
-    result.covariance = (jacobian.transpose() * jacobian).inverse() * (r.squaredNorm() / dof);
+    result.parameters = fit.parameters;
+    result.covariance = fit.covariance;
     return result;
 }
 
@@ -957,17 +930,7 @@ RegistrationReading read_registration_photo(const Image& photo, const std::strin
                 if (best.cells[k].i * kGroups / columns != g) use.push_back(k);
             estimates[static_cast<std::size_t>(g)] = gauss_newton(best.data, map, p, use).parameters;
         }
-        Eigen::Vector4d mean = Eigen::Vector4d::Zero();
-        for (const Eigen::Vector4d& e : estimates) mean += e / kGroups;
-        Eigen::Matrix4d jackknife = Eigen::Matrix4d::Zero();
-        for (const Eigen::Vector4d& e : estimates) jackknife += (e - mean) * (e - mean).transpose();
-        jackknife *= (kGroups - 1.0) / kGroups;
-        for (int i = 0; i < 4; ++i)
-            if (jackknife(i, i) > covariance(i, i)) {
-                const double ratio = std::sqrt(jackknife(i, i) / covariance(i, i));
-                covariance.row(i) *= ratio;
-                covariance.col(i) *= ratio;
-            }
+        widen_by_jackknife(covariance, estimates);
     }
     reading.covariance = covariance;
     check_shift_certain(covariance, name);
