@@ -51,6 +51,18 @@ constexpr double kEdgeReachMm = 1.2;       // Design II's outer edges: profiles 
 constexpr double kFirstEdgeReach = 0.9;    // around the markers, at first: of the pitch
 constexpr double kEdgeStepMm = 0.2;        // between profiles along a side
 constexpr std::size_t kMinEdgePoints = 10;  // crossings a side's line needs
+// A side placed a row in shows the corner tiles' clear quadrants beyond it: photo samples over
+// a corner tile's length and kBeyondStart-kBeyondDepth pitches out (the first placement is
+// squeezed by up to a row), more than kLitBeyondShare of them above the outline's threshold at
+// both ends (the demo's letters hand-held: 3.9 and 6.7 %; beyond the true edge, the holder: none).
+constexpr int kBeyondSamples = 24;
+constexpr double kBeyondStart = 0.1;
+constexpr double kBeyondDepth = 1.3;
+constexpr double kLitBeyondShare = 0.01;
+// A side moved out a row is that near (of the pitch; its row is dark, the next row in farther),
+// and read all along every kMovedEdgeStepMm: only its corner tiles' clear quadrants show it.
+constexpr double kMovedEdgeReach = 0.5;
+constexpr double kMovedEdgeStepMm = 0.05;
 constexpr double kEdgeOutlierPixels = 0.5;  // the least distance from the line left out
 
 // The array's lenslets and its outline (cell corners of the outermost lenslets).
@@ -527,32 +539,79 @@ std::optional<std::pair<Eigen::Vector2d, Eigen::Vector2d>> robust_line(std::vect
     return std::nullopt;
 }
 
+// One of the array's four sides in its own frame: from corner a to corner b, the unit normal
+// pointing out of the array, how many lenslets run along it and the pitch across it.
+struct ArraySide {
+    Eigen::Vector2d a, b, outward;
+    double length = 0.0;
+    int lenslets = 0;
+    double depth = 0.0;
+};
+
+ArraySide array_side(const ArrayShape& shape, std::size_t side) {
+    Eigen::Vector2d middle = Eigen::Vector2d::Zero();
+    for (const Eigen::Vector2d& c : shape.corners) middle += 0.25 * c;
+    ArraySide s;
+    s.a = shape.corners[side];
+    s.b = shape.corners[(side + 1) % 4];
+    s.length = (s.b - s.a).norm();
+    s.outward = Eigen::Vector2d(-(s.b - s.a).y(), (s.b - s.a).x()).normalized();
+    if (s.outward.dot(0.5 * (s.a + s.b) - middle) < 0.0) s.outward = -s.outward;
+    s.lenslets = side % 2 == 0 ? shape.lattice.count_x() : shape.lattice.count_y();
+    s.depth = side % 2 == 0 ? shape.lattice.pitch_y() : shape.lattice.pitch_x();
+    return s;
+}
+
+// Whether the photo is lit beyond `side` at both its ends, within kBeyondDepth pitches of it:
+// the corner tiles' clear quadrants lie there when the side was placed on the edge of the
+// next row in (an outer row dark but for its corner tiles, whose sides are mostly dark).
+// Beyond the array's true edge lies the holder, dark.
+bool lit_beyond_both_ends(const Image& luminance, const Eigen::Matrix3d& array_to_photo, const ArraySide& side,
+                          double threshold) {
+    const double tile = side.length / side.lenslets;
+    for (int end = 0; end < 2; ++end) {
+        const Eigen::Vector2d from = end == 0 ? side.a : side.b, along = (end == 0 ? 1.0 : -1.0) * (side.b - side.a) / side.length;
+        double samples = 0.0, lit = 0.0;
+        for (int i = 0; i < kBeyondSamples; ++i)
+            for (int j = 0; j < kBeyondSamples; ++j) {
+                const double t = (i + 0.5) / kBeyondSamples * tile;
+                const double d = (kBeyondStart + (j + 0.5) / kBeyondSamples * (kBeyondDepth - kBeyondStart)) * side.depth;
+                const double v = photo_at_page(luminance, array_to_photo, from + t * along + d * side.outward);
+                if (!std::isfinite(v)) continue;
+                samples += 1.0;
+                lit += v > threshold ? 1.0 : 0.0;
+            }
+        if (!(samples > 0.0 && lit > kLitBeyondShare * samples)) return false;
+    }
+    return true;
+}
+
 Eigen::Matrix3d fit_outer_edges(const Image& luminance, const ArrayShape& shape, Eigen::Matrix3d array_to_photo,
                                 double threshold, bool around_markers) {
     const std::array<Eigen::Vector2d, 4>& corners = shape.corners;
-    Eigen::Vector2d middle = Eigen::Vector2d::Zero();
-    for (const Eigen::Vector2d& c : corners) middle += 0.25 * c;
+    std::array<bool, 4> row_in{};  // sides found a row in, and moved out
     for (int pass = 0; pass < (around_markers ? 3 : 2); ++pass) {
         // Around the markers (the light near their crosshair: the corner tiles mostly dark, the
-        // outline's corners off by up to most of a pitch) the first pass looks farther, and no
-        // side is read across its corner tiles.
-        const double reach = around_markers && pass == 0
-                                 ? kFirstEdgeReach * std::min(shape.lattice.pitch_x(), shape.lattice.pitch_y())
-                                 : kEdgeReachMm;
+        // outline's corners off by up to most of a pitch) no side is read across its corner
+        // tiles, and the first pass looks farther. A side then found a row in (its outer row
+        // dark but for the corner tiles) is moved out a row and read all along, more finely:
+        // where the corner tiles' clear quadrants meet the holder.
+        const bool first = around_markers && pass == 0;
         std::array<std::optional<std::pair<Eigen::Vector2d, Eigen::Vector2d>>, 4> lines;
-        for (std::size_t side = 0; side < 4; ++side) {
-            const Eigen::Vector2d a = corners[side], b = corners[(side + 1) % 4];
-            const double length = (b - a).norm();
-            Eigen::Vector2d outward(-(b - a).y(), (b - a).x());
-            outward.normalize();
-            if (outward.dot(0.5 * (a + b) - middle) < 0.0) outward = -outward;
-            const int lenslets = side % 2 == 0 ? shape.lattice.count_x() : shape.lattice.count_y();
-            const double skip = around_markers ? std::max(kEdgeReachMm, length / lenslets) : kEdgeReachMm;
+        for (std::size_t index = 0; index < 4; ++index) {
+            const ArraySide side = array_side(shape, index);
+            const double tile = side.length / side.lenslets;
+            double reach = kEdgeReachMm, skip = kEdgeReachMm, step = kEdgeStepMm;
+            if (around_markers) skip = std::max(kEdgeReachMm, tile);
+            if (first) reach = kFirstEdgeReach * std::min(shape.lattice.pitch_x(), shape.lattice.pitch_y());
+            if (row_in[index]) reach = kMovedEdgeReach * side.depth, skip = step = kMovedEdgeStepMm;
             std::vector<Eigen::Vector2d> crossings;
-            for (double t = skip; t <= length - skip; t += kEdgeStepMm)
-                if (const auto q = edge_crossing(luminance, array_to_photo, a + t / length * (b - a), outward, threshold, reach))
+            for (double t = skip; t <= side.length - skip; t += step) {
+                if (const auto q = edge_crossing(luminance, array_to_photo, side.a + t / side.length * (side.b - side.a),
+                                                 side.outward, threshold, reach))
                     crossings.push_back(*q);
-            lines[side] = robust_line(std::move(crossings));
+            }
+            lines[index] = robust_line(std::move(crossings));
         }
         std::array<Eigen::Vector2d, 4> photo_corners;
         for (std::size_t c = 0; c < 4; ++c) {
@@ -563,6 +622,18 @@ Eigen::Matrix3d fit_outer_edges(const Image& luminance, const ArrayShape& shape,
             if (const auto corner = meet(before->first, before->second, after->first, after->second))
                 photo_corners[c] = *corner;
         }
+        array_to_photo = homography_from_points(corners, photo_corners);
+        if (!first) continue;
+        // A side with the corner tiles lit beyond it is a row in: moved out by a pitch.
+        std::array<Eigen::Vector2d, 4> moved = corners;
+        for (std::size_t index = 0; index < 4; ++index) {
+            const ArraySide side = array_side(shape, index);
+            row_in[index] = lit_beyond_both_ends(luminance, array_to_photo, side, threshold);
+            if (!row_in[index]) continue;
+            moved[index] += side.depth * side.outward;
+            moved[(index + 1) % 4] += side.depth * side.outward;
+        }
+        for (std::size_t c = 0; c < 4; ++c) photo_corners[c] = apply(array_to_photo, moved[c]);
         array_to_photo = homography_from_points(corners, photo_corners);
     }
     return array_to_photo;
