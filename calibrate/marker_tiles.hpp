@@ -47,6 +47,10 @@ inline constexpr double kMinMarkerContrast = 0.3;
 /// outline) fits at 0.80-0.89 and 0.013-0.024 mm; good fits reach 0.93-0.97 and 0.003-0.007 mm.
 inline constexpr double kMinMarkerCorrelation = 0.92;
 inline constexpr double kMaxMarkerSigmaMm = 0.01;
+/// ... and the light's spot this near the crosshair's centre (|b|): farther, the marker's ring
+/// darkens the tiles' outer sides and a fit can drift along a line of the cross while still
+/// fitting well (the demo's letters 0.12 mm off centre: within 0.002 mm; 0.14: 0.033 off).
+inline constexpr double kMaxMarkerSpotMm = 0.12;
 
 /// A fit of the four corner tiles.
 struct MarkerTileFit {

@@ -56,13 +56,13 @@ constexpr std::size_t kMinEdgePoints = 10;  // crossings a side's line needs
 // squeezed by up to a row), more than kLitBeyondShare of them above the outline's threshold at
 // both ends (the demo's letters hand-held: 3.9 and 6.7 %; beyond the true edge, the holder: none).
 constexpr int kBeyondSamples = 24;
+// A side moved out a row to its corner tiles is that near (of the pitch), and read all along
+// every kCornerTileStepMm: only the corner tiles' clear quadrants show it.
+constexpr double kCornerTileReach = 0.5;
+constexpr double kCornerTileStepMm = 0.05;
 constexpr double kBeyondStart = 0.1;
 constexpr double kBeyondDepth = 1.3;
 constexpr double kLitBeyondShare = 0.01;
-// A side moved out a row is that near (of the pitch; its row is dark, the next row in farther),
-// and read all along every kMovedEdgeStepMm: only its corner tiles' clear quadrants show it.
-constexpr double kMovedEdgeReach = 0.5;
-constexpr double kMovedEdgeStepMm = 0.05;
 constexpr double kEdgeOutlierPixels = 0.5;  // the least distance from the line left out
 
 // The array's lenslets and its outline (cell corners of the outermost lenslets).
@@ -539,6 +539,10 @@ std::optional<std::pair<Eigen::Vector2d, Eigen::Vector2d>> robust_line(std::vect
     return std::nullopt;
 }
 
+// Where a side whose outer row is dark but for its corner tiles is read: at the next row's
+// edge, or at the corner tiles' own edges.
+enum class RowInEdge { NextRow, CornerTiles };
+
 // One of the array's four sides in its own frame: from corner a to corner b, the unit normal
 // pointing out of the array, how many lenslets run along it and the pitch across it.
 struct ArraySide {
@@ -587,30 +591,44 @@ bool lit_beyond_both_ends(const Image& luminance, const Eigen::Matrix3d& array_t
 }
 
 Eigen::Matrix3d fit_outer_edges(const Image& luminance, const ArrayShape& shape, Eigen::Matrix3d array_to_photo,
-                                double threshold, bool around_markers) {
-    const std::array<Eigen::Vector2d, 4>& corners = shape.corners;
-    std::array<bool, 4> row_in{};  // sides found a row in, and moved out
+                                double threshold, bool around_markers, RowInEdge row_in_edge) {
+    // rows_in[side]: the side's outer row is dark but for its corner tiles. Read at the next
+    // row's edge, the lines are the images of the array's sides moved in so, and so are the
+    // corners where they meet; read at the corner tiles, the side is moved out a row, then
+    // read all along, more finely and farther either side.
+    std::array<int, 4> rows_in{};
+    const bool next_row = row_in_edge == RowInEdge::NextRow;
+    const auto read_corners = [&] {
+        std::array<Eigen::Vector2d, 4> corners = shape.corners;
+        if (!next_row) return corners;
+        for (std::size_t index = 0; index < 4; ++index) {
+            const ArraySide side = array_side(shape, index);
+            const Eigen::Vector2d in = -rows_in[index] * side.depth * side.outward;
+            corners[index] += in;
+            corners[(index + 1) % 4] += in;
+        }
+        return corners;
+    };
     for (int pass = 0; pass < (around_markers ? 3 : 2); ++pass) {
         // Around the markers (the light near their crosshair: the corner tiles mostly dark, the
         // outline's corners off by up to most of a pitch) no side is read across its corner
-        // tiles, and the first pass looks farther. A side then found a row in (its outer row
-        // dark but for the corner tiles) is moved out a row and read all along, more finely:
-        // where the corner tiles' clear quadrants meet the holder.
+        // tiles, and the first pass looks farther.
         const bool first = around_markers && pass == 0;
+        const double reach = first ? kFirstEdgeReach * std::min(shape.lattice.pitch_x(), shape.lattice.pitch_y())
+                                   : kEdgeReachMm;
+        const std::array<Eigen::Vector2d, 4> corners = read_corners();
         std::array<std::optional<std::pair<Eigen::Vector2d, Eigen::Vector2d>>, 4> lines;
         for (std::size_t index = 0; index < 4; ++index) {
             const ArraySide side = array_side(shape, index);
-            const double tile = side.length / side.lenslets;
-            double reach = kEdgeReachMm, skip = kEdgeReachMm, step = kEdgeStepMm;
-            if (around_markers) skip = std::max(kEdgeReachMm, tile);
-            if (first) reach = kFirstEdgeReach * std::min(shape.lattice.pitch_x(), shape.lattice.pitch_y());
-            if (row_in[index]) reach = kMovedEdgeReach * side.depth, skip = step = kMovedEdgeStepMm;
+            const Eigen::Vector2d a = corners[index], b = corners[(index + 1) % 4];
+            double skip = around_markers ? std::max(kEdgeReachMm, side.length / side.lenslets) : kEdgeReachMm;
+            double step = kEdgeStepMm, side_reach = reach;
+            if (rows_in[index] && !next_row) skip = step = kCornerTileStepMm, side_reach = kCornerTileReach * side.depth;
             std::vector<Eigen::Vector2d> crossings;
-            for (double t = skip; t <= side.length - skip; t += step) {
-                if (const auto q = edge_crossing(luminance, array_to_photo, side.a + t / side.length * (side.b - side.a),
-                                                 side.outward, threshold, reach))
+            for (double t = skip; t <= side.length - skip; t += step)
+                if (const auto q = edge_crossing(luminance, array_to_photo, a + t / side.length * (b - a), side.outward,
+                                                 threshold, side_reach))
                     crossings.push_back(*q);
-            }
             lines[index] = robust_line(std::move(crossings));
         }
         std::array<Eigen::Vector2d, 4> photo_corners;
@@ -624,17 +642,22 @@ Eigen::Matrix3d fit_outer_edges(const Image& luminance, const ArrayShape& shape,
         }
         array_to_photo = homography_from_points(corners, photo_corners);
         if (!first) continue;
-        // A side with the corner tiles lit beyond it is a row in: moved out by a pitch.
-        std::array<Eigen::Vector2d, 4> moved = corners;
+        // A side with the corner tiles lit beyond it was found a row in: its line is the edge
+        // of the next row (often the better placement: the marker's ring darkens the corner
+        // tiles' own edges as the spot leaves its centre), or it is moved out to them.
+        std::array<Eigen::Vector2d, 4> moved_out = shape.corners;
         for (std::size_t index = 0; index < 4; ++index) {
             const ArraySide side = array_side(shape, index);
-            row_in[index] = lit_beyond_both_ends(luminance, array_to_photo, side, threshold);
-            if (!row_in[index]) continue;
-            moved[index] += side.depth * side.outward;
-            moved[(index + 1) % 4] += side.depth * side.outward;
+            rows_in[index] = lit_beyond_both_ends(luminance, array_to_photo, side, threshold) ? 1 : 0;
+            moved_out[index] += rows_in[index] * side.depth * side.outward;
+            moved_out[(index + 1) % 4] += rows_in[index] * side.depth * side.outward;
         }
-        for (std::size_t c = 0; c < 4; ++c) photo_corners[c] = apply(array_to_photo, moved[c]);
-        array_to_photo = homography_from_points(corners, photo_corners);
+        if (next_row) {
+            array_to_photo = homography_from_points(read_corners(), photo_corners);
+        } else {
+            for (std::size_t c = 0; c < 4; ++c) photo_corners[c] = apply(array_to_photo, moved_out[c]);
+            array_to_photo = homography_from_points(shape.corners, photo_corners);
+        }
     }
     return array_to_photo;
 }
@@ -724,11 +747,11 @@ bool near_marker(const ArrayShape& shape, const optics::CellIndex& cell) {
 // The array-to-photo homography whose array corners go to the outline's corners turned by
 // `quarter_turns`, refined by the lenslet images (Design I) or the array's edges (Design II).
 Eigen::Matrix3d place_array(const Image& luminance, const ArrayShape& shape, const Outline& outline, int quarter_turns,
-                            bool around_markers = false) {
+                            bool around_markers = false, RowInEdge row_in_edge = RowInEdge::NextRow) {
     std::array<Eigen::Vector2d, 4> photo_corners;
     for (std::size_t c = 0; c < 4; ++c) photo_corners[c] = outline.corners[(c + 4 - static_cast<std::size_t>(quarter_turns)) % 4];
     Eigen::Matrix3d to_photo = homography_from_points(shape.corners, photo_corners);
-    if (shape.tiles) return fit_outer_edges(luminance, shape, to_photo, outline.threshold, around_markers);
+    if (shape.tiles) return fit_outer_edges(luminance, shape, to_photo, outline.threshold, around_markers, row_in_edge);
     to_photo = to_photo * translation(lattice_phase(luminance, shape, to_photo));
     to_photo = refine_homography(luminance, shape, to_photo, outline.dark);
     return to_photo * translation(whole_lenslet_offset(luminance, shape, to_photo));
@@ -906,40 +929,60 @@ void check_readable(const ArrayShape& shape, const optics::Design& design) {
 
 void check_registration_readable(const optics::Design& design) { check_readable(array_shape(design), design); }
 
-RegistrationReading read_registration_photo(const Image& photo, const std::string& name,
-                                            const optics::Design& design, const PatternMap& map,
-                                            std::optional<int> quarter_turns) {
-    RFD_CHECK(!quarter_turns || (*quarter_turns >= 0 && *quarter_turns < 4));
-    const ArrayShape shape = array_shape(design);
-    check_readable(shape, design);
-    const Image luminance = photo_luminance(photo);
-    const Outline outline = find_outline(luminance, name, shape.tiles);
-    // With the light near the axis Design II's corner tiles show their markers, magnified:
-    // they place the spot on the pattern whatever the picture (marker_tiles.hpp). They look
-    // the same any way up, so the way up must be given.
-    if (shape.tiles && quarter_turns) {
-        const Eigen::Matrix3d to_photo =
-            place_array(luminance, shape, outline, labelling_for(shape, outline, *quarter_turns), true);
-        const std::optional<MarkerTileFit> markers = MarkerTiles(design).read(luminance, to_photo, map);
-        if (markers && markers->correlation >= kMinMarkerCorrelation &&
-            std::max(markers->covariance(0, 0), markers->covariance(1, 1)) <= kMaxMarkerSigmaMm * kMaxMarkerSigmaMm) {
-            RegistrationReading reading;
-            reading.name = name;
-            reading.quarter_turns = *quarter_turns;
-            reading.correlation = markers->correlation;
-            reading.runner_up = NAN;
-            reading.rms = markers->rms;
-            reading.apparent_shift = markers->parameters.head<2>();
-            reading.rotation_rad = markers->parameters(2);
-            reading.pitch_error = markers->parameters(3);
-            reading.covariance = markers->covariance;
-            reading.marker_bins = markers->bins;
-            reading.array_to_photo = to_photo;
-            reading.mm_per_pixel = mm_per_pixel_at(to_photo, 0.5 * (shape.low + shape.high));
-            check_shift_certain(reading.covariance, name);
-            return reading;
-        }
+namespace {
+
+// Design II's corner tiles read as pictures of their markers (marker_tiles.hpp), the display
+// turned by `quarter_turns`: the reading, or nullopt when they do not show their markers well
+// enough. `refusal` then says why a good fit was not taken (the light's spot too far from the
+// crosshair), for the message should the macro-pixels fail too.
+std::optional<RegistrationReading> read_markers(const Image& luminance, const std::string& name,
+                                                const optics::Design& design, const ArrayShape& shape,
+                                                const Outline& outline, const PatternMap& map, int quarter_turns,
+                                                std::string& refusal) {
+    // Where a side is dark but for its corner tiles, the array is placed both ways
+    // (fit_outer_edges), and the placement the markers fit best is taken.
+    const int labelling = labelling_for(shape, outline, quarter_turns);
+    const MarkerTiles tiles(design);
+    Eigen::Matrix3d to_photo = place_array(luminance, shape, outline, labelling, true, RowInEdge::NextRow);
+    std::optional<MarkerTileFit> markers = tiles.read(luminance, to_photo, map);
+    const Eigen::Matrix3d other = place_array(luminance, shape, outline, labelling, true, RowInEdge::CornerTiles);
+    if (!other.isApprox(to_photo)) {
+        std::optional<MarkerTileFit> other_markers = tiles.read(luminance, other, map);
+        if (other_markers && (!markers || other_markers->correlation > markers->correlation))
+            markers = std::move(other_markers), to_photo = other;
     }
+    if (!markers || markers->correlation < kMinMarkerCorrelation ||
+        std::max(markers->covariance(0, 0), markers->covariance(1, 1)) > kMaxMarkerSigmaMm * kMaxMarkerSigmaMm)
+        return std::nullopt;
+    const double spot_from_centre = markers->parameters.head<2>().norm();
+    if (spot_from_centre > kMaxMarkerSpotMm) {
+        refusal = format_text("; the corner macro-pixels show the light's spot %.2f mm from their markers' centre, "
+                              "farther than the %.2f mm they are read within: move the light or tilt the display "
+                              "until each shows its dark cross centred",
+                              spot_from_centre, kMaxMarkerSpotMm);
+        return std::nullopt;
+    }
+    RegistrationReading reading;
+    reading.name = name;
+    reading.quarter_turns = quarter_turns;
+    reading.correlation = markers->correlation;
+    reading.runner_up = NAN;
+    reading.rms = markers->rms;
+    reading.apparent_shift = markers->parameters.head<2>();
+    reading.rotation_rad = markers->parameters(2);
+    reading.pitch_error = markers->parameters(3);
+    reading.covariance = markers->covariance;
+    reading.marker_bins = markers->bins;
+    reading.array_to_photo = to_photo;
+    reading.mm_per_pixel = mm_per_pixel_at(to_photo, 0.5 * (shape.low + shape.high));
+    check_shift_certain(reading.covariance, name);
+    return reading;
+}
+
+// The macro-pixels or lenslet images read one value each and fitted, the display turned by
+// `quarter_turns` or, when not given, whichever way up fits best.
+RegistrationReading read_lenslets(const Image& luminance, const std::string& name, const ArrayShape& shape,
+                                  const Outline& outline, const PatternMap& map, std::optional<int> quarter_turns) {
     // The quarter turns to try: the one given, or all. A small array's few readings can fit
     // well the wrong way up (the gain and geometry absorb much of them): all are tried, and the
     // one given must fit best.
@@ -1010,6 +1053,32 @@ RegistrationReading read_registration_photo(const Image& photo, const std::strin
     for (std::size_t k = 0; k < best.data.value.size(); ++k)
         reading.lenslets.push_back({best.data.centre[k], best.data.value[k], best.fit.fitted[k]});
     return reading;
+}
+
+
+}  // namespace
+
+RegistrationReading read_registration_photo(const Image& photo, const std::string& name,
+                                            const optics::Design& design, const PatternMap& map,
+                                            std::optional<int> quarter_turns) {
+    RFD_CHECK(!quarter_turns || (*quarter_turns >= 0 && *quarter_turns < 4));
+    const ArrayShape shape = array_shape(design);
+    check_readable(shape, design);
+    const Image luminance = photo_luminance(photo);
+    const Outline outline = find_outline(luminance, name, shape.tiles);
+    // With the light near the axis Design II's corner tiles show their markers, magnified:
+    // they place the spot on the pattern whatever the picture (marker_tiles.hpp). They look
+    // the same any way up, so the way up must be given.
+    std::string marker_refusal;
+    if (shape.tiles && quarter_turns)
+        if (auto reading = read_markers(luminance, name, design, shape, outline, map, *quarter_turns, marker_refusal))
+            return *reading;
+    try {
+        return read_lenslets(luminance, name, shape, outline, map, quarter_turns);
+    } catch (const InputError& error) {
+        if (marker_refusal.empty()) throw;
+        throw InputError(error.what() + marker_refusal);
+    }
 }
 
 Eigen::Vector2d spot_offset(const optics::Design& design, const Eigen::Vector3d& light) {
