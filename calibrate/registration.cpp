@@ -56,13 +56,13 @@ constexpr std::size_t kMinEdgePoints = 10;  // crossings a side's line needs
 // squeezed by up to a row), more than kLitBeyondShare of them above the outline's threshold at
 // both ends (the demo's letters hand-held: 3.9 and 6.7 %; beyond the true edge, the holder: none).
 constexpr int kBeyondSamples = 24;
+constexpr double kBeyondStart = 0.1;
+constexpr double kBeyondDepth = 1.3;
+constexpr double kLitBeyondShare = 0.01;
 // A side moved out a row to its corner tiles is that near (of the pitch), and read all along
 // every kCornerTileStepMm: only the corner tiles' clear quadrants show it.
 constexpr double kCornerTileReach = 0.5;
 constexpr double kCornerTileStepMm = 0.05;
-constexpr double kBeyondStart = 0.1;
-constexpr double kBeyondDepth = 1.3;
-constexpr double kLitBeyondShare = 0.01;
 constexpr double kEdgeOutlierPixels = 0.5;  // the least distance from the line left out
 
 // The array's lenslets and its outline (cell corners of the outermost lenslets).
