@@ -22,16 +22,16 @@ class SheetUnderArray final : public optics::Transparency {
 public:
     SheetUnderArray(const print::MoireSheet& sheet, int page, const ArrayMounting& mounting, double line_transmittance)
         : sheet_(sheet), page_(page), centre_(mounting.centre), to_page_(array_to_page(mounting)),
-          line_(static_cast<float>(line_transmittance)) {}
+          line_(line_transmittance) {}
     int channels() const override { return 1; }
     void sample(std::span<const Eigen::Vector2d> points, std::span<float> out) const override {
         for (std::size_t k = 0; k < points.size(); ++k) {
             const Eigen::Vector2d page = centre_ + to_page_ * points[k];
-            bool inked = false;
+            double ink = 0.0;
             for (const auto* bands : {&sheet_.measuring, &sheet_.bands})
                 for (const print::MoireBand& band : *bands)
-                    if (band.page == page_ && band.inked(page.x(), page.y())) inked = true;
-            out[k] = inked ? line_ : 1.0f;
+                    if (band.page == page_) ink = std::max(ink, band.ink(page.x(), page.y()));
+            out[k] = static_cast<float>(line_ + (1.0 - ink) * (1.0 - line_));
         }
     }
 
@@ -40,7 +40,7 @@ private:
     int page_;
     Eigen::Vector2d centre_;
     Eigen::Matrix2d to_page_;
-    float line_;
+    double line_;
 };
 
 }  // namespace

@@ -41,16 +41,16 @@ constexpr double kOutlierSigmas = 5.0;
 constexpr double kWholeInset = 0.25;        // its region kept this many lenslets inside the dark's edge
 constexpr double kMinTiltDeg = 10.0;        // the camera's height needs a tilted photograph
 constexpr int kMinWholeLenslets = 24;       // twice the fit's parameters
-constexpr double kWholeFloorX = 1e-4;       // its scale's least uncertainty along a row
-constexpr double kWholeFloorRows = 3.5e-4;  // and across the rows (fit_axis says why)
+constexpr double kWholeFloorX = 2e-5;       // its scale's least uncertainty along a row
+constexpr double kWholeFloorRows = 3e-5;    // and across the rows (fit_axis says why)
 constexpr double kWholeMaxContrast = 1.05;  // a fit whose profile dips below no light,
-constexpr double kWholeMaxResidual = 0.04;  // or misses the readings by this much, settled wrong
+constexpr double kWholeMaxResidual = 0.02;  // or misses the readings by this much, settled wrong
 constexpr double kHolderDark = 0.1;         // a reading under this part of the brightest: the holder
-constexpr double kWholePhaseShare = 0.55;   // of the phase bins 30 random phases fill, needed
+constexpr double kWholePhaseShare = 0.3;    // of the phase bins 30 random phases fill, needed
 constexpr int kWholeTurnSteps = 5;          // its lattice tried at up to this many steps either way
 constexpr double kWholeTurnStepDeg = 1.0;   // of this turn from the spectrum's (read_pitch_photo)
-constexpr int kSpotRays = 48;               // rays per side of a lenslet, for the traced spot
-constexpr int kSpotBins = 24;               // the traced spot's components
+constexpr double kMaxHarmonic = 0.5;        // graded lines: the second harmonic's most, of the first
+constexpr double kWholeMaxTurnOff = 0.035;  // a whole array's fitted rows within 2 deg of its images'
 
 // The page resampled on a grid of `px_per_mm` over a rectangle.
 struct PageRaster {
@@ -186,12 +186,6 @@ struct ImageLattice {
     Eigen::Vector2d origin;
 };
 
-// The spot along the lines' normal as a sum of Gaussians (weight, centre, standard deviation;
-// mm), all scaled by the fitted spot factor; null: one centred Gaussian whose deviation is the
-// factor itself, in periods.
-struct SpotComponent {
-    double weight = 1.0, centre = 0.0, sigma = 1.0;
-};
 
 // The lenslets one axis fits: position label in the design's array frame (relative to a
 // reference lenslet), the light falloff's terms where their light is seen, value, and the
@@ -215,7 +209,7 @@ struct AxisData {
     }
     std::vector<double> value, period, origin;
     std::vector<std::size_t> lenslet;  // index into the reading's lenslets
-    const std::vector<SpotComponent>* spot = nullptr;  // traced; null: a Gaussian
+    bool graded = false;                               // the band's lines (print::MoireBand::graded)
 };
 
 // The lines as a lenslet's spot sees them: a line of width w (periods) centred on phase 0,
@@ -224,34 +218,35 @@ struct AxisData {
 struct Coverage {
     double value = 0.0, d_phase = 0.0, d_width = 0.0, d_log_spot = 0.0;
 };
-// A traced spot's components (`parts`, mm; the line period `period` mm) are each such a
-// Gaussian, scaled by `spot`.
-Coverage line_coverage(double phase, double width, double spot, const std::vector<SpotComponent>* parts = nullptr,
-                       double period = 1.0) {
+Coverage line_coverage(double phase, double width, double spot) {
     constexpr double kInvSqrt2Pi = 0.3989422804014327;
     const auto cdf = [](double x) { return 0.5 * std::erfc(-x / std::numbers::sqrt2); };
     const auto pdf = [&](double x) { return kInvSqrt2Pi * std::exp(-0.5 * x * x); };
-    static const std::vector<SpotComponent> kGaussian{SpotComponent{}};
-    const std::vector<SpotComponent>& components = parts ? *parts : kGaussian;
-    const double unit = parts ? period : 1.0;
     const double d = phase - std::round(phase);
     Coverage c;
-    for (const SpotComponent& part : components) {
-        const double sigma = spot * part.sigma / unit, shift = part.centre / part.sigma;
-        for (int n = -2; n <= 2; ++n) {  // the neighbouring lines reach a wide spot
-            const double a = (0.5 * width - (d + n)) / sigma - shift, b = (-0.5 * width - (d + n)) / sigma - shift;
-            c.value += part.weight * (cdf(a) - cdf(b));
-            c.d_phase += part.weight * (pdf(b) - pdf(a)) / sigma;
-            c.d_width += part.weight * 0.5 * (pdf(a) + pdf(b)) / sigma;
-            c.d_log_spot += part.weight * ((b + shift) * pdf(b) - (a + shift) * pdf(a));
-        }
+    for (int n = -2; n <= 2; ++n) {  // the neighbouring lines reach a wide spot
+        const double a = (0.5 * width - (d + n)) / spot, b = (-0.5 * width - (d + n)) / spot;
+        c.value += cdf(a) - cdf(b);
+        c.d_phase += (pdf(b) - pdf(a)) / spot;
+        c.d_width += 0.5 * (pdf(a) + pdf(b)) / spot;
+        c.d_log_spot += b * pdf(b) - a * pdf(a);
     }
     return c;
 }
 
-// Parameters: c, m1, m2 (the phase), w, log s (the lines' width and the spot), B, D (the
-// readings off and on a line), e_1..e_5 (the light falloff E).
+// Graded lines as a lenslet sees them: the cosine of print::MoireBand::ink, whatever its spot
+// (a blur only lowers the cosine's depth, which the fitted levels take up).
+Coverage graded_coverage(double phase) {
+    const double angle = kTwoPi * phase;
+    return {0.5 * (1.0 + std::cos(angle)), -0.5 * kTwoPi * std::sin(angle), 0.0, 0.0};
+}
+
+// Parameters: c, m1, m2 (the phase), w, log s (sharp lines: the lines' width and the spot;
+// graded lines: the second harmonic's cosine and sine terms, which a printer's tone curve off
+// its profile adds to the cosine), B, D (the readings off and on a line), e_1..e_5 (the light
+// falloff E).
 constexpr int kWidth = 3, kLogSpot = 4, kBright = 5, kDark = 6, kLight = 7;
+constexpr int kCos2 = kWidth, kSin2 = kLogSpot;
 constexpr int kParameters = kLight + kLightTerms;
 
 // The model of the header comment for Eigen's Levenberg-Marquardt: residuals over the used
@@ -260,6 +255,7 @@ struct AxisModel {
     const AxisData* data;
     std::vector<char> used;
     std::vector<std::size_t> rows;  // the used lenslets
+    bool harmonics = true;          // graded lines: the second harmonic free (else held at 0)
     AxisModel(const AxisData& d, std::vector<char> use) : data(&d), used(std::move(use)) {
         for (std::size_t k = 0; k < used.size(); ++k)
             if (used[k]) rows.push_back(k);
@@ -274,10 +270,20 @@ struct AxisModel {
         for (int t = 0; t < kLightTerms; ++t) e += p(kLight + t) * data->light[k][static_cast<std::size_t>(t)];
         return e;
     }
+    // The part of the way to full ink a lenslet sees at `phase`.
+    Coverage covered(const Eigen::VectorXd& p, double phase) const {
+        return data->graded ? graded_coverage(phase)
+                            : line_coverage(phase, p(kWidth), std::exp(p(kLogSpot)));
+    }
+    // Graded lines' second harmonic at `phase`, and its slope in the phase.
+    std::pair<double, double> harmonic(const Eigen::VectorXd& p, double phase) const {
+        if (!data->graded || !harmonics) return {0.0, 0.0};
+        const double c = std::cos(2.0 * kTwoPi * phase), s = std::sin(2.0 * kTwoPi * phase);
+        return {p(kCos2) * c + p(kSin2) * s, 2.0 * kTwoPi * (p(kSin2) * c - p(kCos2) * s)};
+    }
     double profile(const Eigen::VectorXd& p, double phase) const {
-        const double covered =
-            line_coverage(phase, p(kWidth), std::exp(p(kLogSpot)), data->spot, data->period.front()).value;
-        return p(kBright) - (p(kBright) - p(kDark)) * covered;
+        return p(kBright) - (p(kBright) - p(kDark)) * covered(p, phase).value +
+               harmonic(p, phase).first;
     }
     double predict(const Eigen::VectorXd& p, std::size_t k) const { return light(p, k) * profile(p, phase(p, k)); }
     int operator()(const Eigen::VectorXd& p, Eigen::VectorXd& residual) const {
@@ -289,16 +295,21 @@ struct AxisModel {
         for (std::size_t r = 0; r < rows.size(); ++r) {
             const std::size_t k = rows[r];
             const auto row = static_cast<Eigen::Index>(r);
-            const double e = light(p, k);
-            const Coverage c =
-                line_coverage(phase(p, k), p(kWidth), std::exp(p(kLogSpot)), data->spot, data->period[k]);
-            const double depth = p(kBright) - p(kDark), g = p(kBright) - depth * c.value;
-            const double d_phase = -e * depth * c.d_phase / data->period[k];
+            const double e = light(p, k), phi = phase(p, k);
+            const Coverage c = covered(p, phi);
+            const auto [h, d_h] = harmonic(p, phi);
+            const double depth = p(kBright) - p(kDark), g = p(kBright) - depth * c.value + h;
+            const double d_phase = e * (d_h - depth * c.d_phase) / data->period[k];
             jacobian(row, 0) = d_phase;
             jacobian(row, 1) = d_phase * data->label[k].x();
             jacobian(row, 2) = d_phase * data->label[k].y();
-            jacobian(row, kWidth) = -e * depth * c.d_width;
-            jacobian(row, kLogSpot) = -e * depth * c.d_log_spot;
+            if (data->graded) {
+                jacobian(row, kCos2) = harmonics ? e * std::cos(2.0 * kTwoPi * phi) : 0.0;
+                jacobian(row, kSin2) = harmonics ? e * std::sin(2.0 * kTwoPi * phi) : 0.0;
+            } else {
+                jacobian(row, kWidth) = -e * depth * c.d_width;
+                jacobian(row, kLogSpot) = -e * depth * c.d_log_spot;
+            }
             jacobian(row, kBright) = e * (1.0 - c.value);
             jacobian(row, kDark) = e * c.value;
             for (int t = 0; t < kLightTerms; ++t)
@@ -315,12 +326,13 @@ double fit_levels(const AxisModel& model, Eigen::VectorXd& p) {
     Eigen::Vector2d right = Eigen::Vector2d::Zero();
     double values2 = 0.0;
     for (const std::size_t k : model.rows) {
-        const double covered = line_coverage(model.phase(p, k), p(kWidth), std::exp(p(kLogSpot)),
-                                             model.data->spot, model.data->period[k]).value;
+        const double phase = model.phase(p, k);
+        const double covered = model.covered(p, phase).value;
+        const double value = model.data->value[k] - model.harmonic(p, phase).first;
         const Eigen::Vector2d basis(1.0 - covered, covered);
         normal += basis * basis.transpose();
-        right += basis * model.data->value[k];
-        values2 += model.data->value[k] * model.data->value[k];
+        right += basis * value;
+        values2 += value * value;
     }
     const Eigen::Vector2d levels = normal.ldlt().solve(right);
     p(kBright) = levels(0);
@@ -407,8 +419,10 @@ AxisSolution solve_axis(const AxisData& data, double offset, const Eigen::Vector
     p = Eigen::VectorXd::Zero(kParameters);
     p(1) = row.x();
     p(2) = row.y();
-    p(kWidth) = line_fraction;
-    p(kLogSpot) = data.spot ? 0.0 : std::log(kStartSpot);  // a traced spot as traced
+    if (!data.graded) {
+        p(kWidth) = line_fraction;
+        p(kLogSpot) = std::log(kStartSpot);
+    }
     // Where the lines are: of offsets a hundredth of a period apart, the one whose lines,
     // a little blurred, explain the readings best.
     std::vector<char>& used = out.used;
@@ -424,12 +438,25 @@ AxisSolution solve_axis(const AxisData& data, double offset, const Eigen::Vector
         p(0) = best_offset;
         fit_levels(all, p);
     }
+    // Graded lines are fitted as a cosine first, then with their second harmonic free: free
+    // from the start, the harmonic could carry the lines at half the phase's pace, and a fit
+    // settled there with the rows 0.7 % off (phases stepping an eighth of a period per row
+    // rather than a quarter, every lenslet's reading explained).
+    Eigen::VectorXd cosine;
     for (int pass = 0; pass < 2; ++pass) {
         AxisModel model(data, used);
+        model.harmonics = pass == 1;
         Eigen::LevenbergMarquardt<AxisModel> solver(model);
         solver.parameters.maxfev = 400;
         solver.minimize(p);
-        if (pass == 1) break;
+        if (pass == 1) {
+            // A harmonic as strong as half the cosine is not the tone curve's bend: the cosine's fit kept.
+            if (data.graded &&
+                std::hypot(p(kCos2), p(kSin2)) > kMaxHarmonic * 0.5 * std::abs(p(kBright) - p(kDark)))
+                p = cosine;
+            break;
+        }
+        cosine = p;
         Eigen::VectorXd residual(model.values());
         model(p, residual);
         std::vector<double> magnitudes(static_cast<std::size_t>(residual.size()));
@@ -503,11 +530,12 @@ void fit_axis(AxisData& data, double offset, const Eigen::Vector2d& guess, doubl
     fit.row = {p(1), p(2)};
     const Eigen::Matrix2d analytic = covariance.block<2, 2>(1, 1);
     fit.row_covariance = jackknife.trace() > analytic.trace() ? jackknife : analytic;
-    // A whole small array's photograph scatters more than its fit says: its 30 lenslets read
-    // the sharp lines' edges only here and there, and over simulated placements, turns and
-    // pitch errors one photograph's scale came out up to 5 (along a row) and 18 (across the
-    // rows) of its fitted uncertainties off (docs/results.md). The row's length, which is the
-    // scale, gets at least the scatter measured there.
+    // A whole small array's photograph scatters more than some fits say: where each reading
+    // disc lies in its lenslet image moves the phase it reads a little (the image shows the
+    // sheet through the lenslet's aberrations), and over 12 simulated placements one pair's
+    // scale scattered 0.0016 % (along a row) and 0.0021 % (across the rows) RMS
+    // (docs/results.md). The row's length, which is the scale, gets at least about that
+    // scatter; every one of those readings is then within 1.8 of its stated uncertainty.
     if (few) {
         const Eigen::Vector2d along = fit.row.normalized();
         const double scale_variance = along.dot(fit.row_covariance * along);
@@ -524,8 +552,19 @@ void fit_axis(AxisData& data, double offset, const Eigen::Vector2d& guess, doubl
     const double depth = *hi - *lo;
     fit.contrast = *hi > 0.0 ? depth / *hi : 0.0;
     // A whole small array's fit that settled wrong shows it: a profile that dips below no light
-    // or readings far off it (good fits over the simulated arrays of docs/results.md: residual
-    // 0.5-2.3 %, contrast at most 1.00; one that settled wrong: 6.3 %, 1.14).
+    // or readings far off it (over the simulated placements of docs/results.md, good fits to
+    // the graded lines: residual 0.1-0.4 %, contrast at most 0.99; lattices of lenslet images
+    // found wrong: 3.6 % and more).
+    // Or one that wandered beyond what the lattice of lenslet images allows (tried with the
+    // bands slanted 3 deg, one fit settled far off and read the pitch 18 % off at +-0.002 %).
+    const double off_scale = fit.row.norm() / scale - 1.0;
+    const double off_turn = std::atan2(guess.x() * fit.row.y() - guess.y() * fit.row.x(), guess.dot(fit.row));
+    if (few && (std::abs(off_scale) > 2.0 * kPitchPrior || std::abs(off_turn) > kWholeMaxTurnOff))
+        throw InputError(SourceLocation{name},
+                         format_text("the lenslets over the %s measuring band fit the lines only %.2f %% and %.1f deg "
+                                     "off their images' lattice (the fit settled wrong): lay the array down again and "
+                                     "take another photograph",
+                                     along_x ? "x" : "rows", 100.0 * off_scale, radians_to_degrees(off_turn)));
     if (few && (fit.contrast > kWholeMaxContrast || fit.rms > kWholeMaxResidual))
         throw InputError(SourceLocation{name},
                          format_text("the lenslets over the %s measuring band do not fit the lines' profile "
@@ -550,10 +589,9 @@ void fit_axis(AxisData& data, double offset, const Eigen::Vector2d& guess, doubl
     // A small array's few lenslets fill fewer bins even at random phases (30 fill 15.7 of 20
     // on average): four fifths of that, and at most kMinPhaseBins. A whole small array's phases
     // follow its two steps, one per lenslet along a row and one per row, and at some turns of
-    // the array these nearly repeat: over 31 turns of Design II's array (docs/results.md)
-    // fits from 9 to 11 of 20 bins read as well as the others, from 8 one came out 1.8 %
-    // uncertain; so it needs kWholePhaseShare of the random fill (9 bins): 2 of those 31 turns
-    // refused for it rather than 8.
+    // the array these nearly repeat; its graded lines inform at every phase, and fits from 6
+    // to 8 of 20 bins read as well as the others (docs/results.md), so it needs
+    // kWholePhaseShare of the random fill (5 bins).
     const double at_random =
         kPhaseBins * (1.0 - std::pow(1.0 - 1.0 / kPhaseBins, static_cast<double>(model.rows.size())));
     const auto needed = few ? static_cast<std::ptrdiff_t>(std::ceil(kWholePhaseShare * at_random))
@@ -640,43 +678,6 @@ void keep_the_array(std::vector<LensletReading>& lenslets, std::vector<Eigen::Ve
     labels = std::move(kept_labels);
 }
 
-// The spot a reading disc of radius `core` (mm on the diffuser) sees: the sun's rays through
-// the design's exact optics that land on the diffuser within it of the lenslet image's middle,
-// where they cross the pattern, along `normal`, binned into Gaussian components (mm). Through
-// Design II's corrective pair the disc sees the lenslet's middle, whose spot is a fifth of the
-// whole lenslet's (0.022 against 0.107 mm): the lines' profile is sharper than the whole spot
-// says, and the fit's Gaussian would bias the pitch.
-std::vector<SpotComponent> traced_spot(const optics::Design& design, double core, const Eigen::Vector2d& normal) {
-    const optics::DisplaySimulator simulator(design);
-    optics::SimulationOptions options;
-    options.model = optics::Model::Exact;
-    options.rays_per_side = kSpotRays;
-    const optics::RepeatedRays rays =
-        simulator.trace_lenslet({{Eigen::Vector3d::UnitZ(), {1.0, 1.0, 1.0}, print::kSunRadius}}, options);
-    Eigen::Vector2d middle = Eigen::Vector2d::Zero();
-    double total = 0.0;
-    for (const optics::LensletRay& ray : rays.rays) middle += ray.reaching * ray.on_diffuser, total += ray.reaching;
-    if (!(total > 0.0)) return {};
-    middle /= total;
-    std::vector<std::pair<double, double>> along;  // position along the normal, weight
-    double sum = 0.0, weight = 0.0;
-    for (const optics::LensletRay& ray : rays.rays)
-        if (ray.reaching > 0.0 && (ray.on_diffuser - middle).norm() < core) {
-            along.emplace_back(normal.dot(ray.on_pattern), ray.reaching);
-            sum += ray.reaching * along.back().first, weight += ray.reaching;
-        }
-    if (!(weight > 0.0)) return {};
-    double low = HUGE_VAL, high = -HUGE_VAL;
-    for (auto& [x, w] : along) x -= sum / weight, low = std::min(low, x), high = std::max(high, x);
-    const double bin = std::max(1e-4, (high - low) / kSpotBins);
-    std::vector<SpotComponent> parts(kSpotBins);
-    for (int b = 0; b < kSpotBins; ++b) parts[static_cast<std::size_t>(b)] = {0.0, low + (b + 0.5) * bin, 0.6 * bin};
-    for (const auto& [x, w] : along)
-        parts[static_cast<std::size_t>(std::clamp(static_cast<int>((x - low) / bin), 0, kSpotBins - 1))].weight +=
-            w / weight;
-    std::erase_if(parts, [](const SpotComponent& c) { return c.weight <= 0.0; });
-    return parts;
-}
 
 }  // namespace
 
@@ -883,7 +884,6 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
         PitchReading& reading = found.reading;
         const std::vector<Eigen::Vector2d>& labels = found.labels;
         const ImageLattice& images = found.images;
-        const double core = found.core;
         // Each lenslet's measuring band: its light seen well inside the band (the light lies up
         // to a lenslet from where the lenslet focuses, so the band's edges are left out).
         // The light of a lenslet is seen up to a millimetre or two from where it focuses (the
@@ -940,14 +940,8 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
             const Eigen::Vector2d n = band.normal();
             AxisFit& fit = band.along_x ? reading.x : reading.y;
             fit.normal_angle = std::atan2(n.y(), n.x());
-            // A whole array's reading discs see the lenslets' middles: their spot traced (Designs I
-            // and II, which the display simulator models).
-            std::vector<SpotComponent> spot;
             AxisData& data = band.along_x ? along_x : along_y;
-            if (whole && (design.kind == optics::DesignKind::I || design.kind == optics::DesignKind::II)) {
-                spot = traced_spot(design, core / kappa, n);
-                if (!spot.empty()) data.spot = &spot;
-            }
+            data.graded = band.graded;
             fit_axis(data, n.dot(reference_page), (n.transpose() * image_map).transpose(), 1.0,
                      band.line_fraction, band.along_x, whole, fit, reading.lenslets, name);
         }
@@ -966,8 +960,7 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
     // read (a lenslet image is evenly lit; a disc across two sees an edge).
     const Eigen::Matrix2d spectrum_basis = reciprocal.inverse();
     const double spectrum_turn = std::atan2(spectrum_basis(1, 0), spectrum_basis(0, 0));
-    std::optional<LatticeReading> best;
-    double best_spread = HUGE_VAL;
+    std::vector<std::pair<double, LatticeReading>> candidates;  // (spread, lattice read)
     std::optional<InputError> first_error;
     for (int k = 0; k <= 2 * kWholeTurnSteps; ++k) {
         const int steps = (k + 1) / 2 * (k % 2 ? 1 : -1);  // 0, +1, -1, +2, ...
@@ -981,14 +974,36 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
                     disc_statistics(luminance, where.page_to_photo, l.page, candidate.core, candidate.step);
                 variance += spread, light += mean * mean;
             }
-            const double spread = light > 0.0 ? variance / light : HUGE_VAL;
-            if (spread < best_spread) best_spread = spread, best = std::move(candidate);
+            candidates.emplace_back(light > 0.0 ? variance / light : HUGE_VAL, std::move(candidate));
         } catch (const InputError& e) {
             if (!first_error) first_error = e;
         }
     }
-    if (!best) throw *first_error;
-    return fit_lattice(std::move(*best));
+    // The lattices in the order of how well their discs see single images; the first whose
+    // readings fit the lines is kept.
+    std::stable_sort(candidates.begin(), candidates.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    std::optional<InputError> fit_error;
+    for (auto& [spread, candidate] : candidates) {
+        try {
+            PitchReading reading = fit_lattice(std::move(candidate));
+            // The reading discs placed again, on the lattice of the array the lines measured: its
+            // turn and scale (the lattice tried is up to half a degree and the pitch error off,
+            // and where a disc lies in its lenslet image moves the phase it reads).
+            const AxisFit& fit = reading.x.lenslets > 0 ? reading.x : reading.y;
+            const double turn = std::atan2(-fit.row.y(), fit.row.x()) - fit.normal_angle;
+            const Eigen::Matrix2d basis =
+                kappa * fit.row.norm() * Eigen::Rotation2Dd(-turn).toRotationMatrix() * page_basis;
+            try {
+                return fit_lattice(read_lattice(basis, basis.inverse()));
+            } catch (const InputError&) {
+                return reading;  // the discs placed again read worse: the first placement's reading
+            }
+        } catch (const InputError& e) {
+            if (!fit_error) fit_error = e;
+        }
+    }
+    throw fit_error ? *fit_error : *first_error;
 }
 
 PitchCalibration calibrate_pitch(const optics::Design& design, const std::vector<PitchReading>& readings,

@@ -62,6 +62,12 @@ std::string pitch_text(const PitchCalibration& calibration, const std::vector<Pi
     out += format_text("row spacing:       %.6f mm, design %.6f mm: %+.4f %% (+- %.4f %%)\n", calibration.pitch_y(),
                        calibration.design_pitch_y, 100.0 * (calibration.scale_y - 1.0),
                        100.0 * calibration.sigma_scale_y);
+    // Where the lenslets read few of the lines' phases (a small array at some turns) the scale
+    // is still given, with its larger uncertainty, and how to read it finer.
+    constexpr double kFineScale = 5e-5;
+    if (std::max(calibration.sigma_scale_x, calibration.sigma_scale_y) > kFineScale)
+        out += "uncertain beyond 0.005 %: turn the array a degree or two on the band (or lay it down again), "
+               "photograph it again and give all the photographs\n";
     return out;
 }
 

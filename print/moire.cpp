@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <memory>
 #include <numbers>
@@ -43,12 +44,27 @@ constexpr double kMaxSlant = 0.0524;
 constexpr double kMaxDrift = 0.45;
 // An array laid whole on each band in turn (too small for the cross) has few lenslets. Its
 // drift is a quarter period per lenslet: 0.45 puts the mirror alias (drift 1 - d) 1.3 % of
-// Design II's pitch away, a quarter 6.9 %. And it is read in the middle of each lenslet
-// image, which through Design II's corrective pair sees the middle of the lenslet (a spot a
-// fifth of the whole lenslet's): lines drawn for half the whole spot read best there (0.28 mm
-// for Design II; 0.55 and 0.18 mm read 5 and 3 times worse: docs/results.md).
+// Design II's pitch away, a quarter 6.9 %. A quarter repeats every four lenslets, so at turns
+// of the array where the other direction's step is near a multiple of a quarter too its
+// lenslets read few phases, and the scale reads a few times less precisely (the stated
+// uncertainty says so); 0.35 and 1 / count were tried and read less precisely elsewhere
+// (docs/results.md).
 constexpr double kWholeArrayDrift = 0.25;
-constexpr double kWholeArraySpot = 0.5;
+// Its lines are graded (MoireBand::graded): 30 lenslets reading sharp lines inform only near
+// their edges, and one photograph pair scattered 0.035 % across the rows; graded ones inform
+// at every phase, whatever part of the lenslet image a reading disc sees. Their period is about 5.3 whole spots (0.55 mm
+// along Design II's rows, 0.77 mm across): there the whole lenslet's spot keeps half the
+// cosine's depth, so its images are evenly lit enough for the lattice of them to be found.
+// Over 16 hand-held placements (docs/results.md) 12 read within 0.0045 % and 4 were refused
+// (the lattice not found). Shorter (0.28 mm, as the sharp lines were) the images' rims wash
+// out against their middles: 14 read, 3 of them 0.013-0.016 % off; longer (1.2-1.5 mm) all
+// 16 read, but up to 0.025 % off.
+constexpr double kWholeArraySpot = 1.06;
+// Graded lines are printed as this many codes a period (finer than the printer's dots).
+constexpr int kGradedSamples = 64;
+// ...in an image one sample tall and this long along the lines (mm): one tile spans any band,
+// for PDF viewers that draw a repeated image tile by tile (poppler drew 1 mm tiles unturned).
+constexpr double kGradedReach = 1000.0;
 constexpr int kMaxMeasuringPeriods = 40;  // lines per lenslet: keeps the phase unambiguous over +-1 %
 constexpr double kFallbackSpot = 0.02;    // mm, for designs the display simulator does not model
 
@@ -113,11 +129,24 @@ bool MoireBand::inside(double x, double y) const {
     return in({left, top, width, height}) && !(hole[2] > 0.0 && in(hole));
 }
 
+namespace {
+// Across the band's lines from the centred one's middle, in periods.
+double periods_across(const MoireBand& band, double x, double y) {
+    return band.normal().dot(Eigen::Vector2d(x - (band.left + 0.5 * band.width), y - (band.top + 0.5 * band.height))) /
+           band.period;
+}
+}  // namespace
+
 bool MoireBand::inked(double x, double y) const {
     if (!inside(x, y)) return false;
-    // Across the lines, from the centred one's middle, in periods.
-    const double across = normal().dot(Eigen::Vector2d(x - (left + 0.5 * width), y - (top + 0.5 * height))) / period;
+    const double across = periods_across(*this, x, y);
     return std::abs(across - std::round(across)) <= 0.5 * line_fraction;
+}
+
+double MoireBand::ink(double x, double y) const {
+    if (!graded) return inked(x, y) ? 1.0 : 0.0;
+    if (!inside(x, y)) return 0.0;
+    return 0.5 * (1.0 + std::cos(2.0 * std::numbers::pi * periods_across(*this, x, y)));
 }
 
 Eigen::Vector2d lenslet_spot(const optics::Design& design) {
@@ -166,6 +195,35 @@ MeasuringBlock measuring_block(const optics::Lattice& lattice, const Paper& pape
     b.rows_width = std::min(b.measuring_height, b.band_width);
     b.cross = b.band_width >= 3.0 * b.rows_width && b.block_height >= 3.0 * b.measuring_height;
     return b;
+}
+
+// A source that paints graded lines of `period` mm across x (MoireBand::ink, centred on x = 0)
+// in printer codes: the transmittance runs as the cosine from bare film to full ink through
+// the printer's tone curve (printer_value), sampled kGradedSamples times a period.
+std::unique_ptr<cairo_pattern_t, decltype(&cairo_pattern_destroy)> graded_lines(const PrinterProfile& printer,
+                                                                                double period) {
+    std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> codes(
+        cairo_image_surface_create(CAIRO_FORMAT_RGB24, kGradedSamples, 1), &cairo_surface_destroy);
+    cairo_surface_flush(codes.get());
+    auto* row = reinterpret_cast<std::uint32_t*>(cairo_image_surface_get_data(codes.get()));
+    const double ink = printer.ink_transmittance();
+    for (int k = 0; k < kGradedSamples; ++k) {
+        const double phase = (k + 0.5) / kGradedSamples - 0.5;  // sample k's middle; 0 on the line's centre
+        const double covered = 0.5 * (1.0 + std::cos(2.0 * std::numbers::pi * phase));
+        const double value = printer.printer_value(1.0 - covered * (1.0 - ink));
+        const auto code = static_cast<std::uint32_t>(std::lround(255.0 * (1.0 - value)));
+        row[k] = (code << 16) | (code << 8) | code;
+    }
+    cairo_surface_mark_dirty(codes.get());
+    std::unique_ptr<cairo_pattern_t, decltype(&cairo_pattern_destroy)> pattern(
+        cairo_pattern_create_for_surface(codes.get()), &cairo_pattern_destroy);
+    cairo_pattern_set_extend(pattern.get(), CAIRO_EXTEND_REPEAT);
+    cairo_pattern_set_filter(pattern.get(), CAIRO_FILTER_NEAREST);
+    cairo_matrix_t to_samples;  // pattern space: sample k spans [k, k + 1); x = 0 at kGradedSamples / 2
+    cairo_matrix_init_translate(&to_samples, 0.5 * kGradedSamples, 0.0);
+    cairo_matrix_scale(&to_samples, kGradedSamples / period, 1.0 / kGradedReach);
+    cairo_pattern_set_matrix(pattern.get(), &to_samples);
+    return pattern;
 }
 
 }  // namespace
@@ -242,6 +300,7 @@ MoireSheet moire_sheet(const optics::Design& design, const PrinterProfile& print
     for (MoireBand* band : {&x_measure, &y_measure}) {
         band->line_fraction = kMeasuringLineFraction;
         band->measuring = true;
+        band->graded = !cross;
         // Slanted so that the lenslets of one column (x) or one row (rows) cross several
         // lines too, whatever the array's own small turn.
         const double length = band->along_x ? band->height : band->width;
@@ -324,7 +383,14 @@ void draw_moire_page(cairo_t* cr, const MoireSheet& sheet, const optics::Design&
         cairo_clip(cr);
         cairo_set_fill_rule(cr, CAIRO_FILL_RULE_WINDING);
         const double width = band.line_fraction * band.period;
-        if (band.slant_rad != 0.0) {
+        if (band.graded) {
+            // One period of the cosine as exact printer codes (as the step wedge's patches:
+            // code 255 is no ink), repeated across the lines in the frame turned to their normal.
+            cairo_translate(cr, band.left + 0.5 * band.width, band.top + 0.5 * band.height);
+            cairo_rotate(cr, std::atan2(band.normal().y(), band.normal().x()));
+            cairo_set_source(cr, graded_lines(printer, band.period).get());
+            cairo_paint(cr);
+        } else if (band.slant_rad != 0.0) {
             // Slanted lines: drawn in a frame turned to the band's normal, about its centre.
             cairo_translate(cr, band.left + 0.5 * band.width, band.top + 0.5 * band.height);
             cairo_rotate(cr, std::atan2(band.normal().y(), band.normal().x()));

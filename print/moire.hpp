@@ -84,6 +84,11 @@ struct MoireBand {
     /// A rectangle (left, top, width, height) inside it left bare: where the measuring
     /// bands cross. Width 0: none.
     std::array<double, 4> hole{};
+    /// Lines of graded density: across them the transmittance runs as a cosine from bare film
+    /// (between lines) to full ink (on a line's centre), instead of sharp lines line_fraction
+    /// of the period wide. Any lens blur leaves a cosine a cosine (only its depth falls), so
+    /// every lenslet reads its phase whatever its spot (print/moire.cpp says where it is used).
+    bool graded = false;
 
     /// Whether page point (x, y) lies in the band and not in its hole.
     bool inside(double x, double y) const;
@@ -92,11 +97,15 @@ struct MoireBand {
     /// Whether page point (x, y) mm lies on one of the band's lines (line_fraction of the
     /// period wide, one centred in the band across the lines).
     bool inked(double x, double y) const;
+    /// How much ink page point (x, y) mm gets, as the part of the way from bare film's
+    /// transmittance to full ink's: 0 or 1 on sharp lines (inked), (1 + cos(2 pi phase)) / 2
+    /// on graded ones, phase 0 on the centred line; 0 outside the band.
+    double ink(double x, double y) const;
 };
 
 /// The sheet laid out: its bands page by page and the registration marks every page carries.
 /// Above the hypotheses, two measuring bands (x, then rows) for `rfd calibrate pitch`: lines
-/// half a period wide whose period is not the pitch, so that across the array the lenslets
+/// half a period wide (graded, for an array laid whole on them) whose period is not the pitch, so that across the array the lenslets
 /// read every phase of them (measuring_period), slanted a few degrees so that the lenslets of
 /// one column (x) or one row (rows) read different phases too.
 struct MoireSheet {
@@ -122,8 +131,8 @@ Eigen::Vector2d lenslet_spot(const optics::Design& design);
 /// lenslet (about 5 spots or 12 dots a line, 1 to 40), drift 0.2 + 2 / count (at most 0.45):
 /// from one lenslet to the next the phase steps by a fifth of a period, and over the array it
 /// drifts by two more periods, so the lenslets read every phase. An array laid whole on the
-/// band (`whole_array`) drifts by a quarter period per lenslet and gets lines for half the
-/// spot (print/moire.cpp says why).
+/// band (`whole_array`) drifts by a quarter period per lenslet and gets graded lines about
+/// 5.3 spots apart (print/moire.cpp says why).
 double measuring_period(double spacing, int count, double spot, double dot, bool whole_array = false);
 
 /// Whether the sheet for `design` on `paper` lays the array whole on each measuring band in

@@ -162,7 +162,7 @@ pitch_case() {  # NAME CAMERA_PIXELS SIMULATE ARGS...
 # 2.5 mm off the band's middle, the camera 22-35 deg off the vertical from any side, rolled up
 # to 15 deg), then one placement turned from -1.5 to +1.5 deg in steps of 0.1. Per case the
 # pitch's and row spacing's error against the truth (%) with the stated uncertainty, or the
-# refusal. About 3 minutes.
+# refusal. About 3 minutes. The bands are graded (print/moire.cpp).
 index_section pitch_small "Pitch calibration: Design II's small array"
 small="$out/pitch_small"
 mkdir -p "$small"
