@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
 #include <cstdio>
 #include <memory>
 #include <numbers>
@@ -202,21 +201,17 @@ MeasuringBlock measuring_block(const optics::Lattice& lattice, const Paper& pape
 // the printer's tone curve (printer_value), sampled kGradedSamples times a period.
 std::unique_ptr<cairo_pattern_t, decltype(&cairo_pattern_destroy)> graded_lines(const PrinterProfile& printer,
                                                                                 double period) {
-    std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> codes(
-        cairo_image_surface_create(CAIRO_FORMAT_RGB24, kGradedSamples, 1), &cairo_surface_destroy);
-    cairo_surface_flush(codes.get());
-    auto* row = reinterpret_cast<std::uint32_t*>(cairo_image_surface_get_data(codes.get()));
     const double ink = printer.ink_transmittance();
+    std::vector<int> codes(kGradedSamples);
     for (int k = 0; k < kGradedSamples; ++k) {
         const double phase = (k + 0.5) / kGradedSamples - 0.5;  // sample k's middle; 0 on the line's centre
         const double covered = 0.5 * (1.0 + std::cos(2.0 * std::numbers::pi * phase));
         const double value = printer.printer_value(1.0 - covered * (1.0 - ink));
-        const auto code = static_cast<std::uint32_t>(std::lround(255.0 * (1.0 - value)));
-        row[k] = (code << 16) | (code << 8) | code;
+        codes[static_cast<std::size_t>(k)] = static_cast<int>(std::lround(255.0 * (1.0 - value)));
     }
-    cairo_surface_mark_dirty(codes.get());
+    const CairoSurface row = code_row(codes);
     std::unique_ptr<cairo_pattern_t, decltype(&cairo_pattern_destroy)> pattern(
-        cairo_pattern_create_for_surface(codes.get()), &cairo_pattern_destroy);
+        cairo_pattern_create_for_surface(row.get()), &cairo_pattern_destroy);
     cairo_pattern_set_extend(pattern.get(), CAIRO_EXTEND_REPEAT);
     cairo_pattern_set_filter(pattern.get(), CAIRO_FILTER_NEAREST);
     cairo_matrix_t to_samples;  // pattern space: sample k spans [k, k + 1); x = 0 at kGradedSamples / 2

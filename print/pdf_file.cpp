@@ -51,16 +51,27 @@ void PdfFile::finish() {
     temporary_.release();
 }
 
+CairoSurface code_row(const std::vector<int>& codes) {
+    CairoSurface row(cairo_image_surface_create(CAIRO_FORMAT_RGB24, static_cast<int>(codes.size()), 1),
+                     &cairo_surface_destroy);
+    cairo_surface_flush(row.get());
+    auto* pixels = reinterpret_cast<std::uint32_t*>(cairo_image_surface_get_data(row.get()));
+    for (std::size_t k = 0; k < codes.size(); ++k) {
+        const auto c = static_cast<std::uint32_t>(codes[k]);
+        pixels[k] = (c << 16) | (c << 8) | c;
+    }
+    cairo_surface_mark_dirty(row.get());
+    return row;
+}
+
 namespace {
 
-using Surface = std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)>;
-
 // The page painted over white into an RGB24 surface, `px_per_mm` pixels per mm.
-Surface paint_page(double paper_width_mm, double paper_height_mm, double px_per_mm,
+CairoSurface paint_page(double paper_width_mm, double paper_height_mm, double px_per_mm,
                    const std::function<void(cairo_t*)>& draw) {
     const int width = std::max(1, static_cast<int>(std::lround(paper_width_mm * px_per_mm)));
     const int height = std::max(1, static_cast<int>(std::lround(paper_height_mm * px_per_mm)));
-    Surface page(cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height), &cairo_surface_destroy);
+    CairoSurface page(cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height), &cairo_surface_destroy);
     {
         std::unique_ptr<cairo_t, decltype(&cairo_destroy)> cr(cairo_create(page.get()), &cairo_destroy);
         cairo_set_source_rgb(cr.get(), 1, 1, 1);
@@ -77,7 +88,7 @@ Surface paint_page(double paper_width_mm, double paper_height_mm, double px_per_
 Image page_codes(double paper_width_mm, double paper_height_mm, double px_per_mm,
                  const std::function<void(cairo_t*)>& draw) {
     RFD_CHECK(px_per_mm > 0.0);
-    const Surface page = paint_page(paper_width_mm, paper_height_mm, px_per_mm, draw);
+    const CairoSurface page = paint_page(paper_width_mm, paper_height_mm, px_per_mm, draw);
     const int width = cairo_image_surface_get_width(page.get()), height = cairo_image_surface_get_height(page.get());
     const int stride = cairo_image_surface_get_stride(page.get());
     const unsigned char* data = cairo_image_surface_get_data(page.get());
@@ -92,7 +103,7 @@ Image page_codes(double paper_width_mm, double paper_height_mm, double px_per_mm
 void write_page_png(const std::filesystem::path& png, double paper_width_mm, double paper_height_mm, int pixels,
                     const std::function<void(cairo_t*)>& draw) {
     const double px_per_mm = pixels / std::max(paper_width_mm, paper_height_mm);
-    const Surface page = paint_page(paper_width_mm, paper_height_mm, px_per_mm, draw);
+    const CairoSurface page = paint_page(paper_width_mm, paper_height_mm, px_per_mm, draw);
     const std::filesystem::path temporary = temporary_sibling(png);
     if (cairo_surface_write_to_png(page.get(), temporary.c_str()) != CAIRO_STATUS_SUCCESS) {
         remove_temporary(temporary);

@@ -15,6 +15,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <cairo.h>
 
@@ -44,6 +45,12 @@ private:
     std::FILE* file_ = nullptr;
     cairo_surface_t* surface_ = nullptr;
 };
+
+using CairoSurface = std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)>;
+
+/// An image one pixel tall holding `codes` (0-255, the same on every channel): exact printer
+/// codes for a page to draw without smoothing (CAIRO_FILTER_NEAREST), as sheets draw patterns.
+CairoSurface code_row(const std::vector<int>& codes);
 
 /// A page as a screen picture: `draw` paints it (user units: page-frame mm) over white, at
 /// `pixels` along the paper's longer side; written as PNG through a temporary file. IoError

@@ -1,7 +1,6 @@
 #include "print/wedge.hpp"
 
 #include <cmath>
-#include <cstdint>
 #include <memory>
 #include <string>
 
@@ -20,15 +19,10 @@ constexpr double kGap = 4.0;      // mm between patches, across
 constexpr double kLabel = 10.0;   // mm below a patch for its label
 constexpr double kWedgeHeader = 20.0;  // mm for the instructions at the top of each page
 
-// One patch: a 1 x 1 image of `code` on every channel, drawn over the square without
-// smoothing, the way sheets draw patterns.
+// One patch: a 1 x 1 image of `code`, drawn over the square without smoothing, the way
+// sheets draw patterns.
 void draw_patch(cairo_t* cr, int code, double left, double top) {
-    std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> dot(
-        cairo_image_surface_create(CAIRO_FORMAT_RGB24, 1, 1), &cairo_surface_destroy);
-    cairo_surface_flush(dot.get());
-    const auto c = static_cast<std::uint32_t>(code);
-    *reinterpret_cast<std::uint32_t*>(cairo_image_surface_get_data(dot.get())) = (c << 16) | (c << 8) | c;
-    cairo_surface_mark_dirty(dot.get());
+    const CairoSurface dot = code_row({code});
     cairo_save(cr);
     cairo_translate(cr, left, top);
     cairo_scale(cr, kPatch, kPatch);
