@@ -353,6 +353,24 @@ TEST(PitchCalibration, RefusesAFrontalPhotographOfASmallArray) {
 
 // The measured pitch goes into the design file the rest of rfd reads: a hexagonal array's
 // one pitch, the rest of the file as it was.
+// A scale read less finely than 0.005 % (a small array at a turn where its lenslets read few
+// phases) is still given, and the report says how to read it finer; a fine one says nothing.
+TEST(PitchCalibration, SaysHowToReadAnUncertainScaleFiner) {
+    PitchCalibration calibration;
+    calibration.design_pitch_x = 4.0;
+    calibration.design_pitch_y = 4.8;
+    calibration.sigma_scale_x = 2e-5;
+    calibration.sigma_scale_y = 3e-5;
+    calibration.rotation_deg = {0.4};  // one photograph's turn, as calibrate_pitch gives it
+    calibration.sigma_rotation_deg = {0.002};
+    calibration.shear_deg = {0.0};
+    EXPECT_THAT(pitch_text(calibration, {PitchReading{}}), Not(HasSubstr("uncertain")));
+    calibration.sigma_scale_x = 9e-5;
+    const std::string text = pitch_text(calibration, {PitchReading{}});
+    EXPECT_THAT(text, HasSubstr("+- 0.0090 %"));
+    EXPECT_THAT(text, HasSubstr("uncertain beyond 0.005 %: turn the array a degree or two"));
+}
+
 TEST(PitchCalibration, WritesTheDesignWithTheMeasuredPitch) {
     const MoireFixture& f = moire_fixture();
     PitchCalibration calibration;
