@@ -4,6 +4,7 @@
 #include <cmath>
 #include <complex>
 #include <limits>
+#include <numeric>
 #include <numbers>
 
 #include <Eigen/Dense>
@@ -615,12 +616,17 @@ void fit_axis(AxisData& data, double offset, const Eigen::Vector2d& guess, doubl
 // dark around the array, and the band's lines beside it), the design's count_x x count_y
 // block of points read whole whose ring of points around it is darkest (the holder, where no
 // light comes through), each point in it brighter than a lenslet image can be (the bare
-// sheet: 1.4 times the 70th percentile of the readings that are not the holder's dark)
-// counting as ten rings' light. A hexagonal array's rows are
-// offset by half a pitch: its block is counted in columns i + floor(j / 2). InputError when
-// the region does not hold a whole block.
-void keep_the_array(std::vector<LensletReading>& lenslets, std::vector<Eigen::Vector2d>& labels,
-                    const Eigen::Matrix2d& design_basis, const optics::Lattice& lattice, const std::string& name) {
+// sheet, which reads about twice the brightest image: 1.4 times the 90th percentile of the
+// readings that are not the holder's dark) counting as ten rings' light. The graded lines
+// spread the images' light from none to full as a cosine: 1.4 times their 70th percentile
+// (0.79 of the brightest) fell below the brightest images once the light's falloff was
+// added, and pushed a block off their row onto the holder. A hexagonal array's rows are
+// offset by half a pitch: its block is counted in columns i + floor(j / 2). Returns the
+// indices of the block's points read (fewer than the array's lenslets when the region holds
+// no whole block).
+std::vector<std::size_t> array_block(const std::vector<LensletReading>& lenslets,
+                                     const std::vector<Eigen::Vector2d>& labels, const Eigen::Matrix2d& design_basis,
+                                     const optics::Lattice& lattice) {
     const bool hex = lattice.kind() == optics::LatticeKind::Hexagonal;
     std::vector<Eigen::Vector2i> cells;
     Eigen::Vector2i low = Eigen::Vector2i::Constant(std::numeric_limits<int>::max()), high = -low;
@@ -642,7 +648,7 @@ void keep_the_array(std::vector<LensletReading>& lenslets, std::vector<Eigen::Ve
     for (const LensletReading& l : lenslets)
         if (l.value >= kHolderDark * brightest) values.push_back(l.value);
     std::sort(values.begin(), values.end());
-    const double bright = 1.4 * values[static_cast<std::size_t>(0.7 * static_cast<double>(values.size() - 1))];
+    const double bright = 1.4 * values[static_cast<std::size_t>(0.9 * static_cast<double>(values.size() - 1))];
     const int width = lattice.count_x(), height = lattice.count_y();
     Eigen::Vector2i best(0, 0);
     double best_score = HUGE_VAL;
@@ -663,21 +669,13 @@ void keep_the_array(std::vector<LensletReading>& lenslets, std::vector<Eigen::Ve
                                  10.0 * static_cast<double>(too_bright);
             if (count > best_count || score < best_score) best_score = score, best = {i0, j0}, best_count = count;
         }
-    if (best_count < static_cast<std::size_t>(width) * static_cast<std::size_t>(height))
-        throw InputError(SourceLocation{name},
-                         format_text("the array's %d x %d lenslet images are not all in view in the darker region "
-                                     "(%zu found): photograph the whole array on the band, lit from behind",
-                                     width, height, best_count));
-    std::vector<LensletReading> kept;
-    std::vector<Eigen::Vector2d> kept_labels;
+    std::vector<std::size_t> kept;
     for (std::size_t k = 0; k < cells.size(); ++k)
         if (cells[k].x() >= best.x() && cells[k].x() < best.x() + width && cells[k].y() >= best.y() &&
             cells[k].y() < best.y() + height)
-            kept.push_back(lenslets[k]), kept_labels.push_back(labels[k]);
-    lenslets = std::move(kept);
-    labels = std::move(kept_labels);
+            kept.push_back(k);
+    return kept;
 }
-
 
 }  // namespace
 
@@ -790,6 +788,7 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
         std::vector<Eigen::Vector2d> labels;
         ImageLattice images;
         double core = 0.0, step = 0.0;
+        double spread = HUGE_VAL;  // the light varying inside the reading discs, against the light they read
     };
     // Reads the lenslet images on the lattice of `basis` (its reciprocal vectors the rows of
     // `reciprocal_rows`); a whole array's block of them.
@@ -827,57 +826,100 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
                 }
             return points;
         };
-        // The transform's phase places the lattice up to half a period along each basis vector
-        // (a lenslet image may be bright in the middle or at its rim, where images overlap). Of
-        // the four candidates, the one whose reading discs see single lenslets: their readings
-        // then differ most from one lenslet to the next (a disc across two mixes them). Sampled
-        // every 2.5 lenslets over a large array; over a whole small one, at every lenslet.
         const double core = kCoreFraction * std::min(images.basis.col(0).norm(),
                                                      std::abs(images.basis.determinant()) / images.basis.col(0).norm());
         const double step = std::max(where.mm_per_pixel, core / 8.0);
-        const int stride = std::max(1, static_cast<int>(std::lround(2.5 * px * kCoarsePixelsPerMm)));
-        double best_variation = -1.0;
-        for (const Eigen::Vector2d& shift : {Eigen::Vector2d(0, 0), Eigen::Vector2d(0.5, 0), Eigen::Vector2d(0, 0.5),
-                                            Eigen::Vector2d(0.5, 0.5)}) {
-            const Eigen::Vector2d origin = images.basis * (phases + shift);
-            double sum = 0.0, sum2 = 0.0;
-            int cells = 0;
-            const auto add = [&](const Eigen::Vector2d& at) {
-                const double mean = disc_statistics(luminance, where.page_to_photo, at, core, step).first;
-                if (std::isfinite(mean)) sum += mean, sum2 += mean * mean, ++cells;
-            };
-            if (whole)
-                for (const LatticePoint& point : points_in_region(origin)) add(point.at);
-            else
-                for (int y = y0; y <= y1; y += stride)
-                    for (int x = x0; x <= x1; x += stride)
-                        if (region[static_cast<std::size_t>(y) * static_cast<std::size_t>(coarse.image.width()) +
-                                   static_cast<std::size_t>(x)])
-                            add(origin + images.basis * (images.basis.inverse() * (coarse.page(x, y) - origin))
-                                                            .array()
-                                                            .round()
-                                                            .matrix());
-            if (cells < 2) continue;
-            const double mean = sum / cells, variation = (sum2 / cells - mean * mean) / (mean * mean);
-            if (variation > best_variation) best_variation = variation, images.origin = origin;
-        }
-
-        // Every lenslet image inside the region, read over its central part.
-        std::vector<Eigen::Vector2d> labels;
-        for (const LatticePoint& point : points_in_region(images.origin)) {
-                const Eigen::Vector2d at = point.at;
-                const double value = disc_statistics(luminance, where.page_to_photo, at, core, step).first;
-                if (!std::isfinite(value)) continue;
+        // Every lenslet image inside the region for a lattice origin, read over its central
+        // part; a whole array's block of them.
+        const auto read_images = [&](const Eigen::Vector2d& origin) {
+            LatticeReading found{start, {}, {images.basis, origin}, core, step};
+            std::vector<double> variances;
+            for (const LatticePoint& point : points_in_region(origin)) {
+                const auto [mean, variance] = disc_statistics(luminance, where.page_to_photo, point.at, core, step);
+                if (!std::isfinite(mean)) continue;
                 LensletReading l;
-                l.page = at;
-                l.value = value;
-                reading.lenslets.push_back(l);
-                labels.push_back(design_basis * Eigen::Vector2d(point.i, point.j));
+                l.page = point.at;
+                l.value = mean;
+                found.reading.lenslets.push_back(l);
+                found.labels.push_back(design_basis * Eigen::Vector2d(point.i, point.j));
+                variances.push_back(variance);
+            }
+            std::vector<std::size_t> kept(found.labels.size());
+            std::iota(kept.begin(), kept.end(), std::size_t{0});
+            if (whole && !kept.empty()) kept = array_block(found.reading.lenslets, found.labels, design_basis, lattice);
+            double variance = 0.0, light = 0.0;
+            std::vector<LensletReading> lenslets;
+            std::vector<Eigen::Vector2d> labels;
+            for (const std::size_t k : kept) {
+                variance += variances[k];
+                light += found.reading.lenslets[k].value * found.reading.lenslets[k].value;
+                lenslets.push_back(found.reading.lenslets[k]);
+                labels.push_back(found.labels[k]);
+            }
+            found.reading.lenslets = std::move(lenslets);
+            found.labels = std::move(labels);
+            if (light > 0.0) found.spread = variance / light;
+            return found;
+        };
+        // The transform's phase places the lattice up to half a period along each basis vector
+        // (a lenslet image may be bright in the middle or at its rim, where images overlap). Of
+        // the four candidates, the one whose reading discs see single lenslets: their readings
+        // then differ most from one lenslet to the next (a disc across two mixes them), sampled
+        // every 2.5 lenslets.
+        if (!whole) {
+            const int stride = std::max(1, static_cast<int>(std::lround(2.5 * px * kCoarsePixelsPerMm)));
+            double best_variation = -1.0;
+            for (const Eigen::Vector2d& shift : {Eigen::Vector2d(0, 0), Eigen::Vector2d(0.5, 0),
+                                                Eigen::Vector2d(0, 0.5), Eigen::Vector2d(0.5, 0.5)}) {
+                const Eigen::Vector2d origin = images.basis * (phases + shift);
+                double sum = 0.0, sum2 = 0.0;
+                int cells = 0;
+                for (int y = y0; y <= y1; y += stride)
+                    for (int x = x0; x <= x1; x += stride) {
+                        if (!region[static_cast<std::size_t>(y) * static_cast<std::size_t>(coarse.image.width()) +
+                                    static_cast<std::size_t>(x)])
+                            continue;
+                        const Eigen::Vector2d cell =
+                            (images.basis.inverse() * (coarse.page(x, y) - origin)).array().round().matrix();
+                        const double mean =
+                            disc_statistics(luminance, where.page_to_photo, origin + images.basis * cell, core, step)
+                                .first;
+                        if (std::isfinite(mean)) sum += mean, sum2 += mean * mean, ++cells;
+                    }
+                if (cells < 2) continue;
+                const double mean = sum / cells, variation = (sum2 / cells - mean * mean) / (mean * mean);
+                if (variation > best_variation) best_variation = variation, images.origin = origin;
+            }
+            LatticeReading found = read_images(images.origin);
+            if (found.labels.empty()) throw InputError(SourceLocation{name}, "no lenslet images found");
+            return found;
         }
-
-        if (reading.lenslets.empty()) throw InputError(SourceLocation{name}, "no lenslet images found");
-        if (whole) keep_the_array(reading.lenslets, labels, design_basis, lattice, name);
-        return LatticeReading{std::move(reading), std::move(labels), images, core, step};
+        // A whole small array's few images give the phase only roughly, and the graded lines
+        // make its lenslets' light differ as much as a disc across two does (a quarter of the
+        // hand-held placements of docs/results.md found no lattice that way): its origin is
+        // searched over the cell, a tenth and then a fiftieth of it apart, for the block of
+        // discs that see the least light varying inside them against the light they read (a
+        // lenslet image is evenly lit; a disc across two sees an edge).
+        LatticeReading best{start, {}, images, core, step};
+        const std::size_t count = static_cast<std::size_t>(lattice.count_x()) * static_cast<std::size_t>(lattice.count_y());
+        const auto search = [&](const Eigen::Vector2d& around, double spacing, int reach) {
+            Eigen::Vector2d best_shift = around;
+            for (int a = -reach; a <= reach; ++a)
+                for (int b = -reach; b <= reach; ++b) {
+                    const Eigen::Vector2d shift = around + spacing * Eigen::Vector2d(a, b);
+                    LatticeReading found = read_images(images.basis * shift);
+                    if (found.labels.size() == count && (best.labels.size() < count || found.spread < best.spread))
+                        best = std::move(found), best_shift = shift;
+                }
+            return best_shift;
+        };
+        search(search(phases, 0.1, 5), 0.02, 4);
+        if (best.labels.size() < count)
+            throw InputError(SourceLocation{name},
+                             format_text("the array's %d x %d lenslet images are not all in view in the darker region "
+                                         "(%zu found): photograph the whole array on the band, lit from behind",
+                                         lattice.count_x(), lattice.count_y(), best.labels.size()));
+        return best;
     };
     // Fits the bands' lines to the lenslets read.
     const auto fit_lattice = [&](LatticeReading found) {
@@ -968,13 +1010,7 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
         const Eigen::Matrix2d basis = kappa * Eigen::Rotation2Dd(turn).toRotationMatrix() * page_basis;
         try {
             LatticeReading candidate = read_lattice(basis, basis.inverse());
-            double variance = 0.0, light = 0.0;
-            for (const LensletReading& l : candidate.reading.lenslets) {
-                const auto [mean, spread] =
-                    disc_statistics(luminance, where.page_to_photo, l.page, candidate.core, candidate.step);
-                variance += spread, light += mean * mean;
-            }
-            candidates.emplace_back(light > 0.0 ? variance / light : HUGE_VAL, std::move(candidate));
+            candidates.emplace_back(candidate.spread, std::move(candidate));
         } catch (const InputError& e) {
             if (!first_error) first_error = e;
         }

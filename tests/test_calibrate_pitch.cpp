@@ -278,9 +278,8 @@ TEST(PitchCalibration, ReadsASmallArrayLaidWholeOnEachBand) {
 
 // Over eight arrays (pitch error, turn, placement up to 2.3 mm off the band's middle, and
 // pose each different): each pair read within 0.01 % along both axes (the target)
-// and four stated uncertainties, or refused because the lattice of lenslet images it found
-// does not fit the lines (3 of the 8: the array laid down again reads, docs/results.md),
-// never a number outside the target.
+// and four stated uncertainties. Three of them were refused while the lattice's origin was
+// taken from the spectrum's phase (the discs then straddled two images).
 TEST(PitchAccuracy, ASmallArrayOverPlacementsAndPoses) {
     struct Case {
         double pitch_error, rotation_deg;
@@ -290,22 +289,14 @@ TEST(PitchAccuracy, ASmallArrayOverPlacementsAndPoses) {
                                      {-0.002, 1.0, {-0.21, 0.11}}, {0.0015, 1.0, {0.07, -0.29}},
                                      {0.002, 0.3, {-0.37, -0.05}}, {-0.001, 0.7, {0.45, 0.41}},
                                      {0.0005, -0.8, {1.6, -1.6}},  {0.001, 0.4, {-0.5, 0.3}}};
-    int checked = 0, refused = 0;
+    int checked = 0;
     for (std::size_t k = 0; k < cases.size(); ++k) {
         const Case& c = cases[k];
         Camera phone = rfd::testing::hand_held(frontal_camera());
         phone.seed = 11 + k;
         phone.pose.tilt_deg = 25.0 + 2.0 * static_cast<double>(k % 4);
         phone.pose.turn_deg = k % 2 ? 20.0 : -15.0;
-        std::vector<PitchReading> readings;
-        try {
-            readings = small_array_readings(phone, c.shift, c.pitch_error, c.rotation_deg);
-        } catch (const InputError& e) {
-            std::printf("array %zu: refused: %s\n", k, e.what());
-            EXPECT_THAT(e.what(), HasSubstr("lay the array down again")) << k;
-            ++refused;
-            continue;
-        }
+        const std::vector<PitchReading> readings = small_array_readings(phone, c.shift, c.pitch_error, c.rotation_deg);
         const PitchCalibration r = calibrate_pitch(small_array_fixture().design, readings);
         const double error_x = r.scale_x - (1.0 + c.pitch_error), error_y = r.scale_y - (1.0 + c.pitch_error);
         std::printf("array %zu: pitch %+.4f %% (+- %.4f), rows %+.4f %% (+- %.4f), turn %+.4f %+.4f deg\n", k,
@@ -318,8 +309,7 @@ TEST(PitchAccuracy, ASmallArrayOverPlacementsAndPoses) {
         for (const double turn : r.rotation_deg) EXPECT_LT(std::abs(turn - c.rotation_deg), 0.02) << k;
         ++checked;
     }
-    EXPECT_EQ(checked + refused, 8);
-    EXPECT_LE(refused, 3);
+    EXPECT_EQ(checked, 8);
 }
 
 // An array laid off the middle of its band, photographed from the side it lies toward: many
@@ -342,6 +332,27 @@ TEST(PitchCalibration, FindsASmallArrayBesideItsHoldersDark) {
     EXPECT_EQ(readings[1].y.lenslets, 30);
     EXPECT_LT(std::abs(r.scale_x - (1.0 - 0.0015)), 4 * r.sigma_scale_x);
     EXPECT_LT(std::abs(r.scale_y - (1.0 - 0.0015)), 4 * r.sigma_scale_y);
+}
+
+// The graded lines spread the lenslet images' light from none to full, and the light falls
+// off across the photograph: judged from the 70th percentile of the light, the brightest
+// images counted as bare sheet and the block slid a row onto the holder (study turn -0.3 deg
+// of docs/results.md, refused).
+TEST(PitchCalibration, KeepsTheArraysBrightestImagesInItsBlock) {
+    Camera phone = framing_camera(small_array_fixture().printer.paper, 520.0, 0.78, 4000);
+    phone.pose.tilt_deg = 28.0;
+    phone.pose.turn_deg = -150.0;
+    phone.pose.roll_deg = 4.0;
+    phone.blur = 1.2;
+    phone.vignetting = 0.3;
+    phone.photons = 2500.0;
+    phone.seed = 3;
+    const std::vector<PitchReading> readings = small_array_readings(phone, {0.8, -0.6}, 0.0007, -0.3);
+    const PitchCalibration r = calibrate_pitch(small_array_fixture().design, readings);
+    EXPECT_LT(std::abs(r.scale_x - 1.0007), 1e-4);
+    EXPECT_LT(std::abs(r.scale_y - 1.0007), 1e-4);
+    EXPECT_LT(std::abs(r.scale_x - 1.0007), 4 * r.sigma_scale_x);
+    EXPECT_LT(std::abs(r.scale_y - 1.0007), 4 * r.sigma_scale_y);
 }
 
 // A frontal photograph cannot tell the camera's height, which the small array's reading
