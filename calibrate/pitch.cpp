@@ -991,7 +991,32 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
             if (band.page == page) ++(band.along_x ? reading.x.bands : reading.y.bands);
         return reading;
     };
-    if (!whole) return fit_lattice(read_lattice(reciprocal.inverse(), reciprocal));
+    if (!whole) {
+        PitchReading reading = fit_lattice(read_lattice(reciprocal.inverse(), reciprocal));
+        if (reading.x.lenslets == 0 || reading.y.lenslets == 0) return reading;
+        // The lenslet images' lattice is the array's magnified about the camera's foot, the
+        // same shape as the lattice the lines measure; where a reading disc lies in its image
+        // moves the phase it reads, so discs placed on a lattice that departs from it drift
+        // across the images and bias the scale. With the sun 28-30 deg off the axis or a
+        // hand-held photograph unevenly lit, the spectrum's lattice departed 0.06-0.23 % and
+        // the row spacing read 0.015-0.044 % off at +-0.001 % (docs/results.md); the scale moved
+        // by up to half the departure. In good photographs it departs at most 0.04 %
+        // (kLatticeMismatchNoise): beyond that, each scale's uncertainty grows by the excess.
+        Eigen::Matrix2d normals, rows;
+        normals << std::cos(reading.x.normal_angle), std::sin(reading.x.normal_angle),
+            std::cos(reading.y.normal_angle), std::sin(reading.y.normal_angle);
+        rows << reading.x.row.transpose(), reading.y.row.transpose();
+        const Eigen::Matrix2d shape = reciprocal.inverse() * (normals.inverse() * rows * design_basis).inverse();
+        const Eigen::Vector2d stretch = Eigen::JacobiSVD<Eigen::Matrix2d>(shape).singularValues();
+        reading.lattice_mismatch = stretch(0) / stretch(1) - 1.0;
+        const double excess = reading.lattice_mismatch - kLatticeMismatchNoise;
+        if (excess > 0.0)
+            for (AxisFit* fit : {&reading.x, &reading.y}) {
+                const Eigen::Vector2d along = fit->row.normalized();
+                fit->row_covariance += std::pow(excess * fit->row.norm(), 2) * along * along.transpose();
+            }
+        return reading;
+    }
     // A whole small array's few lenslet images give the spectrum broad peaks, which the
     // moire's modulation of their brightness pulls aside: its turn came out up to 3 deg off in
     // hand-held photographs, enough for the reading discs of the outer lenslets to straddle two

@@ -96,7 +96,17 @@ struct PitchReading {
     double mm_per_pixel = 0.0;
     AxisFit x, y;
     std::vector<LensletReading> lenslets;
+    /// A large array read on both bands: how far the lattice of its lenslet images departs
+    /// from the shape the lines measure (the larger over the smaller stretch, minus one). The
+    /// two are one lattice (the images magnified about the camera's foot); a departure means
+    /// the reading discs drift across the images (read_pitch_photo).
+    double lattice_mismatch = 0.0;
 };
+
+/// The most a large array's lenslet images' lattice departed from the lines' shape in good
+/// simulated photographs (0.040 % at 60 deg of tilt; docs/results.md): beyond it the reading's
+/// scale uncertainties grow by the excess.
+inline constexpr double kLatticeMismatchNoise = 4e-4;
 
 /// InputError naming the design file when its array is too small for the measuring bands:
 /// fewer than 24 lenslets (twice the fit's parameters; the hypothesis bands read by eye serve

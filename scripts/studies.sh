@@ -151,6 +151,8 @@ pitch_case() {  # NAME CAMERA_PIXELS SIMULATE ARGS...
   for blur in 2 4 8; do pitch_case "blur_$blur" 3000 --blur "$blur" --photons 3000; done
   for photons in 30 100 300; do pitch_case "photons_$photons" 3000 --blur 1 --photons "$photons"; done
   for sun in 10 20 25 28 30; do pitch_case "sun_$sun" 3000 --light-tilt "$sun" --light-turn 40 --blur 1 --photons 3000; done
+  pitch_case hand_uneven 3000 --camera-tilt 30 --camera-turn 50 --blur 1.5 --vignetting 0.35 --photons 2000 \
+    --light-tilt 10 --light-turn 120
   for pixels in 2000 1500 1000; do pitch_case "pixels_$pixels" "$pixels" --blur 1 --photons 3000; done
   pitch_case shifted_20mm 3000 --array-shift 0,-20 --blur 1 --photons 3000
   pitch_case off_the_bands 3000 --array-shift 0,150 --blur 1 --photons 3000
