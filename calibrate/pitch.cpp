@@ -782,12 +782,11 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
     for (int i = 0; i < 2; ++i)
         reciprocal.row(i) = strongest_frequency(spectrum, nominal_reciprocal.row(i).transpose(), extent).transpose();
     // The lenslet images read on a lattice: the readings, their labels in the design's array
-    // frame, the lattice, and the reading discs' radius and sampling step.
+    // frame, the lattice, and how evenly lit the reading discs are.
     struct LatticeReading {
         PitchReading reading;
         std::vector<Eigen::Vector2d> labels;
         ImageLattice images;
-        double core = 0.0, step = 0.0;
         double spread = HUGE_VAL;  // the light varying inside the reading discs, against the light they read
     };
     // Reads the lenslet images on the lattice of `basis` (its reciprocal vectors the rows of
@@ -832,7 +831,7 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
         // Every lenslet image inside the region for a lattice origin, read over its central
         // part; a whole array's block of them.
         const auto read_images = [&](const Eigen::Vector2d& origin) {
-            LatticeReading found{start, {}, {images.basis, origin}, core, step};
+            LatticeReading found{start, {}, {images.basis, origin}};
             std::vector<double> variances;
             for (const LatticePoint& point : points_in_region(origin)) {
                 const auto [mean, variance] = disc_statistics(luminance, where.page_to_photo, point.at, core, step);
@@ -900,7 +899,7 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
         // searched over the cell, a tenth and then a fiftieth of it apart, for the block of
         // discs that see the least light varying inside them against the light they read (a
         // lenslet image is evenly lit; a disc across two sees an edge).
-        LatticeReading best{start, {}, images, core, step};
+        LatticeReading best{start, {}, images};
         const std::size_t count = static_cast<std::size_t>(lattice.count_x()) * static_cast<std::size_t>(lattice.count_y());
         const auto search = [&](const Eigen::Vector2d& around, double spacing, int reach) {
             Eigen::Vector2d best_shift = around;
@@ -1027,15 +1026,14 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
     // read (a lenslet image is evenly lit; a disc across two sees an edge).
     const Eigen::Matrix2d spectrum_basis = reciprocal.inverse();
     const double spectrum_turn = std::atan2(spectrum_basis(1, 0), spectrum_basis(0, 0));
-    std::vector<std::pair<double, LatticeReading>> candidates;  // (spread, lattice read)
+    std::vector<LatticeReading> candidates;
     std::optional<InputError> first_error;
     for (int k = 0; k <= 2 * kWholeTurnSteps; ++k) {
         const int steps = (k + 1) / 2 * (k % 2 ? 1 : -1);  // 0, +1, -1, +2, ...
         const double turn = spectrum_turn + degrees_to_radians(kWholeTurnStepDeg * steps);
         const Eigen::Matrix2d basis = kappa * Eigen::Rotation2Dd(turn).toRotationMatrix() * page_basis;
         try {
-            LatticeReading candidate = read_lattice(basis, basis.inverse());
-            candidates.emplace_back(candidate.spread, std::move(candidate));
+            candidates.push_back(read_lattice(basis, basis.inverse()));
         } catch (const InputError& e) {
             if (!first_error) first_error = e;
         }
@@ -1043,9 +1041,9 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
     // The lattices in the order of how well their discs see single images; the first whose
     // readings fit the lines is kept.
     std::stable_sort(candidates.begin(), candidates.end(),
-                     [](const auto& a, const auto& b) { return a.first < b.first; });
+                     [](const LatticeReading& a, const LatticeReading& b) { return a.spread < b.spread; });
     std::optional<InputError> fit_error;
-    for (auto& [spread, candidate] : candidates) {
+    for (LatticeReading& candidate : candidates) {
         try {
             PitchReading reading = fit_lattice(std::move(candidate));
             // The reading discs placed again, on the lattice of the array the lines measured: its
