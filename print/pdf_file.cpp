@@ -51,6 +51,18 @@ void PdfFile::finish() {
     temporary_.release();
 }
 
+CairoContext page_context(cairo_surface_t* surface) {
+    CairoContext cr(cairo_create(surface), &cairo_destroy);
+    RFD_CHECK(cairo_status(cr.get()) == CAIRO_STATUS_SUCCESS);
+    std::unique_ptr<cairo_font_options_t, decltype(&cairo_font_options_destroy)> options(
+        cairo_font_options_create(), &cairo_font_options_destroy);
+    cairo_font_options_set_antialias(options.get(), CAIRO_ANTIALIAS_GRAY);
+    cairo_font_options_set_hint_style(options.get(), CAIRO_HINT_STYLE_NONE);
+    cairo_font_options_set_hint_metrics(options.get(), CAIRO_HINT_METRICS_OFF);
+    cairo_set_font_options(cr.get(), options.get());
+    return cr;
+}
+
 CairoSurface code_row(const std::vector<int>& codes) {
     CairoSurface row(cairo_image_surface_create(CAIRO_FORMAT_RGB24, static_cast<int>(codes.size()), 1),
                      &cairo_surface_destroy);
@@ -73,7 +85,7 @@ CairoSurface paint_page(double paper_width_mm, double paper_height_mm, double px
     const int height = std::max(1, static_cast<int>(std::lround(paper_height_mm * px_per_mm)));
     CairoSurface page(cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height), &cairo_surface_destroy);
     {
-        std::unique_ptr<cairo_t, decltype(&cairo_destroy)> cr(cairo_create(page.get()), &cairo_destroy);
+        const CairoContext cr = page_context(page.get());
         cairo_set_source_rgb(cr.get(), 1, 1, 1);
         cairo_paint(cr.get());
         cairo_scale(cr.get(), px_per_mm, px_per_mm);
@@ -117,7 +129,7 @@ void write_pages(const std::filesystem::path& out, const Paper& paper, int pages
     constexpr double kPointsPerMm = 72.0 / kMillimetresPerInch;
     PdfFile pdf(out, paper.width * kPointsPerMm, paper.height * kPointsPerMm, what);
     {
-        std::unique_ptr<cairo_t, decltype(&cairo_destroy)> cr(cairo_create(pdf.surface()), &cairo_destroy);
+        const CairoContext cr = page_context(pdf.surface());
         cairo_scale(cr.get(), kPointsPerMm, kPointsPerMm);
         for (int page = 0; page < pages; ++page) {
             draw(cr.get(), page);

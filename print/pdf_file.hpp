@@ -47,6 +47,13 @@ private:
 };
 
 using CairoSurface = std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)>;
+using CairoContext = std::unique_ptr<cairo_t, decltype(&cairo_destroy)>;
+
+/// A context drawing on `surface` (a PDF's or a picture's) whose text has fixed font options:
+/// grey anti-aliasing, no hinting, unhinted metrics. Cairo resolves a font face once per
+/// process, with the options of the first surface that draws it, and keeps them for every
+/// later one; fixed options make a page's picture the same whatever was drawn before it.
+CairoContext page_context(cairo_surface_t* surface);
 
 /// An image one pixel tall holding `codes` (0-255, the same on every channel): exact printer
 /// codes for a page to draw without smoothing (CAIRO_FILTER_NEAREST), as sheets draw patterns.

@@ -25,8 +25,6 @@
 namespace rfd::print {
 namespace {
 
-using SurfacePtr = std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)>;
-using ContextPtr = std::unique_ptr<cairo_t, decltype(&cairo_destroy)>;
 
 constexpr int kMaskChunk = 8192;  // columns of one Cairo mask surface (Cairo stops at 32767)
 
@@ -68,9 +66,8 @@ private:
                static_cast<std::size_t>(x);
     }
     void render_chunk(int x0, int y0, int width, bool clear) {
-        SurfacePtr surface(cairo_image_surface_create(CAIRO_FORMAT_A8, width, rows_), &cairo_surface_destroy);
-        ContextPtr cr(cairo_create(surface.get()), &cairo_destroy);
-        RFD_CHECK(cairo_status(cr.get()) == CAIRO_STATUS_SUCCESS);
+        CairoSurface surface(cairo_image_surface_create(CAIRO_FORMAT_A8, width, rows_), &cairo_surface_destroy);
+        const CairoContext cr = page_context(surface.get());
         // User units: page-frame mm; device: dots of this chunk.
         cairo_matrix_t m;
         cairo_matrix_init(&m, 1.0 / layout_.dot_x, 0.0, 0.0, 1.0 / layout_.dot_y, -x0, -y0);
@@ -187,7 +184,7 @@ void write_pdf(const std::filesystem::path& out, const SheetLayout& layout, cons
     PdfFile pdf(out, layout.paper.width * kPointsPerMm, layout.paper.height * kPointsPerMm, "sheet");
     {
         cairo_pdf_surface_set_metadata(pdf.surface(), CAIRO_PDF_METADATA_TITLE, layout.label.front().c_str());
-        ContextPtr cr(cairo_create(pdf.surface()), &cairo_destroy);
+        const CairoContext cr = page_context(pdf.surface());
         cairo_scale(cr.get(), kPointsPerMm, kPointsPerMm);  // user units: page-frame mm
         if (layout.mirror) {
             cairo_translate(cr.get(), layout.paper.width, 0.0);
@@ -206,7 +203,7 @@ void write_pdf(const std::filesystem::path& out, const SheetLayout& layout, cons
         Progress progress("sheet rows", static_cast<std::size_t>(g.height));
         for (int ty = 0; ty < g.height; ty += kPdfTile) {
             const int th = std::min(kPdfTile + overlap_y, g.height - ty);  // rows with the overlap
-            std::vector<SurfacePtr> tiles;
+            std::vector<CairoSurface> tiles;
             std::vector<int> tile_x;
             for (int tx = 0; tx < g.width; tx += kPdfTile) {
                 tiles.emplace_back(cairo_image_surface_create(CAIRO_FORMAT_RGB24, std::min(kPdfTile + overlap_x, g.width - tx), th),
@@ -274,7 +271,7 @@ void write_preview(const std::filesystem::path& png, const SheetLayout& layout, 
     const int ph = std::clamp(static_cast<int>(std::lround((hi.y() - lo.y()) * px_per_mm)), 1, layout.pattern.height);
     const Image pattern = patterns::box_averaged(pattern_file, pw, ph);
 
-    SurfacePtr picture(cairo_image_surface_create(CAIRO_FORMAT_RGB24, pw, ph), &cairo_surface_destroy);
+    CairoSurface picture(cairo_image_surface_create(CAIRO_FORMAT_RGB24, pw, ph), &cairo_surface_destroy);
     cairo_surface_flush(picture.get());
     std::vector<float> values(static_cast<std::size_t>(pw) * static_cast<std::size_t>(pattern.channels()));
     std::vector<float> codes(3 * static_cast<std::size_t>(pw));

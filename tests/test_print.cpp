@@ -932,6 +932,53 @@ TEST(Moire, InkedIsWhereTheLinesAre) {
     EXPECT_EQ(checked, 18);
 }
 
+// Cairo resolves a font face once per process, with the font options of the first surface
+// that draws it (a PDF's: no hinting), and keeps them for every later surface. The sheet's
+// labels must rasterise the same whatever was drawn before, or a simulated photograph of the
+// sheet depends on which tests (or which of rfd make's steps) ran before it in the process.
+// The reference picture is drawn in a fresh process (a death test re-executes the binary);
+// this one draws a PDF first, as the CLI does.
+TEST(PageText, APagesPictureIsTheSameWhateverWasDrawnBefore) {
+    TempDir dir;
+    const optics::Design design = bundled_design(1);
+    const PrinterProfile printer = load_printer("epson_stylus_pro_4800");
+    const MoireOptions options{default_pitch_range(design)};
+    const MoireSheet sheet = moire_sheet(design, printer, options);
+    constexpr double kPxPerMm = 12.0;
+    const auto picture = [&] { return moire_page_codes(sheet, design, printer, 0, kPxPerMm); };
+    // The child runs this body again up to EXPECT_EXIT: it keeps its parent's file name.
+    constexpr const char* kFreshFile = "RFD_TEST_FRESH_PICTURE";
+    if (!std::getenv(kFreshFile)) ::setenv(kFreshFile, (dir / "fresh.f32").c_str(), 1);
+    const std::filesystem::path fresh_file = std::getenv(kFreshFile);
+    GTEST_FLAG_SET(death_test_style, "threadsafe");
+    EXPECT_EXIT(
+        {
+            const Image fresh = picture();
+            const std::span<const float> codes = fresh.plane(0);
+            std::ofstream(fresh_file, std::ios::binary)
+                .write(reinterpret_cast<const char*>(codes.data()), static_cast<std::streamsize>(codes.size_bytes()));
+            std::filesystem::remove_all(dir.path());  // the child's own; exit runs no destructor
+            std::exit(0);
+        },
+        ::testing::ExitedWithCode(0), "");
+    ::unsetenv(kFreshFile);
+    write_moire_pdf(dir / "calib.pdf", design, printer, options);
+    const Image after_pdf_picture = picture();
+    const std::span<const float> after_pdf = after_pdf_picture.plane(0);
+    std::ifstream in(fresh_file, std::ios::binary);
+    std::vector<float> fresh(after_pdf.size());
+    in.read(reinterpret_cast<char*>(fresh.data()), static_cast<std::streamsize>(fresh.size() * sizeof(float)));
+    ASSERT_TRUE(in) << "the fresh process wrote no picture";
+    // The page is inked (grey edges: anti-aliased), and every pixel is the same.
+    long long grey = 0, differing = 0;
+    for (std::size_t k = 0; k < fresh.size(); ++k) {
+        grey += fresh[k] > 0.05f && fresh[k] < 0.95f;
+        differing += fresh[k] != after_pdf[k];
+    }
+    EXPECT_GT(grey, 1000);
+    EXPECT_EQ(differing, 0);
+}
+
 TEST(Moire, BandsForEveryHypothesisOnPaperSizedPages) {
     TempDir dir;
     const optics::Design design = bundled_design(1);
