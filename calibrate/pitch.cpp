@@ -896,9 +896,11 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
         // A whole small array's few images give the phase only roughly, and the graded lines
         // make its lenslets' light differ as much as a disc across two does (a quarter of the
         // hand-held placements of docs/results.md found no lattice that way): its origin is
-        // searched over the cell, a tenth and then a fiftieth of it apart, for the block of
-        // discs that see the least light varying inside them against the light they read (a
-        // lenslet image is evenly lit; a disc across two sees an edge).
+        // searched over the cell, a fifth, a twentieth and a fiftieth of it apart, each around
+        // the best of the one before, for the block of discs that see the least light varying
+        // inside them against the light they read (a lenslet image is evenly lit; a disc across
+        // two sees an edge). A disc of 0.3 of a cell sees a single image over about 0.4 of it,
+        // wider than the first spacing.
         LatticeReading best{start, {}, images};
         const std::size_t count = static_cast<std::size_t>(lattice.count_x()) * static_cast<std::size_t>(lattice.count_y());
         const auto search = [&](const Eigen::Vector2d& around, double spacing, int reach) {
@@ -912,7 +914,7 @@ PitchReading read_pitch_photo(const Image& photo, const std::string& name, const
                 }
             return best_shift;
         };
-        search(search(phases, 0.1, 5), 0.02, 4);
+        search(search(search(phases, 0.2, 2), 0.05, 2), 0.02, 1);
         if (best.labels.size() < count)
             throw InputError(SourceLocation{name},
                              format_text("the array's %d x %d lenslet images are not all in view in the darker region "
