@@ -89,6 +89,11 @@ struct AxisFit {
     std::vector<double> profile;  ///< G at 64 phases over one period
 };
 
+/// The most a large array's lenslet images' lattice departed from the lines' shape in good
+/// simulated photographs (0.040 % at 60 deg of tilt; docs/results.md): beyond it the reading's
+/// scale uncertainties grow by the excess.
+inline constexpr double kLatticeMismatchNoise = 4e-4;
+
 /// What one photograph says.
 struct PitchReading {
     std::string name;
@@ -101,12 +106,10 @@ struct PitchReading {
     /// two are one lattice (the images magnified about the camera's foot); a departure means
     /// the reading discs drift across the images (read_pitch_photo).
     double lattice_mismatch = 0.0;
-};
 
-/// The most a large array's lenslet images' lattice departed from the lines' shape in good
-/// simulated photographs (0.040 % at 60 deg of tilt; docs/results.md): beyond it the reading's
-/// scale uncertainties grow by the excess.
-inline constexpr double kLatticeMismatchNoise = 4e-4;
+    /// The reading discs drift across the images: the departure is beyond good photographs'.
+    bool discs_drift() const { return lattice_mismatch > kLatticeMismatchNoise; }
+};
 
 /// InputError naming the design file when its array is too small for the measuring bands:
 /// fewer than 24 lenslets (twice the fit's parameters; the hypothesis bands read by eye serve

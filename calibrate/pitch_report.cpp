@@ -52,7 +52,7 @@ std::string pitch_text(const PitchCalibration& calibration, const std::vector<Pi
                                "residual %.2f %%\n",
                                fit->along_x ? "x" : "row", fit->lenslets, fit->bands, fit->outliers, fit->contrast,
                                100.0 * fit->rms);
-        if (r.lattice_mismatch > kLatticeMismatchNoise)
+        if (r.discs_drift())
             out += format_text("  the lenslet images' lattice is %.3f %% out of the shape the lines measure (the "
                                "reading discs drift across the images; the uncertainty includes it)\n",
                                100.0 * r.lattice_mismatch);
@@ -69,9 +69,8 @@ std::string pitch_text(const PitchCalibration& calibration, const std::vector<Pi
     // Where the lenslets read few of the lines' phases (a small array at some turns) the scale
     // is still given, with its larger uncertainty, and how to read it finer.
     constexpr double kFineScale = 5e-5;
-    const bool drifting = std::any_of(readings.begin(), readings.end(), [](const PitchReading& r) {
-        return r.lattice_mismatch > kLatticeMismatchNoise;
-    });
+    const bool drifting =
+        std::any_of(readings.begin(), readings.end(), [](const PitchReading& r) { return r.discs_drift(); });
     if (std::max(calibration.sigma_scale_x, calibration.sigma_scale_y) > kFineScale)
         out += drifting ? "uncertain beyond 0.005 %: photograph the sheet again with the sun behind the display, "
                           "within 20 deg of its axis, the display evenly lit, and give all the photographs\n"

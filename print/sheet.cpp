@@ -25,7 +25,6 @@
 namespace rfd::print {
 namespace {
 
-
 constexpr int kMaskChunk = 8192;  // columns of one Cairo mask surface (Cairo stops at 32767)
 
 // Printer codes (1 - v, three channels) of one pattern row of `channels` channels.
