@@ -2,6 +2,7 @@
 
 #include "optics/analysis.hpp"
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -21,49 +22,103 @@ namespace rfd::cli {
 
 namespace {
 
-double parse_number(const std::string& text, const std::string& light, const char* what) {
+double parse_number(const std::string& text, const std::string& light, const char* what, const char* option,
+                    const char* syntax) {
     const std::optional<double> value = finite_number(text);
     if (!value)
-        throw InputError("--light '" + light + "': " + what + " '" + text + "' is not a number; expected " +
-                         kLightSyntax);
+        throw InputError(std::string(option) + " '" + light + "': " + what + " '" + text +
+                         "' is not a number; expected " + syntax);
     return *value;
+}
+
+// A light's text split at its commas, its colour (a last part R:G:B) taken off.
+struct LightParts {
+    std::vector<std::string> numbers;
+    Eigen::Vector3d colour = Eigen::Vector3d::Ones();
+};
+
+LightParts split_light(const std::string& text, const char* option, const char* syntax) {
+    LightParts parts;
+    std::stringstream stream(text);
+    for (std::string part; std::getline(stream, part, ',');) parts.numbers.push_back(part);
+    if (!text.empty() && text.back() == ',') parts.numbers.emplace_back();
+    if (parts.numbers.size() >= 3 && parts.numbers.back().find(':') != std::string::npos) {
+        std::vector<std::string> channels;
+        std::stringstream colour_stream(parts.numbers.back());
+        for (std::string c; std::getline(colour_stream, c, ':');) channels.push_back(c);
+        if (channels.size() != 3)
+            throw InputError(std::string(option) + " '" + text + "': colour '" + parts.numbers.back() +
+                             "' must be R:G:B");
+        for (int c = 0; c < 3; ++c) {
+            parts.colour[c] = parse_number(channels[static_cast<std::size_t>(c)], text, "colour channel", option, syntax);
+            if (parts.colour[c] < 0.0)
+                throw InputError(std::string(option) + " '" + text + "': colour channels must be >= 0");
+        }
+        parts.numbers.pop_back();
+    }
+    return parts;
+}
+
+// The light toward unit `direction`, a disc when `radius` (degrees, "deg" allowed after it)
+// is given.
+relight::Light light_toward(const Eigen::Vector3d& direction, const std::string* radius, const Eigen::Vector3d& colour,
+                            const std::string& text, const char* option, const char* syntax) {
+    if (radius == nullptr) return relight::DirectionalLight{direction, colour};
+    std::string number = *radius;
+    if (number.size() > 3 && number.ends_with("deg")) number.resize(number.size() - 3);
+    const double degrees = parse_number(number, text, "RADIUS", option, syntax);
+    if (!(degrees > 0.0 && degrees <= 90.0))
+        throw InputError(std::string(option) + " '" + text + "': RADIUS must be within (0, 90] degrees, got " + *radius);
+    return relight::DiskLight{direction, degrees_to_radians(degrees), colour};
 }
 
 }  // namespace
 
 relight::Light parse_light(const std::string& text) {
-    std::vector<std::string> parts;
-    std::stringstream stream(text);
-    for (std::string part; std::getline(stream, part, ',');) parts.push_back(part);
-    if (!text.empty() && text.back() == ',') parts.emplace_back();
-    Eigen::Vector3d colour = Eigen::Vector3d::Ones();
-    if (parts.size() >= 3 && parts.back().find(':') != std::string::npos) {
-        std::vector<std::string> channels;
-        std::stringstream colour_stream(parts.back());
-        for (std::string c; std::getline(colour_stream, c, ':');) channels.push_back(c);
-        if (channels.size() != 3)
-            throw InputError("--light '" + text + "': colour '" + parts.back() + "' must be R:G:B");
-        for (int c = 0; c < 3; ++c) {
-            colour[c] = parse_number(channels[static_cast<std::size_t>(c)], text, "colour channel");
-            if (colour[c] < 0.0) throw InputError("--light '" + text + "': colour channels must be >= 0");
-        }
-        parts.pop_back();
-    }
-    if (parts.size() < 2 || parts.size() > 3)
+    const LightParts parts = split_light(text, "--light", kLightSyntax);
+    const std::vector<std::string>& numbers = parts.numbers;
+    if (numbers.size() < 2 || numbers.size() > 3)
         throw InputError("--light '" + text + "': expected " + kLightSyntax);
-    const double theta = parse_number(parts[0], text, "THETA");
-    const double phi = parse_number(parts[1], text, "PHI");
+    const double theta = parse_number(numbers[0], text, "THETA", "--light", kLightSyntax);
+    const double phi = parse_number(numbers[1], text, "PHI", "--light", kLightSyntax);
+    if (numbers.size() == 3 && !numbers[2].ends_with("deg")) {
+        // An .lp line's x,y,z pasted reads as a tiny disc near the zenith: refuse the guess.
+        const std::optional<double> third = finite_number(numbers[2]);
+        const Eigen::Vector3d xyz(theta, phi, third.value_or(0.0));
+        if (third && xyz.cwiseAbs().maxCoeff() <= 1.0 && std::abs(xyz.norm() - 1.0) < 0.1)
+            throw InputError("--light '" + text + "' reads as THETA " + numbers[0] + ", PHI " + numbers[1] +
+                             " degrees and a disc of " + numbers[2] +
+                             " degrees, but looks like a unit direction X,Y,Z (a light file's numbers): give a "
+                             "direction as --light-dir " + text + "; for that disc, write its radius as " +
+                             numbers[2] + "deg");
+    }
     if (theta < 0.0 || theta > 90.0)
         throw InputError("--light '" + text + "': THETA must be within [0, 90] degrees from the zenith "
-                         "(the field covers the upper hemisphere), got " + parts[0]);
+                         "(the field covers the upper hemisphere), got " + numbers[0]);
     const Eigen::Vector3d direction = direction_from_angles(degrees_to_radians(theta), degrees_to_radians(phi));
-    if (parts.size() == 2) return relight::DirectionalLight{direction, colour};
-    const double radius = parse_number(parts[2], text, "RADIUS");
-    if (!(radius > 0.0 && radius <= 90.0))
-        throw InputError("--light '" + text + "': RADIUS must be within (0, 90] degrees, got " + parts[2]);
-    return relight::DiskLight{direction, degrees_to_radians(radius), colour};
+    return light_toward(direction, numbers.size() == 3 ? &numbers[2] : nullptr, parts.colour, text, "--light",
+                        kLightSyntax);
 }
 
+relight::Light parse_light_direction(const std::string& text) {
+    const LightParts parts = split_light(text, "--light-dir", kLightDirectionSyntax);
+    const std::vector<std::string>& numbers = parts.numbers;
+    if (numbers.size() < 3 || numbers.size() > 4)
+        throw InputError("--light-dir '" + text + "': expected " + kLightDirectionSyntax);
+    constexpr std::array<const char*, 3> kAxes{"X", "Y", "Z"};
+    Eigen::Vector3d direction;
+    for (int i = 0; i < 3; ++i)
+        direction[i] = parse_number(numbers[static_cast<std::size_t>(i)], text, kAxes[static_cast<std::size_t>(i)],
+                                    "--light-dir", kLightDirectionSyntax);
+    if (!(direction.norm() > 1e-12))
+        throw InputError("--light-dir '" + text + "': the direction has zero length");
+    direction.normalize();
+    if (direction.z() < 0.0)
+        throw InputError("--light-dir '" + text + "': the direction points below the horizon (Z < 0); the field "
+                         "covers the upper hemisphere, Z toward the camera");
+    return light_toward(direction, numbers.size() == 4 ? &numbers[3] : nullptr, parts.colour, text, "--light-dir",
+                        kLightDirectionSyntax);
+}
 
 std::pair<int, int> parse_resolution(const std::string& text) {
     int w = 0, h = 0;

@@ -65,7 +65,14 @@ void apply_scene_overrides(relight::Scene& scene, const std::string& resolution,
 inline constexpr const char* kLightSyntax = "THETA,PHI[,RADIUS][,R:G:B] (degrees; colour as irradiance per channel)";
 /// --light THETA,PHI[,RADIUS][,R:G:B]: a distant light toward (THETA, PHI) in the field's
 /// frame, a disc of RADIUS degrees if given; InputError quoting the option otherwise.
+/// Three numbers within [-1, 1] of length 0.9 to 1.1 (a light file's X,Y,Z pasted) are
+/// refused as ambiguous, unless the radius is written with its unit ("0.9deg").
 relight::Light parse_light(const std::string& text);
+
+inline constexpr const char* kLightDirectionSyntax = "X,Y,Z[,RADIUS][,R:G:B] (a direction as a light file writes it)";
+/// --light-dir X,Y,Z[,RADIUS][,R:G:B]: the light toward direction (X, Y, Z) of the field's
+/// frame (x right, y up, z toward the camera; normalised here), not below the horizon.
+relight::Light parse_light_direction(const std::string& text);
 
 /// --interpolation: "delaunay", "solid-angle" or "nearest"; InputError naming it otherwise.
 relight::Interpolation parse_interpolation(const std::string& text);

@@ -33,11 +33,35 @@
 namespace rfd::cli {
 namespace {
 
+// The lights of --light and --light-dir in the order they were given, with their texts.
+struct OrderedLights {
+    std::vector<relight::Light> lights;
+    std::vector<std::string> texts;
+};
+
+OrderedLights ordered_lights(const CLI::App& cmd, const CLI::Option* light, const CLI::Option* light_dir,
+                             const std::vector<std::string>& angles, const std::vector<std::string>& directions) {
+    OrderedLights out;
+    std::size_t next_angles = 0, next_direction = 0;
+    for (const CLI::Option* option : cmd.parse_order()) {
+        if (option == light && next_angles < angles.size()) {
+            out.texts.push_back(angles[next_angles]);
+            out.lights.push_back(parse_light(angles[next_angles++]));
+        } else if (option == light_dir && next_direction < directions.size()) {
+            out.texts.push_back(directions[next_direction]);
+            out.lights.push_back(parse_light_direction(directions[next_direction++]));
+        }
+    }
+    return out;
+}
+
 void add_render(CLI::App& relight) {
-    auto* cmd = relight.add_subcommand("render", "Relight a reflectance field under distant lights or an environment map");
+    auto* cmd = relight.add_subcommand(
+        "render", "Relight a reflectance field under distant lights or an environment map, read a band of rows at "
+                  "a time (a field may be larger than memory)");
     struct Options {
-        std::string field, envmap, out, interpolation = "delaunay";
-        std::vector<std::string> lights;
+        std::string field, envmap, light_file, interpolation = "delaunay";
+        std::vector<std::string> lights, light_dirs, outs;
         bool json = false;
         WindowOptions window;
     };
@@ -48,20 +72,47 @@ void add_render(CLI::App& relight) {
                                   std::string("A distant light ") + kLightSyntax +
                                       "; with RADIUS a disk of that angular radius; repeat to add lights")
                       ->allow_extra_args(false);
+    auto* light_dir = cmd->add_option("--light-dir", opt->light_dirs,
+                                      std::string("A distant light toward ") + kLightDirectionSyntax +
+                                          "; repeat to add lights")
+                          ->allow_extra_args(false);
+    auto* light_file = cmd->add_option("--lights", opt->light_file,
+                                       "A light file (.lp: per line OUTPUT X Y Z [RADIUS_DEG]): one image per line, "
+                                       "named as the line says, into the --out folder, all in one pass");
     auto* envmap = cmd->add_option("--envmap", opt->envmap,
                                    "Latitude-longitude environment map (EXR/HDR radiance; row 0 at the zenith, "
                                    "centre column toward +x)");
-    light->excludes(envmap);
-    cmd->add_option("--out", opt->out, "Output image (.exr linear, .png sRGB, ...)")->required();
+    light->excludes(envmap)->excludes(light_file);
+    light_dir->excludes(envmap)->excludes(light_file);
+    light_file->excludes(envmap);
+    cmd->add_option("--out", opt->outs,
+                    "Output image (.exr linear, .png sRGB, ...): one for the lights summed, or one per --light / "
+                    "--light-dir in their order; with --lights, a folder")
+        ->required()
+        ->allow_extra_args(false);
     cmd->add_option("--interpolation", opt->interpolation, "delaunay, solid-angle (eq. 4.6 as written) or nearest");
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
-    cmd->callback([opt] {
-        if (opt->lights.empty() && opt->envmap.empty())
-            throw InputError("relight render: give at least one --light or an --envmap");
+    cmd->callback([opt, cmd, light, light_dir] {
         const relight::Interpolation method = parse_interpolation(opt->interpolation);
-        std::vector<relight::Light> lights;
-        for (const auto& text : opt->lights) lights.push_back(parse_light(text));
-        if (!opt->envmap.empty()) {
+        const OrderedLights given = ordered_lights(*cmd, light, light_dir, opt->lights, opt->light_dirs);
+        // Each output image and the lights it sums.
+        std::vector<std::vector<relight::Light>> renders;
+        std::vector<std::filesystem::path> outs;
+        std::vector<std::string> names;
+        if (!opt->light_file.empty()) {
+            if (opt->outs.size() != 1)
+                throw InputError("relight render: with --lights, give one --out: the folder for its images");
+            for (const relight::LightEntry& entry : relight::read_light_file(opt->light_file)) {
+                relight::Light one = relight::DirectionalLight{entry.direction};
+                if (entry.kernel_radius > 0.0) one = relight::DiskLight{entry.direction, entry.kernel_radius};
+                renders.push_back({one});
+                outs.push_back(std::filesystem::path(opt->outs.front()) / entry.file);
+                names.push_back(entry.file);
+            }
+            if (renders.empty()) throw InputError(SourceLocation{opt->light_file}, "the light file lists no light");
+            ensure_directory(opt->outs.front());
+        } else if (!opt->envmap.empty()) {
+            if (opt->outs.size() != 1) throw InputError("relight render: with --envmap, give one --out");
             Image map = read_image(opt->envmap);
             if (map.width() != 2 * map.height())
                 throw InputError(SourceLocation{opt->envmap},
@@ -72,47 +123,78 @@ void add_render(CLI::App& relight) {
             } catch (const InputError& error) {
                 throw InputError(SourceLocation{opt->envmap}, error.what());
             }
-            lights.push_back(relight::EnvironmentMap{std::move(map)});
+            renders.push_back({relight::EnvironmentMap{std::move(map)}});
+            outs.emplace_back(opt->outs.front());
+            names.push_back(opt->envmap);
+        } else if (given.lights.empty()) {
+            throw InputError("relight render: give at least one --light, --light-dir, --lights or --envmap");
+        } else if (opt->outs.size() == 1) {
+            renders.push_back(given.lights);
+            outs.emplace_back(opt->outs.front());
+            names.push_back(given.texts.size() == 1 ? given.texts.front()
+                                                    : std::to_string(given.texts.size()) + " lights summed");
+        } else if (opt->outs.size() == given.lights.size()) {
+            for (std::size_t j = 0; j < given.lights.size(); ++j) {
+                renders.push_back({given.lights[j]});
+                outs.emplace_back(opt->outs[j]);
+                names.push_back(given.texts[j]);
+            }
+        } else {
+            throw InputError("relight render: " + std::to_string(opt->outs.size()) + " --out for " +
+                             std::to_string(given.lights.size()) +
+                             " lights; give one --out (the lights summed) or one per light, in their order");
         }
         const auto t0 = std::chrono::steady_clock::now();
-        const relight::ReflectanceField field = relight::read_field(opt->field, opt->window.window());
+        relight::FieldReader field(opt->field, opt->window.window());
+        const relight::SphericalInterpolator interpolator(field.directions());
+        std::vector<relight::LightCoefficients> coefficients;
+        for (const auto& lights : renders)
+            coefficients.push_back(relight::light_coefficients(interpolator, lights, method));
         const auto t1 = std::chrono::steady_clock::now();
-        const relight::SphericalInterpolator interpolator(field.directions);
-        const relight::LightCoefficients k = relight::light_coefficients(interpolator, lights, method);
+        relight::relight_to_files(field, coefficients, outs);
         const auto t2 = std::chrono::steady_clock::now();
-        const Image image = relight::relight(field, k);
-        const auto t3 = std::chrono::steady_clock::now();
-        write_image(opt->out, image);
         const auto seconds = [](auto a, auto b) { return std::chrono::duration<double>(b - a).count(); };
-        const Eigen::Vector3d k_sum = k.k.colwise().sum().transpose();
+        std::vector<bool> needed(field.size(), false);
+        for (const auto& k : coefficients)
+            for (std::size_t i = 0; i < field.size(); ++i)
+                needed[i] = needed[i] || !k.k.row(static_cast<Eigen::Index>(i)).isZero();
+        const auto decoded = static_cast<std::size_t>(std::count(needed.begin(), needed.end(), true));
         if (opt->json) {
-            const nlohmann::json summary = {
-                {"field", opt->field},
-                {"out", opt->out},
-                {"images", field.size()},
-                {"lights", lights.size()},
-                {"interpolation", opt->interpolation},
-                {"weight_evaluations", k.weight_evaluations},
-                {"nonzero_weights", k.nonzero},
-                {"sum_of_weights_rgb", {k_sum[0], k_sum[1], k_sum[2]}},
-                {"resolution", {image.width(), image.height()}},
-                {"channels", image.channels()},
-                {"read_seconds", seconds(t0, t1)},
-                {"weights_seconds", seconds(t1, t2)},
-                {"relight_seconds", seconds(t2, t3)}};
+            nlohmann::json images = nlohmann::json::array();
+            for (std::size_t j = 0; j < outs.size(); ++j) {
+                const Eigen::Vector3d k_sum = coefficients[j].k.colwise().sum().transpose();
+                images.push_back({{"out", outs[j].string()},
+                                  {"light", names[j]},
+                                  {"lights", renders[j].size()},
+                                  {"weight_evaluations", coefficients[j].weight_evaluations},
+                                  {"nonzero_weights", coefficients[j].nonzero},
+                                  {"sum_of_weights_rgb", {k_sum[0], k_sum[1], k_sum[2]}}});
+            }
+            const nlohmann::json summary = {{"field", opt->field},
+                                            {"images", field.size()},
+                                            {"images_decoded", decoded},
+                                            {"interpolation", opt->interpolation},
+                                            {"resolution", {field.width(), field.height()}},
+                                            {"outputs", std::move(images)},
+                                            {"weights_seconds", seconds(t0, t1)},
+                                            {"read_and_relight_seconds", seconds(t1, t2)}};
             std::printf("%s\n", summary.dump(2).c_str());
-        } else {
-            std::printf("relit %s (%zu images) under %zu light(s) into %s\n", opt->field.c_str(), field.size(),
-                        lights.size(), opt->out.c_str());
-            std::printf("  weights            %s interpolation, %zu direction(s) evaluated\n",
-                        opt->interpolation.c_str(), k.weight_evaluations);
-            std::printf("  non-zero weights   %zu of %zu images, sum %.6g %.6g %.6g (R G B)\n", k.nonzero,
-                        field.size(), k_sum[0], k_sum[1], k_sum[2]);
-            std::printf("  image              %d x %d, %d channel(s)\n", image.width(), image.height(),
-                        image.channels());
-            std::printf("  time               %.3f s read, %.4f s weights, %.4f s relight\n", seconds(t0, t1),
-                        seconds(t1, t2), seconds(t2, t3));
+            return;
         }
+        std::printf("relit %s (%zu images) into %zu image(s), %s interpolation\n", opt->field.c_str(), field.size(),
+                    outs.size(), opt->interpolation.c_str());
+        std::printf("  image              %d x %d, %d channel(s) in the field\n", field.width(), field.height(),
+                    field.channels());
+        for (std::size_t j = 0; j < outs.size(); ++j) {
+            const Eigen::Vector3d k_sum = coefficients[j].k.colwise().sum().transpose();
+            std::printf("  %s (%s): non-zero weights %zu of %zu images, sum %.6g %.6g %.6g (R G B)\n",
+                        outs[j].string().c_str(), names[j].c_str(), coefficients[j].nonzero, field.size(), k_sum[0],
+                        k_sum[1], k_sum[2]);
+        }
+        std::printf("  read               %zu of %zu images decoded, each once, a band of rows at a time\n", decoded,
+                    field.size());
+        std::printf("  time               %.4f s weights, %.3f s read and relight\n", seconds(t0, t1),
+                    seconds(t1, t2));
     });
 }
 

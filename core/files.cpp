@@ -2,9 +2,11 @@
 
 #include <fcntl.h>
 #include <sys/file.h>
+#include <sys/resource.h>
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cctype>
@@ -200,6 +202,13 @@ std::string read_text_file(const std::filesystem::path& path) {
     text << in.rdbuf();
     if (!in) throw IoError(SourceLocation{path.string()}, "cannot read");
     return text.str();
+}
+
+void raise_open_file_limit(std::size_t files) {
+    rlimit limit{};
+    if (getrlimit(RLIMIT_NOFILE, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY || limit.rlim_cur >= files) return;
+    limit.rlim_cur = limit.rlim_max == RLIM_INFINITY ? files : std::min<rlim_t>(files, limit.rlim_max);
+    setrlimit(RLIMIT_NOFILE, &limit);  // best effort: opening the files says what failed
 }
 
 }  // namespace rfd

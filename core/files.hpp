@@ -2,6 +2,7 @@
 // Output files are written to a temporary file beside the target and renamed into place,
 // so an interrupted or failed write never leaves a half-written output behind.
 
+#include <cstddef>
 #include <filesystem>
 #include <functional>
 #include <ostream>
@@ -82,5 +83,9 @@ private:
 
 /// True for a line of a text data file that holds nothing: blank, or a '#' comment.
 bool is_blank_or_comment(const std::string& line);
+
+/// Lets the process hold `files` open files at once, as far as its hard limit allows (a
+/// field read in bands keeps every image open); the soft limit is often 1024.
+void raise_open_file_limit(std::size_t files);
 
 }  // namespace rfd

@@ -10,10 +10,14 @@
 //
 // Example: Image image = read_image("field/img_000.exr"); write_image("preview.png", image);
 
+#include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include "core/image.hpp"
+#include "core/image_file.hpp"
 
 namespace rfd {
 
@@ -28,11 +32,62 @@ struct ImageSize {
 /// is NaN or infinite (naming the pixel).
 Image read_image(const std::filesystem::path& path);
 ImageSize read_image_size(const std::filesystem::path& path);
+/// InputError naming `path` when an image of `size` is too large to hold whole (2^30
+/// samples): a broken or hostile header, not a photograph.
+void check_whole_image_size(const std::filesystem::path& path, const ImageSize& size);
 
 /// Writes `image` to `path` in the encoding its extension selects, with the format's
 /// `compression` when given ("jpeg:80": a JPEG of quality 80). Throws InputError for a
 /// non-finite sample (nothing is written) and IoError when writing fails.
 void write_image(const std::filesystem::path& path, const Image& image, const std::string& compression = "");
+
+/// An image file read a band of rows at a time, decoded as read_image() decodes it: integer
+/// samples through a table of their linear values (no power per sample), float samples
+/// checked finite. Bands read in ascending order cost one decode of the file (JPEG and PNG
+/// decode sequentially; a band above the last one read starts the file again).
+//
+// Example: ImageBandReader in("big.jpg");
+//          for (int y = 0; y < in.height(); y += 64) use(in.read(y, std::min(y + 64, in.height())));
+class ImageBandReader {
+public:
+    /// Opens `path`; IoError when it is missing or unreadable, InputError for a file
+    /// without pixels or with rows too long to hold.
+    explicit ImageBandReader(const std::filesystem::path& path);
+
+    int width() const { return file_.spec().width; }
+    int height() const { return file_.spec().height; }
+    int channels() const { return file_.spec().channels; }
+    const std::filesystem::path& path() const { return file_.path(); }
+
+    /// Rows [y0, y1) of columns [x0, x1) (the whole width when x1 is 0), linear and planar.
+    /// InputError naming the pixel for a sample that is NaN or infinite.
+    Image read(int y0, int y1, int x0 = 0, int x1 = 0);
+
+private:
+    ImageFileReader file_;
+    std::vector<std::uint8_t> bytes_;     // a band of an 8-bit file, as stored, reused
+    std::vector<std::uint16_t> words_;    // of a 16-bit file
+    std::vector<float> floats_;           // of a float file
+};
+
+/// An image file written a band of rows at a time, top to bottom, encoded as write_image()
+/// encodes by extension; nothing is at the path until finish() (core/image_file.hpp).
+class ImageBandWriter {
+public:
+    ImageBandWriter(const std::filesystem::path& path, int width, int height, int channels,
+                    const std::string& compression = "");
+    /// The next band.height() rows; InputError for a non-finite sample (nothing is written).
+    void write(const Image& band);
+    /// Closes the file and renames it into place; every row must have been written.
+    void finish();
+
+private:
+    std::filesystem::path path_;
+    int width_ = 0, height_ = 0, channels_ = 0, next_row_ = 0;
+    bool srgb_ = false;
+    std::unique_ptr<ImageFileWriter> file_;
+    std::vector<float> interleaved_;
+};
 
 /// The extension of `path` in lower case, with its dot (".exr"), as writers choose formats.
 std::string lower_extension(const std::filesystem::path& path);

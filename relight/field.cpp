@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cctype>
 #include <cstdio>
+#include <exception>
 #include <fstream>
 #include <sstream>
 #include <tuple>
@@ -13,6 +14,7 @@
 #include "core/files.hpp"
 #include "core/image_io.hpp"
 #include "core/number.hpp"
+#include "core/parallel.hpp"
 #include "core/progress.hpp"
 #include "core/text.hpp"
 #include "relight/vision.hpp"
@@ -68,7 +70,7 @@ std::vector<LightEntry> read_light_file(const std::filesystem::path& lp_path) {
     int line_number = 0;
     long declared = -1;
     std::vector<LightEntry> entries;
-    int windows_names = 0;
+    int windows_names = 0, extra_lines = 0;
     while (std::getline(in, line)) {
         ++line_number;
         if (!line.empty() && line.back() == '\r') line.pop_back();  // files from Windows tools
@@ -80,6 +82,12 @@ std::vector<LightEntry> read_light_file(const std::filesystem::path& lp_path) {
                 throw InputError(line_in(lp_path, line_number),
                                  "expected the image count (a non-negative integer), got '" +
                                      line + "'");
+            continue;
+        }
+        if (static_cast<long>(entries.size()) == declared) {
+            // More lines than the count: readers of the format (RTIBuilder, relight) take the
+            // first ones, so a stray last line does not lose the capture.
+            ++extra_lines;
             continue;
         }
         LightEntry entry;
@@ -124,6 +132,10 @@ std::vector<LightEntry> read_light_file(const std::filesystem::path& lp_path) {
                                                 ? std::string("its jpeg-exports/ folder")
                                                 : std::string("its folder")));
     if (declared < 0) throw InputError(line_in(lp_path, line_number), "light file is empty");
+    if (extra_lines > 0)
+        Progress::note(lp_path.string() + ": declares " + std::to_string(declared) + " images but lists " +
+                       std::to_string(declared + extra_lines) + "; reading the first " + std::to_string(declared) +
+                       ", as RTIBuilder and relight do");
     if (static_cast<long>(entries.size()) != declared)
         throw InputError(line_in(lp_path, 1), "declares " + std::to_string(declared) +
                                              " images but lists " +
@@ -209,67 +221,198 @@ ImageWindow parse_region(const std::string& text, const std::string& option) {
     return window;
 }
 
-Image apply_window(const Image& image, const ImageWindow& window, const std::string& name) {
-    if (window.whole()) return image;
+namespace {
+
+// The pixels of an image of `size` a window takes, and the size it scales them to; the
+// errors name `name`, the image the window meets first.
+struct WindowGeometry {
+    int x = 0, y = 0, width = 0, height = 0;  // the region
+    PlaneSize to;                              // after the scale
+};
+
+WindowGeometry window_geometry(const ImageWindow& window, int width, int height, const std::string& name) {
     if (!(window.scale > 0.0) || !std::isfinite(window.scale))
         throw InputError("--scale: expected a positive number, got " + std::to_string(window.scale));
-    Image region = image;
+    WindowGeometry g{0, 0, width, height, {width, height}};
     if (window.width > 0 || window.height > 0) {
-        if (window.x + window.width > image.width() || window.y + window.height > image.height())
+        if (window.x + window.width > width || window.y + window.height > height)
             throw InputError(SourceLocation{name}, "--region " + std::to_string(window.x) + "," + std::to_string(window.y) +
                                                        "," + std::to_string(window.width) + "," +
                                                        std::to_string(window.height) + " reaches outside the " +
-                                                       std::to_string(image.width()) + " x " +
-                                                       std::to_string(image.height()) + " image");
-        region = Image(window.width, window.height, image.channels());
-        for (int c = 0; c < image.channels(); ++c)
-            for (int y = 0; y < window.height; ++y)
-                for (int x = 0; x < window.width; ++x) region.at(x, y, c) = image.at(window.x + x, window.y + y, c);
+                                                       std::to_string(width) + " x " + std::to_string(height) +
+                                                       " image");
+        g = {window.x, window.y, window.width, window.height, {window.width, window.height}};
     }
-    if (window.scale == 1.0) return region;
-    const PlaneSize from{region.width(), region.height()};
-    const PlaneSize to{static_cast<int>(std::lround(from.width * window.scale)),
-                       static_cast<int>(std::lround(from.height * window.scale))};
-    if (to.width < 1 || to.height < 1 || to.area() > (std::size_t{1} << 28))
+    if (window.scale == 1.0) return g;
+    g.to = {static_cast<int>(std::lround(g.width * window.scale)), static_cast<int>(std::lround(g.height * window.scale))};
+    if (g.to.width < 1 || g.to.height < 1 || g.to.area() > (std::size_t{1} << 28))
         throw InputError(SourceLocation{name}, "--scale " + format_number(window.scale) + " makes the " +
-                                                   std::to_string(from.width) + " x " + std::to_string(from.height) +
-                                                   " image " + std::to_string(to.width) + " x " +
-                                                   std::to_string(to.height) + " pixels");
-    Image scaled(to.width, to.height, region.channels());
-    for (int c = 0; c < region.channels(); ++c) vision().resize(from, region.plane(c), to, scaled.plane(c));
-    return scaled;
+                                                   std::to_string(g.width) + " x " + std::to_string(g.height) +
+                                                   " image " + std::to_string(g.to.width) + " x " +
+                                                   std::to_string(g.to.height) + " pixels");
+    return g;
+}
+
+bool identity(const AxisResampling& axis) { return axis.from() == axis.to(); }
+
+// Rows [y0, y1) of `image`, every column.
+Image rows_of(const Image& image, int y0, int y1) {
+    Image out(image.width(), y1 - y0, image.channels());
+    for (int c = 0; c < image.channels(); ++c)
+        std::copy_n(image.plane(c).data() + static_cast<std::size_t>(y0) * image.width(),
+                    static_cast<std::size_t>(y1 - y0) * image.width(), out.plane(c).data());
+    return out;
+}
+
+// `top` with `bottom`'s rows below it.
+Image stacked(const Image& top, const Image& bottom) {
+    if (top.empty()) return bottom;
+    Image out(top.width(), top.height() + bottom.height(), top.channels());
+    for (int c = 0; c < top.channels(); ++c) {
+        float* to = std::copy(top.plane(c).begin(), top.plane(c).end(), out.plane(c).data());
+        std::copy(bottom.plane(c).begin(), bottom.plane(c).end(), to);
+    }
+    return out;
+}
+
+}  // namespace
+
+Image apply_window(const Image& image, const ImageWindow& window, const std::string& name) {
+    if (window.whole()) return image;
+    const WindowGeometry g = window_geometry(window, image.width(), image.height(), name);
+    Image region(g.width, g.height, image.channels());
+    for (int c = 0; c < image.channels(); ++c)
+        for (int y = 0; y < g.height; ++y)
+            for (int x = 0; x < g.width; ++x) region.at(x, y, c) = image.at(g.x + x, g.y + y, c);
+    if (window.scale == 1.0) return region;
+    return resample_band(region, 0, AxisResampling(g.width, g.to.width), AxisResampling(g.height, g.to.height), 0,
+                         g.to.height);
+}
+
+// One image of a FieldReader: its file, open from the first band read until the last, and
+// the region's rows already decoded that the next band reads again (a shrinking scale's
+// bands share a source row; decoding never steps back).
+struct FieldReader::Source {
+    std::unique_ptr<ImageBandReader> file;
+    Image carry;         // region rows [carry_y0, carry_y0 + carry.height()), the region's width
+    int carry_y0 = 0;
+};
+
+FieldReader::FieldReader(const std::filesystem::path& field, const ImageWindow& window)
+    : light_file_(light_file_of(field)), entries_(read_light_file(light_file_)) {
+    if (entries_.empty()) throw InputError(line_in(light_file_, 1), "a field needs at least one image");
+    check_field_images(light_file_, entries_);
+    const LightEntry& front = entries_.front();
+    const ImageSize size = read_image_size(front.path);
+    WindowGeometry g;
+    try {
+        g = window_geometry(window, size.width, size.height, front.path.string());
+    } catch (const Error& error) {
+        rethrow_at(error, line_in(light_file_, front.line), "image '" + front.file + "': " + error.what());
+    }
+    channels_ = size.channels;
+    region_x_ = g.x;
+    region_y_ = g.y;
+    columns_ = AxisResampling(g.width, g.to.width);
+    rows_ = AxisResampling(g.height, g.to.height);
+    sources_.resize(entries_.size());
+    // Every image is open while bands are read from it.
+    raise_open_file_limit(entries_.size() + 64);
+}
+
+FieldReader::~FieldReader() = default;
+FieldReader::FieldReader(FieldReader&&) noexcept = default;
+FieldReader& FieldReader::operator=(FieldReader&&) noexcept = default;
+
+std::vector<Eigen::Vector3d> FieldReader::directions() const {
+    std::vector<Eigen::Vector3d> out;
+    for (const LightEntry& entry : entries_) out.push_back(entry.direction);
+    return out;
+}
+
+std::vector<double> FieldReader::kernel_radii() const {
+    std::vector<double> out;
+    for (const LightEntry& entry : entries_) out.push_back(entry.kernel_radius);
+    if (std::all_of(out.begin(), out.end(), [](double radius) { return radius == 0.0; })) out.clear();
+    return out;
+}
+
+int FieldReader::band_rows(std::size_t images, std::size_t extra_planes, std::size_t bytes) const {
+    // A band's source rows, decoded before scaling, count too: at most one image's per thread,
+    // bounded here by every image's.
+    const double source_rows_per_row = std::max(1.0, static_cast<double>(rows_.from()) / rows_.to());
+    const double per_row = sizeof(float) * (static_cast<double>(images) * channels_ *
+                                                (width() + source_rows_per_row * columns_.from() / 4.0) +
+                                            static_cast<double>(extra_planes) * width());
+    return static_cast<int>(std::clamp(static_cast<double>(bytes) / std::max(per_row, 1.0), 1.0,
+                                       static_cast<double>(height())));
+}
+
+std::vector<Image> FieldReader::read_band(int y0, int y1, const std::vector<bool>& wanted) {
+    RFD_CHECK(0 <= y0 && y0 < y1 && y1 <= height() && (wanted.empty() || wanted.size() == size()));
+    // The region's rows the band reads, and the first one the next band will read.
+    const int first = rows_.first(y0), end = rows_.end(y1 - 1);
+    const int keep_from = y1 < height() ? rows_.first(y1) : end;
+    std::vector<Image> band(size());
+    std::vector<std::exception_ptr> failures(size());
+    parallel_for_chunks(size(), 1, [&](std::size_t begin, std::size_t stop) {
+        for (std::size_t i = begin; i < stop; ++i) {
+            if (!wanted.empty() && !wanted[i]) continue;
+            try {
+                if (!sources_[i]) sources_[i] = std::make_unique<Source>();
+                Source& source = *sources_[i];
+                const int carried_end = source.carry_y0 + source.carry.height();
+                if (first < source.carry_y0 || (source.file == nullptr && carried_end < end)) {
+                    // Back to the top, or the first band from this image: (re)open it.
+                    source.carry = Image();
+                    source.file = std::make_unique<ImageBandReader>(entries_[i].path);
+                }
+                const int carried = source.carry.empty() ? first : std::max(first, carried_end);
+                Image rows = source.carry.empty() || carried_end <= first
+                                 ? Image()
+                                 : rows_of(source.carry, first - source.carry_y0, carried_end - source.carry_y0);
+                if (carried < end)
+                    rows = stacked(rows, source.file->read(region_y_ + carried, region_y_ + end, region_x_,
+                                                           region_x_ + columns_.from()));
+                if (keep_from < end) {
+                    source.carry = rows_of(rows, keep_from - first, end - first);
+                    source.carry_y0 = keep_from;
+                } else {
+                    source.carry = Image();
+                    source.carry_y0 = end;
+                }
+                if (end == rows_.from()) source.file.reset();  // the image's last row is read
+                band[i] = identity(columns_) && identity(rows_) ? std::move(rows)
+                                                                : resample_band(rows, first, columns_, rows_, y0, y1);
+            } catch (...) {
+                failures[i] = std::current_exception();
+            }
+        }
+    });
+    for (std::size_t i = 0; i < size(); ++i) {
+        if (!failures[i]) continue;
+        try {
+            std::rethrow_exception(failures[i]);
+        } catch (const Error& error) {
+            rethrow_at(error, line_in(light_file_, entries_[i].line),
+                       "image '" + entries_[i].file + "': " + error.what());
+        }
+    }
+    return band;
 }
 
 ReflectanceField read_field(const std::filesystem::path& field_path, const ImageWindow& window) {
-    const std::filesystem::path lp = light_file_of(field_path);
-    const std::vector<LightEntry> entries = read_light_file(lp);
-    if (entries.empty()) throw InputError(line_in(lp, 1), "a field needs at least one image");
-    check_field_images(lp, entries);
-    ReflectanceField field;
-    bool any_kernel = false;
-    for (const LightEntry& entry : entries) {
-        Image image;
-        try {
-            image = apply_window(read_image(entry.path), window, entry.path.string());
-        } catch (const Error& error) {
-            rethrow_at(error, line_in(lp, entry.line), std::string("image '") + entry.file + "': " + error.what());
-        }
-        if (!field.images.empty() && !image.same_shape(field.images.front())) {
-            const Image& first = field.images.front();
-            throw InputError(line_in(lp, entry.line),
-                             "image '" + entry.file + "' is " + std::to_string(image.width()) +
-                                 "x" + std::to_string(image.height()) + "x" +
-                                 std::to_string(image.channels()) + ", the first image is " +
-                                 std::to_string(first.width()) + "x" +
-                                 std::to_string(first.height()) + "x" +
-                                 std::to_string(first.channels()));
-        }
-        field.directions.push_back(entry.direction);
-        field.images.push_back(std::move(image));
-        field.kernel_radii.push_back(entry.kernel_radius);
-        any_kernel = any_kernel || entry.kernel_radius > 0.0;
+    FieldReader reader(field_path, window);
+    const LightEntry& front = reader.entries().front();
+    try {
+        check_whole_image_size(front.path, read_image_size(front.path));
+    } catch (const Error& error) {
+        rethrow_at(error, line_in(reader.light_file(), front.line), "image '" + front.file + "': " + error.what());
     }
-    if (!any_kernel) field.kernel_radii.clear();
+    ReflectanceField field;
+    field.directions = reader.directions();
+    field.kernel_radii = reader.kernel_radii();
+    field.images = reader.read_band(0, reader.height());
     return field;
 }
 

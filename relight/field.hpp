@@ -23,14 +23,17 @@
 //
 // Example: ReflectanceField field = read_field("out/bottle"); field.size();
 
+#include <cstddef>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
-#include "core/options.hpp"
 #include "core/image.hpp"
+#include "core/options.hpp"
+#include "core/resample.hpp"
 
 namespace rfd::relight {
 
@@ -95,10 +98,59 @@ void write_light_file(const std::filesystem::path& lp_path, const std::vector<st
 /// .lp itself.
 std::filesystem::path light_file_of(const std::filesystem::path& field);
 
-/// Reads a whole field. Throws for any malformed light file, a missing or unreadable image,
-/// images of different sizes, and non-finite samples, naming the file and the .lp line.
-/// Each image goes through `window` as it is read.
+/// Reads a whole field (a FieldReader's one band of every row). Throws for any malformed
+/// light file, a missing or unreadable image, images of different sizes, and non-finite
+/// samples, naming the file and the .lp line. Each image goes through `window` as it is read.
 ReflectanceField read_field(const std::filesystem::path& field, const ImageWindow& window = {});
+
+/// A field read a band of rows at a time, for fields larger than memory: the images stay on
+/// disk, each open while bands are read from it, and a band of rows is decoded from every
+/// image it is asked of in parallel, through the window (region, then scale, as
+/// apply_window(): the same samples as reading whole images). Bands read in ascending order
+/// decode each image once.
+//
+// Example: FieldReader field("captures/coin", window);
+//          for (int y = 0; y < field.height(); y += rows)
+//              use(field.read_band(y, std::min(y + rows, field.height())));
+class FieldReader {
+public:
+    /// Reads the light file and the images' headers; throws as read_field() does for a bad
+    /// light file, a missing image, images of different sizes or a window outside them.
+    explicit FieldReader(const std::filesystem::path& field, const ImageWindow& window = {});
+    ~FieldReader();
+    FieldReader(FieldReader&&) noexcept;
+    FieldReader& operator=(FieldReader&&) noexcept;
+
+    const std::filesystem::path& light_file() const { return light_file_; }
+    const std::vector<LightEntry>& entries() const { return entries_; }
+    std::size_t size() const { return entries_.size(); }
+    std::vector<Eigen::Vector3d> directions() const;
+    /// Radians per image, or empty when every light is narrow (ReflectanceField::kernel_radii).
+    std::vector<double> kernel_radii() const;
+    /// The field's images, through the window.
+    int width() const { return columns_.to(); }
+    int height() const { return rows_.to(); }
+    int channels() const { return channels_; }
+
+    /// Rows [y0, y1) of the images whose `wanted` entry is true (all when `wanted` is empty),
+    /// linear; the others are left empty. Throws, naming the image and its line in the light
+    /// file (the first in the file when several fail), for an unreadable image or a sample
+    /// that is not finite.
+    std::vector<Image> read_band(int y0, int y1, const std::vector<bool>& wanted = {});
+    /// Rows a band may have so that `images` images of it, and `extra_planes` more planes of
+    /// the field's width (outputs being made), take at most `bytes`; at least 1.
+    int band_rows(std::size_t images, std::size_t extra_planes = 0, std::size_t bytes = kBandBytes) const;
+    static constexpr std::size_t kBandBytes = std::size_t{256} << 20;
+
+private:
+    struct Source;
+    std::filesystem::path light_file_;
+    std::vector<LightEntry> entries_;
+    int channels_ = 0;
+    int region_x_ = 0, region_y_ = 0;
+    AxisResampling columns_{1, 1}, rows_{1, 1};
+    std::vector<std::unique_ptr<Source>> sources_;  // per image, open while bands are read
+};
 
 /// Writes a field into `folder` one image at a time, for fields too large to hold: open
 /// (creates the folder and removes `<name>.lp` if an earlier run left one, since it would

@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <string>
 #include <type_traits>
 #include <utility>
 
 #include "core/error.hpp"
+#include "core/image_io.hpp"
 #include "core/parallel.hpp"
 #include "core/progress.hpp"
 #include "core/sphere.hpp"
@@ -192,76 +194,137 @@ Image relight(const ReflectanceField& field, const LightCoefficients& coefficien
     return relight(field.images, coefficients);
 }
 
-Image relight(const std::vector<Image>& images, const LightCoefficients& coefficients) {
+namespace {
+
+// One image's share of an output channel.
+struct Term {
+    const float* plane;
+    float k;
+};
+
+// Per channel of one output image, the images with a non-zero coefficient, in image order;
+// those with only zero coefficients may be empty (a band of the images a light needs).
+struct Terms {
+    int width = 0, height = 0;
+    std::vector<std::vector<Term>> channels;
+};
+
+Terms terms_of(const std::vector<Image>& images, const LightCoefficients& coefficients) {
     RFD_CHECK(static_cast<std::size_t>(coefficients.k.rows()) == images.size());
-    RFD_CHECK(!images.empty());
-    const Image& shape = images.front();
-    for (const Image& image : images) RFD_CHECK(image.same_shape(shape));
+    const auto found = std::find_if(images.begin(), images.end(), [](const Image& image) { return !image.empty(); });
+    RFD_CHECK(found != images.end());
+    const Image& shape = *found;
+    for (std::size_t i = 0; i < images.size(); ++i)
+        RFD_CHECK(images[i].empty() ? coefficients.k.row(static_cast<Eigen::Index>(i)).isZero()
+                                    : images[i].same_shape(shape));
     const int field_channels = shape.channels();
     const bool colour_light = !coefficients.grey;
     if (colour_light && field_channels != 1 && field_channels != 3)
         throw InputError("coloured light needs a field with 1 or 3 channels; this one has " +
                          std::to_string(field_channels));
-    const int channels = colour_light ? 3 : field_channels;
-    Image out(shape.width(), shape.height(), channels);
-
-    // Per output channel, the images with a non-zero coefficient, in image order.
-    struct Term {
-        const float* plane;
-        float k;
-    };
-    std::vector<std::vector<Term>> terms(static_cast<std::size_t>(channels));
-    for (int c = 0; c < channels; ++c) {
+    Terms terms{shape.width(), shape.height(), {}};
+    terms.channels.resize(static_cast<std::size_t>(colour_light ? 3 : field_channels));
+    for (int c = 0; c < static_cast<int>(terms.channels.size()); ++c) {
         const int light_channel = colour_light ? c : (field_channels == 3 ? c : 0);
         const int field_channel = field_channels == 1 ? 0 : c;
         for (std::size_t i = 0; i < images.size(); ++i) {
             const double k = coefficients.k(static_cast<Eigen::Index>(i), light_channel);
-            if (k != 0.0) terms[static_cast<std::size_t>(c)].push_back({images[i].plane(field_channel).data(),
-                                                                        static_cast<float>(k)});
+            if (k != 0.0) terms.channels[static_cast<std::size_t>(c)].push_back({images[i].plane(field_channel).data(),
+                                                                                 static_cast<float>(k)});
         }
     }
+    return terms;
+}
 
-    // Blocks small enough that the accumulator stays in the L1 cache while every image
-    // streams through it once.
-    constexpr std::size_t kBlock = 4096;
-    const std::size_t pixels = out.pixel_count();
-    const std::size_t blocks = (pixels + kBlock - 1) / kBlock;
-    Progress progress("relighting", blocks);
+// acc[p] = sum of k * plane[first + p] over `list`, p < count, each pixel summed in image
+// order: the bits depend on neither the block nor the thread.
+void accumulate(const std::vector<Term>& list, std::size_t first, std::size_t count, float* __restrict acc) {
+    // Four images per sweep of the accumulator (a quarter of its loads and stores); the
+    // additions stay in image order, so the bits do not change.
+    std::size_t t = 0;
+    for (; t + 4 <= list.size(); t += 4) {
+        const float* __restrict s0 = list[t].plane + first;
+        const float* __restrict s1 = list[t + 1].plane + first;
+        const float* __restrict s2 = list[t + 2].plane + first;
+        const float* __restrict s3 = list[t + 3].plane + first;
+        const float k0 = list[t].k, k1 = list[t + 1].k, k2 = list[t + 2].k, k3 = list[t + 3].k;
+        for (std::size_t p = 0; p < count; ++p) {
+            float a = acc[p];
+            a += k0 * s0[p];
+            a += k1 * s1[p];
+            a += k2 * s2[p];
+            a += k3 * s3[p];
+            acc[p] = a;
+        }
+    }
+    for (; t < list.size(); ++t) {
+        const float* __restrict src = list[t].plane + first;
+        const float k = list[t].k;
+        for (std::size_t p = 0; p < count; ++p) acc[p] += k * src[p];
+    }
+}
+
+// Every output of `terms` over its pixels, in blocks small enough that the accumulators
+// stay in the L1 cache and the images' block in L2 while every output reads it.
+std::vector<Image> relight_blocks(const std::vector<Terms>& terms, Progress* progress) {
+    std::vector<Image> out;
+    for (const Terms& t : terms) out.emplace_back(t.width, t.height, static_cast<int>(t.channels.size()));
+    const std::size_t block = terms.size() == 1 ? 4096 : 1024;
+    const std::size_t pixels = out.front().pixel_count();
+    const std::size_t blocks = (pixels + block - 1) / block;
     parallel_for_chunks(blocks, 1, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t block = begin; block < end; ++block) {
-            const std::size_t first = block * kBlock, count = std::min(kBlock, pixels - first);
-            for (int c = 0; c < channels; ++c) {
-                float* __restrict acc = out.plane(c).data() + first;
-                const auto& list = terms[static_cast<std::size_t>(c)];
-                // Four images per sweep of the accumulator (a quarter of its loads and
-                // stores); the additions stay in image order, so the bits do not change.
-                std::size_t t = 0;
-                for (; t + 4 <= list.size(); t += 4) {
-                    const float* __restrict s0 = list[t].plane + first;
-                    const float* __restrict s1 = list[t + 1].plane + first;
-                    const float* __restrict s2 = list[t + 2].plane + first;
-                    const float* __restrict s3 = list[t + 3].plane + first;
-                    const float k0 = list[t].k, k1 = list[t + 1].k, k2 = list[t + 2].k, k3 = list[t + 3].k;
-                    for (std::size_t p = 0; p < count; ++p) {
-                        float a = acc[p];
-                        a += k0 * s0[p];
-                        a += k1 * s1[p];
-                        a += k2 * s2[p];
-                        a += k3 * s3[p];
-                        acc[p] = a;
-                    }
-                }
-                for (; t < list.size(); ++t) {
-                    const float* __restrict src = list[t].plane + first;
-                    const float k = list[t].k;
-                    for (std::size_t p = 0; p < count; ++p) acc[p] += k * src[p];
-                }
-            }
-            progress.advance();
+        for (std::size_t b = begin; b < end; ++b) {
+            const std::size_t first = b * block, count = std::min(block, pixels - first);
+            for (std::size_t j = 0; j < terms.size(); ++j)
+                for (std::size_t c = 0; c < terms[j].channels.size(); ++c)
+                    accumulate(terms[j].channels[c], first, count, out[j].plane(static_cast<int>(c)).data() + first);
+            if (progress != nullptr) progress->advance();
         }
     });
+    return out;
+}
+
+}  // namespace
+
+Image relight(const std::vector<Image>& images, const LightCoefficients& coefficients) {
+    const Terms terms = terms_of(images, coefficients);
+    Progress progress("relighting", (static_cast<std::size_t>(terms.width) * terms.height + 4095) / 4096);
+    Image out = std::move(relight_blocks({terms}, &progress).front());
     progress.finish();
     return out;
+}
+
+void relight_to_files(FieldReader& reader, const std::vector<LightCoefficients>& coefficients,
+                      const std::vector<std::filesystem::path>& outs, std::size_t band_bytes) {
+    RFD_CHECK(coefficients.size() == outs.size() && !outs.empty());
+    // The images some light needs: the others are never decoded.
+    std::vector<bool> wanted(reader.size(), false);
+    std::size_t images = 0, planes = 0;
+    for (const LightCoefficients& k : coefficients) {
+        RFD_CHECK(static_cast<std::size_t>(k.k.rows()) == reader.size());
+        planes += static_cast<std::size_t>(k.grey ? reader.channels() : 3);
+        for (std::size_t i = 0; i < reader.size(); ++i) wanted[i] = wanted[i] || !k.k.row(static_cast<Eigen::Index>(i)).isZero();
+    }
+    images = static_cast<std::size_t>(std::count(wanted.begin(), wanted.end(), true));
+    if (images == 0) wanted[0] = true;  // every light below the horizon: black images of the field's shape
+    std::vector<std::unique_ptr<ImageBandWriter>> writers;
+    for (std::size_t j = 0; j < outs.size(); ++j) {
+        const int channels = coefficients[j].grey ? reader.channels() : 3;
+        writers.push_back(std::make_unique<ImageBandWriter>(outs[j], reader.width(), reader.height(), channels));
+    }
+    const int rows = reader.band_rows(std::max<std::size_t>(images, 1), planes, band_bytes);
+    Progress progress("relighting", static_cast<std::size_t>((reader.height() + rows - 1) / rows));
+    for (int y0 = 0; y0 < reader.height(); y0 += rows) {
+        const int y1 = std::min(y0 + rows, reader.height());
+        const std::vector<Image> band = reader.read_band(y0, y1, wanted);
+        std::vector<Terms> terms;
+        for (const LightCoefficients& k : coefficients) terms.push_back(terms_of(band, k));
+        const std::vector<Image> relit = relight_blocks(terms, nullptr);
+        for (std::size_t j = 0; j < outs.size(); ++j) writers[j]->write(relit[j]);
+        progress.advance();
+    }
+    for (auto& writer : writers) writer->finish();
+    progress.finish();
 }
 
 Image render(const ReflectanceField& field, const std::vector<Light>& lights, Interpolation method) {

@@ -16,6 +16,7 @@
 // Example: Image out = render(field, {DirectionalLight{direction_from_angles(0.5, 0.0)}});
 
 #include <cstddef>
+#include <filesystem>
 #include <variant>
 #include <vector>
 
@@ -91,6 +92,16 @@ Image relight(const ReflectanceField& field, const LightCoefficients& coefficien
 
 /// The same for bare images (all of one shape), as implicit relighting combines them.
 Image relight(const std::vector<Image>& images, const LightCoefficients& coefficients);
+
+/// relight() of the field `reader` reads, once per entry of `coefficients`, writing image j
+/// to `outs[j]` (its encoding by extension, as write_image()) a band of rows at a time. Only
+/// the images some light needs are decoded, each once, and memory holds one band of them
+/// (FieldReader::kBandBytes), whatever the field's size. The same samples as relight() of
+/// the whole field. Nothing is at an output's path until every band is written.
+/// `band_bytes` bounds a band (FieldReader::band_rows).
+void relight_to_files(FieldReader& reader, const std::vector<LightCoefficients>& coefficients,
+                      const std::vector<std::filesystem::path>& outs,
+                      std::size_t band_bytes = FieldReader::kBandBytes);
 
 /// light_coefficients() of the field's own interpolator, then relight().
 Image render(const ReflectanceField& field, const std::vector<Light>& lights,

@@ -288,6 +288,13 @@ protected:
 
 TEST_F(MalformedLightFile, CountMismatch) {
     EXPECT_THAT(read_error("2\na.exr 0 0 1\n"), HasSubstr("f.lp:1: declares 2 images but lists 1"));
+    // More lines than declared: the first ones are read, as RTIBuilder and relight read them,
+    // whatever follows.
+    write(dir / "f.lp", "2\na.exr 0 0 1\na.exr 0 1 1\nstray line\n");
+    const std::vector<LightEntry> entries = read_light_file(dir / "f.lp");
+    ASSERT_EQ(entries.size(), 2u);
+    EXPECT_EQ(entries[1].line, 3);
+    EXPECT_NEAR(entries[1].direction.y(), std::sqrt(0.5), 1e-15);
 }
 TEST_F(MalformedLightFile, BadCount) {
     EXPECT_THAT(read_error("two\na.exr 0 0 1\n"), HasSubstr("f.lp:1: expected the image count"));

@@ -1,5 +1,6 @@
 # `rfd relight render` and `rfd relight eval` end to end on two small rendered fields:
 #  - render: several lights add up, two runs give byte-identical images, an env map works;
+#    several lights relit in one pass give each the bytes it has relit alone;
 #  - eval: a field against itself has no error; a sparse one has some, and --out writes the
 #    CSV and the polar map with nothing temporary left; an env map of the wrong shape is an
 #    input error naming the file; an image the .lp lists that is not there is an I/O error.
@@ -30,6 +31,30 @@ file(SHA256 ${OUT}/a.exr bytes_a)
 file(SHA256 ${OUT}/b.exr bytes_b)
 if(NOT bytes_a STREQUAL bytes_b)
   message(FATAL_ERROR "two identical relight runs differ")
+endif()
+# Several lights in one pass, each its own image, named in order (--light and --light-dir
+# mixed) or by a light file: the same bytes as relighting under each alone.
+run_rfd(0 relight render ${OUT}/dense --light 0,0 --out ${OUT}/zenith.exr)
+run_rfd(0 relight render ${OUT}/dense --light 60,200,10,1:0.5:0.2 --out ${OUT}/disc.exr)
+run_rfd(0 relight render ${OUT}/dense --light 60,200,10,1:0.5:0.2 --out ${OUT}/pair_disc.exr
+        --light-dir 0,0,1 --out ${OUT}/pair_zenith.exr)
+file(WRITE ${OUT}/lights.lp "2\nfile_zenith.exr 0 0 1\nfile_side.exr 0.5 0 0.8660254037844386\n")
+run_rfd(0 relight render ${OUT}/dense --lights ${OUT}/lights.lp --out ${OUT}/from_file)
+foreach(pair "zenith;pair_zenith" "disc;pair_disc" "zenith;from_file/file_zenith")
+  list(GET pair 0 alone)
+  list(GET pair 1 together)
+  file(SHA256 ${OUT}/${alone}.exr bytes_alone)
+  file(SHA256 ${OUT}/${together}.exr bytes_together)
+  if(NOT bytes_alone STREQUAL bytes_together)
+    message(FATAL_ERROR "${together}.exr, relit in one pass with other lights, differs from ${alone}.exr relit alone")
+  endif()
+endforeach()
+if(NOT EXISTS ${OUT}/from_file/file_side.exr)
+  message(FATAL_ERROR "relight render --lights did not write the light file's second image")
+endif()
+run_rfd(2 relight render ${OUT}/dense --light 0,0 --light 30,0 --light 40,0 --out ${OUT}/a.exr --out ${OUT}/b.exr)
+if(NOT stderr MATCHES "2 --out for 3 lights")
+  message(FATAL_ERROR "three lights and two outputs: ${stderr}")
 endif()
 run_rfd(0 relight render ${OUT}/dense --envmap ${OUT}/sparse/field_0000.exr --out ${OUT}/env.exr --json)
 if(NOT stdout MATCHES "\"nonzero_weights\": [1-9]")
