@@ -1,7 +1,8 @@
 // A field at camera resolution relit a band of rows at a time: 60 JPEGs of 6000 x 4000
 // (24 Mpx), made once and kept in the temporary folder (about 0.4 GB).
 //  - the floor: decoding every image once, in bands, both cores, nothing else done;
-//  - `rfd relight render FIELD --lights L --out DIR` run as a child process under 8 lights:
+//  - `rfd relight render FIELD --lights L --out DIR` run as a child process under 8 lights,
+//    written as JPEGs (as PNGs, zlib takes about 9 s of one core per 24 Mpx image):
 //    point lights (the images next to each are read), and wide discs (every image weighted),
 //    its wall time as a ratio to the floor measured in the same run, and its peak memory
 //    (the child's maximum resident set).
@@ -82,7 +83,7 @@ std::filesystem::path light_file(double radius_deg) {
     out << "8\n";
     for (int j = 0; j < 8; ++j) {
         const Eigen::Vector3d d = direction_from_angles(degrees_to_radians(15.0 + 7.0 * j), 0.8 * j);
-        out << "light_" << j << ".png " << d.x() << " " << d.y() << " " << d.z();
+        out << "light_" << j << ".jpg " << d.x() << " " << d.y() << " " << d.z();
         if (radius_deg > 0.0) out << " " << radius_deg;
         out << "\n";
     }

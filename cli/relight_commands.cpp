@@ -201,7 +201,7 @@ void add_render(CLI::App& relight) {
 struct EvalOptions {
     std::string field, reference, out, interpolation = "delaunay";
     std::vector<std::string> lights;
-    bool json = false;
+    bool json = false, leave_one_out = false;
     WindowOptions window;
 };
 
@@ -257,12 +257,74 @@ void evaluate_under_lights(const EvalOptions& opt, const relight::ReflectanceFie
         std::printf("  wrote %s/errors.csv and light_K.png (field | reference)\n", opt.out.c_str());
 }
 
+// relight eval --leave-one-out: per image of the field, both PSNRs, and their means.
+void evaluate_leave_one_out(const EvalOptions& opt, relight::Interpolation method) {
+    relight::FieldReader field(opt.field, opt.window.window());
+    const relight::LeaveOneOut loo = relight::leave_one_out(field, method);
+    const std::size_t n = loo.squared_error.size();
+    const char* kCodes = "PSNR in 8-bit sRGB codes (peak 255)";
+    const std::string linear_label = "PSNR linear (peak " + format_number(loo.peak, 6) + ", the brightest sample)";
+    if (!opt.out.empty()) {
+        const std::filesystem::path out(opt.out);
+        ensure_directory(out);
+        CsvTable errors({"index", "theta_deg", "phi_deg", "psnr_srgb8_db", "psnr_linear_db", "squared_error"});
+        for (std::size_t j = 0; j < n; ++j) {
+            const SphericalAngles a = angles_of(loo.directions[j]);
+            errors.add_row({std::to_string(j), format_number(radians_to_degrees(a.theta), 10),
+                            format_number(radians_to_degrees(a.phi), 10),
+                            loo.eight_bit() ? format_number(loo.psnr_srgb8(j), 10) : "",
+                            format_number(loo.psnr_linear(j), 10), format_number(loo.squared_error[j], 10)});
+        }
+        errors.write(out / "leave_one_out.csv");
+    }
+    if (opt.json) {
+        nlohmann::json per_light = nlohmann::json::array();
+        for (std::size_t j = 0; j < n; ++j) {
+            const SphericalAngles a = angles_of(loo.directions[j]);
+            per_light.push_back({{"theta_deg", radians_to_degrees(a.theta)},
+                                 {"phi_deg", radians_to_degrees(a.phi)},
+                                 {"psnr_srgb8_db", loo.eight_bit() ? finite_or_null(loo.psnr_srgb8(j)) : nullptr},
+                                 {"psnr_linear_db", finite_or_null(loo.psnr_linear(j))},
+                                 {"squared_error", loo.squared_error[j]}});
+        }
+        const nlohmann::json summary = {
+            {"field", opt.field},
+            {"interpolation", opt.interpolation},
+            {"images", n},
+            {"eight_bit", loo.eight_bit()},
+            {"peak", loo.peak},
+            {"mean_psnr_srgb8_db", loo.eight_bit() ? finite_or_null(loo.mean_psnr_srgb8()) : nullptr},
+            {"mean_psnr_linear_db", finite_or_null(loo.mean_psnr_linear())},
+            {"per_light", std::move(per_light)}};
+        std::printf("%s\n", summary.dump(2).c_str());
+        return;
+    }
+    std::printf("%s (%zu images, %d x %d): each image predicted from the others, %s interpolation\n",
+                opt.field.c_str(), n, field.width(), field.height(), opt.interpolation.c_str());
+    if (loo.eight_bit())
+        std::printf("  mean %-58s %.2f dB\n", kCodes, loo.mean_psnr_srgb8());
+    else
+        std::printf("  the images are not 8-bit: no PSNR in 8-bit codes\n");
+    std::printf("  mean %-58s %.2f dB\n", linear_label.c_str(), loo.mean_psnr_linear());
+    std::printf("  %5s %9s %9s %12s %12s\n", "index", "theta", "phi", "sRGB8 dB", "linear dB");
+    for (std::size_t j = 0; j < n; ++j) {
+        const SphericalAngles a = angles_of(loo.directions[j]);
+        std::printf("  %5zu %9.3f %9.3f %12s %12.2f\n", j, radians_to_degrees(a.theta), radians_to_degrees(a.phi),
+                    loo.eight_bit() ? format_number(loo.psnr_srgb8(j), 4).c_str() : "-", loo.psnr_linear(j));
+    }
+    if (!opt.out.empty()) std::printf("  wrote %s/leave_one_out.csv\n", opt.out.c_str());
+}
+
 void add_eval(CLI::App& relight) {
     auto* cmd = relight.add_subcommand(
         "eval", "Relight every reference direction from a sparse field and report the error (thesis figure 5.4)");
     auto opt = std::make_shared<EvalOptions>();
     cmd->add_option("FIELD", opt->field, "Sparse reflectance field (folder or .lp)")->required();
-    cmd->add_option("--reference", opt->reference, "Reference field, same view and image size")->required();
+    auto* reference_option = cmd->add_option("--reference", opt->reference, "Reference field, same view and image size");
+    auto* loo = cmd->add_flag("--leave-one-out", opt->leave_one_out,
+                              "Judge the field alone: every image predicted from the others and compared with it "
+                              "(PSNR in 8-bit sRGB for 8-bit captures, and linear), read a band of rows at a time");
+    loo->excludes(reference_option);
     add_window_options(*cmd, opt->window);
     cmd->add_option("--interpolation", opt->interpolation, "delaunay, solid-angle (eq. 4.6 as written) or nearest");
     cmd->add_option("--light", opt->lights,
@@ -276,6 +338,14 @@ void add_eval(CLI::App& relight) {
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
     cmd->callback([opt] {
         const relight::Interpolation method = parse_interpolation(opt->interpolation);
+        if (opt->leave_one_out) {
+            if (!opt->lights.empty()) throw InputError("relight eval: --leave-one-out scores the field's own lights; "
+                                                       "leave out --light");
+            evaluate_leave_one_out(*opt, method);
+            return;
+        }
+        if (opt->reference.empty())
+            throw InputError("relight eval: give --reference FIELD, or --leave-one-out to judge the field alone");
         std::vector<relight::Light> lights;
         for (const auto& text : opt->lights) lights.push_back(parse_light(text));
         // The same part of the same view in both fields.

@@ -1,13 +1,17 @@
 #include "core/image_io.hpp"
 
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <cctype>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <string>
 
 #include "core/error.hpp"
 #include "core/image_file.hpp"
+#include "core/parallel.hpp"
 
 namespace rfd {
 
@@ -57,7 +61,76 @@ void deinterleave(const std::vector<Sample>& band, int width, int channels, int 
         }
 }
 
+// The 8-bit code write_image() gives a linear sample: sRGB-encoded, clamped, rounded.
+std::uint8_t srgb_code(float linear) {
+    return static_cast<std::uint8_t>(std::lround(255.0f * linear_to_srgb(std::clamp(linear, 0.0f, 1.0f))));
+}
+
+// thresholds[k]: the least linear value whose code is above k. Found by bisection over the
+// non-negative floats' bit patterns (ordered as the floats are), so a search in the table
+// gives srgb_code() without a power per sample.
+const std::array<float, 255>& srgb_code_thresholds() {
+    static const std::array<float, 255> thresholds = [] {
+        std::array<float, 255> t{};
+        for (int k = 0; k < 255; ++k) {
+            std::uint32_t low = 0, high = std::bit_cast<std::uint32_t>(1.0f);  // code(low) <= k < code(high)
+            while (high - low > 1) {
+                const std::uint32_t middle = low + (high - low) / 2;
+                (srgb_code(std::bit_cast<float>(middle)) > k ? high : low) = middle;
+            }
+            t[static_cast<std::size_t>(k)] = std::bit_cast<float>(high);
+        }
+        return t;
+    }();
+    return thresholds;
+}
+
+// Per bucket of floats sharing their top 16 bits (those in [0, 1] fill 16257 buckets), the
+// code of the bucket's least value. No bucket holds more than one threshold (checked here:
+// the codes' steps in linear light are wider than the buckets everywhere in [0, 1]), so a
+// sample's code is its bucket's, plus one past the threshold.
+const std::vector<std::uint8_t>& srgb_bucket_codes() {
+    static const std::vector<std::uint8_t> codes = [] {
+        const std::array<float, 255>& t = srgb_code_thresholds();
+        std::vector<std::uint8_t> first((std::bit_cast<std::uint32_t>(1.0f) >> 16) + 1);
+        for (std::size_t b = 0; b < first.size(); ++b) {
+            const auto code_of = [&](std::uint32_t bits) {
+                return std::upper_bound(t.begin(), t.end(), std::bit_cast<float>(bits)) - t.begin();
+            };
+            const auto least = static_cast<std::uint32_t>(b << 16);
+            first[b] = static_cast<std::uint8_t>(code_of(least));
+            RFD_CHECK(b + 1 == first.size() || code_of(least + 0xFFFF) - code_of(least) <= 1);
+        }
+        return first;
+    }();
+    return codes;
+}
+
+// The thresholds with +infinity after the last, so code 255 never steps further.
+const std::array<float, 256>& srgb_code_steps() {
+    static const std::array<float, 256> steps = [] {
+        std::array<float, 256> s{};
+        std::copy(srgb_code_thresholds().begin(), srgb_code_thresholds().end(), s.begin());
+        s[255] = std::numeric_limits<float>::infinity();
+        return s;
+    }();
+    return steps;
+}
+
+// encode_srgb8() with its tables in hand (a function-local static costs a guard per call),
+// without a branch: samples are finite here (checked before).
+inline std::uint8_t encode_srgb8(float linear, const float* steps, const std::uint8_t* bucket_codes) {
+    const float v = std::min(std::max(0.0f, linear), 1.0f);  // -0 becomes +0: its bits index no bucket
+    const unsigned code = bucket_codes[std::bit_cast<std::uint32_t>(v) >> 16];
+    return static_cast<std::uint8_t>(code + (v >= steps[code] ? 1u : 0u));
+}
+
 }  // namespace
+
+std::uint8_t encode_srgb8(float linear) {
+    if (std::isnan(linear)) return 0;
+    return encode_srgb8(linear, srgb_code_steps().data(), srgb_bucket_codes().data());
+}
 
 ImageBandReader::ImageBandReader(const std::filesystem::path& path) : file_(path) {
     const ImageFileSpec& spec = file_.spec();
@@ -133,7 +206,7 @@ ImageBandWriter::ImageBandWriter(const std::filesystem::path& path, int width, i
     spec.compression = compression;
     if (ext == ".png" || ext == ".jpg" || ext == ".jpeg") {
         spec.type = SampleType::UInt8;
-        srgb_ = true;
+        srgb_ = codes_ = true;
     } else if (ext == ".tif" || ext == ".tiff") {
         spec.type = SampleType::UInt16;
         srgb_ = true;
@@ -148,17 +221,36 @@ ImageBandWriter::ImageBandWriter(const std::filesystem::path& path, int width, i
 
 void ImageBandWriter::write(const Image& band) {
     RFD_CHECK(band.width() == width_ && band.channels() == channels_ && next_row_ + band.height() <= height_);
+    for (int c = 0; c < channels_; ++c)
+        for (std::size_t p = 0; p < band.pixel_count(); ++p)
+            if (!std::isfinite(band.plane(c)[p]))
+                throw InputError(SourceLocation{path_.string()},
+                                 "refusing to write pixel (" + std::to_string(p % width_) + ", " +
+                                     std::to_string(next_row_ + static_cast<int>(p / width_)) + ") channel " +
+                                     std::to_string(c) + ": not a finite number");
+    if (codes_) {
+        // 8 bits: the codes from the table, no power per sample.
+        bytes_.resize(band.pixel_count() * static_cast<std::size_t>(channels_));
+        const auto channels = static_cast<std::size_t>(channels_);
+        const float* steps = srgb_code_steps().data();
+        const std::uint8_t* bucket_codes = srgb_bucket_codes().data();
+        parallel_for_chunks(band.pixel_count(), 1 << 14, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t c = 0; c < channels; ++c) {
+                const float* plane = band.plane(static_cast<int>(c)).data();
+                for (std::size_t p = begin; p < end; ++p)
+                    bytes_[p * channels + c] = encode_srgb8(plane[p], steps, bucket_codes);
+            }
+        });
+        file_->write_rows(next_row_, next_row_ + band.height(), SampleType::UInt8, bytes_.data());
+        next_row_ += band.height();
+        return;
+    }
     interleaved_.resize(band.pixel_count() * static_cast<std::size_t>(channels_));
     std::size_t k = 0;
     for (int y = 0; y < band.height(); ++y)
         for (int x = 0; x < width_; ++x)
             for (int c = 0; c < channels_; ++c) {
                 const float v = band.at(x, y, c);
-                if (!std::isfinite(v))
-                    throw InputError(SourceLocation{path_.string()},
-                                     "refusing to write pixel (" + std::to_string(x) + ", " +
-                                         std::to_string(next_row_ + y) + ") channel " + std::to_string(c) +
-                                         ": not a finite number");
                 interleaved_[k++] = srgb_ ? linear_to_srgb(std::clamp(v, 0.0f, 1.0f)) : v;
             }
     file_->write_rows(next_row_, next_row_ + band.height(), interleaved_);

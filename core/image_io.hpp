@@ -85,9 +85,15 @@ private:
     std::filesystem::path path_;
     int width_ = 0, height_ = 0, channels_ = 0, next_row_ = 0;
     bool srgb_ = false;
+    bool codes_ = false;  // 8-bit: encoded through encode_srgb8()
     std::unique_ptr<ImageFileWriter> file_;
     std::vector<float> interleaved_;
+    std::vector<std::uint8_t> bytes_;
 };
+
+/// The 8-bit sRGB code of a linear sample, as 8-bit files are written: clamped to [0, 1],
+/// encoded, rounded; through a table of the codes' thresholds.
+std::uint8_t encode_srgb8(float linear);
 
 /// The extension of `path` in lower case, with its dot (".exr"), as writers choose formats.
 std::string lower_extension(const std::filesystem::path& path);

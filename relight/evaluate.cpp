@@ -5,7 +5,9 @@
 #include <string>
 
 #include "core/error.hpp"
+#include "core/image_io.hpp"
 #include "core/parallel.hpp"
+#include "core/progress.hpp"
 
 namespace rfd::relight {
 
@@ -108,6 +110,89 @@ LightEvaluation evaluate_under_lights(const ReflectanceField& sparse, const Refl
     }
     const double samples = static_cast<double>(lights.size()) * score.samples_per_entry;
     score.psnr = psnr_from_mse(score.total_squared_error / samples, score.peak);
+    return result;
+}
+
+double LeaveOneOut::psnr_linear(std::size_t j) const {
+    return psnr_from_mse(squared_error.at(j) / samples_per_image, peak);
+}
+
+double LeaveOneOut::psnr_srgb8(std::size_t j) const {
+    return psnr_from_mse(code_squared_error.at(j) / samples_per_image, 255.0);
+}
+
+double LeaveOneOut::mean_psnr_linear() const {
+    double sum = 0.0;
+    for (std::size_t j = 0; j < squared_error.size(); ++j) sum += psnr_linear(j);
+    return sum / static_cast<double>(squared_error.size());
+}
+
+double LeaveOneOut::mean_psnr_srgb8() const {
+    double sum = 0.0;
+    for (std::size_t j = 0; j < code_squared_error.size(); ++j) sum += psnr_srgb8(j);
+    return sum / static_cast<double>(code_squared_error.size());
+}
+
+LeaveOneOut leave_one_out(FieldReader& field, Interpolation method) {
+    const std::size_t n = field.size();
+    if (n < 4)
+        throw InputError(SourceLocation{field.light_file().string()},
+                         "leave-one-out needs at least 4 images (3 left to interpolate from); the field has " +
+                             std::to_string(n));
+    const std::vector<Eigen::Vector3d> directions = field.directions();
+    // Per held-out image, its weights over the others (indices into the whole field).
+    std::vector<InterpolationWeights> weights(n);
+    for (std::size_t j = 0; j < n; ++j) {
+        std::vector<Eigen::Vector3d> others;
+        for (std::size_t i = 0; i < n; ++i)
+            if (i != j) others.push_back(directions[i]);
+        InterpolationWeights w = SphericalInterpolator(others).weights(directions[j], method);
+        for (std::size_t k = 0; k < w.count; ++k) w.index[k] += w.index[k] >= j ? 1 : 0;
+        weights[j] = w;
+    }
+    LeaveOneOut result;
+    result.directions = directions;
+    result.squared_error.assign(n, 0.0);
+    const bool eight_bit = field.sample_type() == SampleType::UInt8;
+    if (eight_bit) result.code_squared_error.assign(n, 0.0);
+    result.samples_per_image = static_cast<double>(field.width()) * field.height() * field.channels();
+    std::vector<float> peaks(n, 0.0f);
+    const int rows = field.band_rows(n);
+    Progress progress("leave-one-out", static_cast<std::size_t>((field.height() + rows - 1) / rows));
+    for (int y0 = 0; y0 < field.height(); y0 += rows) {
+        const std::vector<Image> band = field.read_band(y0, std::min(field.height(), y0 + rows));
+        parallel_for_chunks(n, 1, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t j = begin; j < end; ++j) {
+                const InterpolationWeights& w = weights[j];
+                const std::span<const float> truth = band[j].samples();
+                std::array<const float*, 3> from{};
+                std::array<float, 3> k{};
+                for (std::size_t t = 0; t < 3; ++t) {
+                    from[t] = band[w.index[t < w.count ? t : 0]].samples().data();
+                    k[t] = t < w.count ? static_cast<float>(w.weight[t]) : 0.0f;
+                }
+                double linear = 0.0, codes = 0.0;
+                float peak = peaks[j];
+                for (std::size_t s = 0; s < truth.size(); ++s) {
+                    const float predicted = k[0] * from[0][s] + k[1] * from[1][s] + k[2] * from[2][s];
+                    const double e = static_cast<double>(predicted) - truth[s];
+                    linear += e * e;
+                    if (eight_bit) {
+                        const int c = int{encode_srgb8(predicted)} - int{encode_srgb8(truth[s])};
+                        codes += c * c;
+                    }
+                    peak = std::max(peak, truth[s]);
+                }
+                // Band after band in order, whatever the thread: the sums do not depend on it.
+                result.squared_error[j] += linear;
+                if (eight_bit) result.code_squared_error[j] += codes;
+                peaks[j] = peak;
+            }
+        });
+        progress.advance();
+    }
+    progress.finish();
+    result.peak = *std::max_element(peaks.begin(), peaks.end());
     return result;
 }
 

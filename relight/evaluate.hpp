@@ -15,6 +15,8 @@
 #include <array>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "relight/field.hpp"
 #include "relight/interpolation.hpp"
 #include "relight/render.hpp"
@@ -50,6 +52,31 @@ struct LightEvaluation {
 /// InputError as evaluate(), and for no lights or a light check_light() rejects.
 LightEvaluation evaluate_under_lights(const ReflectanceField& sparse, const ReflectanceField& reference,
                                       const std::vector<Light>& lights, Interpolation method = Interpolation::Delaunay);
+
+/// Leave-one-out on a field alone, as RTI fits are judged: every image predicted from the
+/// others (interpolated with that image left out of the triangulation) and compared with it,
+/// the field read a band of rows at a time. Two PSNRs, labelled wherever they are printed:
+///  - in 8-bit sRGB codes, peak 255, the prediction encoded as an 8-bit file would store it:
+///    what RTI papers and tools quote, given for fields of 8-bit images;
+///  - linear, peak the field's brightest sample (relight eval's other scores).
+struct LeaveOneOut {
+    std::vector<Eigen::Vector3d> directions;   ///< of the held-out images, field order
+    std::vector<double> squared_error;         ///< linear, summed over each image's samples
+    std::vector<double> code_squared_error;    ///< in 8-bit codes; empty unless the images are 8-bit
+    double peak = 0.0;                         ///< the field's brightest sample (linear)
+    double samples_per_image = 0.0;
+
+    bool eight_bit() const { return !code_squared_error.empty(); }
+    double psnr_linear(std::size_t j) const;
+    double psnr_srgb8(std::size_t j) const;
+    /// Means over the held-out images of their PSNRs, as RTI evaluations average them.
+    double mean_psnr_linear() const;
+    double mean_psnr_srgb8() const;
+};
+
+/// InputError for a field of fewer than 4 images, or one whose directions left one out do
+/// not triangulate (SphericalInterpolator).
+LeaveOneOut leave_one_out(FieldReader& field, Interpolation method = Interpolation::Delaunay);
 
 /// Sum of (w0 a + w1 b + w2 c - reference)^2 over every sample (weights of images a, b, c;
 /// pass the same image with weight 0 for unused slots). Fixed order, vectorisable.

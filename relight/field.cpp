@@ -265,8 +265,8 @@ Image rows_of(const Image& image, int y0, int y1) {
 }
 
 // `top` with `bottom`'s rows below it.
-Image stacked(const Image& top, const Image& bottom) {
-    if (top.empty()) return bottom;
+Image stacked(const Image& top, Image&& bottom) {
+    if (top.empty()) return std::move(bottom);
     Image out(top.width(), top.height() + bottom.height(), top.channels());
     for (int c = 0; c < top.channels(); ++c) {
         float* to = std::copy(top.plane(c).begin(), top.plane(c).end(), out.plane(c).data());
@@ -303,7 +303,9 @@ FieldReader::FieldReader(const std::filesystem::path& field, const ImageWindow& 
     if (entries_.empty()) throw InputError(line_in(light_file_, 1), "a field needs at least one image");
     check_field_images(light_file_, entries_);
     const LightEntry& front = entries_.front();
-    const ImageSize size = read_image_size(front.path);
+    const ImageFileSpec spec = ImageFileReader(front.path).spec();
+    const ImageSize size{spec.width, spec.height, spec.channels};
+    sample_type_ = spec.type;
     WindowGeometry g;
     try {
         g = window_geometry(window, size.width, size.height, front.path.string());
@@ -344,7 +346,9 @@ int FieldReader::band_rows(std::size_t images, std::size_t extra_planes, std::si
     const double per_row = sizeof(float) * (static_cast<double>(images) * channels_ *
                                                 (width() + source_rows_per_row * columns_.from() / 4.0) +
                                             static_cast<double>(extra_planes) * width());
-    return static_cast<int>(std::clamp(static_cast<double>(bytes) / std::max(per_row, 1.0), 1.0,
+    // No one image's band above 16 MB either: blocks the allocator keeps for reuse (cli/main.cpp).
+    const double image_rows = (16 << 20) / (sizeof(float) * static_cast<double>(channels_) * width());
+    return static_cast<int>(std::clamp(std::min(static_cast<double>(bytes) / std::max(per_row, 1.0), image_rows), 1.0,
                                        static_cast<double>(height())));
 }
 

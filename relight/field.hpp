@@ -32,6 +32,7 @@
 #include <Eigen/Core>
 
 #include "core/image.hpp"
+#include "core/image_file.hpp"
 #include "core/options.hpp"
 #include "core/resample.hpp"
 
@@ -131,6 +132,8 @@ public:
     int width() const { return columns_.to(); }
     int height() const { return rows_.to(); }
     int channels() const { return channels_; }
+    /// How the first image stores its samples (UInt8: an 8-bit capture, JPEG or PNG).
+    SampleType sample_type() const { return sample_type_; }
 
     /// Rows [y0, y1) of the images whose `wanted` entry is true (all when `wanted` is empty),
     /// linear; the others are left empty. Throws, naming the image and its line in the light
@@ -147,6 +150,7 @@ private:
     std::filesystem::path light_file_;
     std::vector<LightEntry> entries_;
     int channels_ = 0;
+    SampleType sample_type_ = SampleType::Float32;
     int region_x_ = 0, region_y_ = 0;
     AxisResampling columns_{1, 1}, rows_{1, 1};
     std::vector<std::unique_ptr<Source>> sources_;  // per image, open while bands are read

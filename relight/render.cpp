@@ -237,7 +237,12 @@ Terms terms_of(const std::vector<Image>& images, const LightCoefficients& coeffi
 }
 
 // acc[p] = sum of k * plane[first + p] over `list`, p < count, each pixel summed in image
-// order: the bits depend on neither the block nor the thread.
+// order: the bits depend on neither the block nor the thread. Compiled for AVX2 machines and
+// for the baseline, bit-identical without contraction (cmake/flags.cmake); Clang 14 cannot
+// flatten a multiversioned function, as optics/paraxial.cpp says.
+#ifndef __clang__
+__attribute__((target_clones("arch=x86-64-v3", "default")))
+#endif
 void accumulate(const std::vector<Term>& list, std::size_t first, std::size_t count, float* __restrict acc) {
     // Four images per sweep of the accumulator (a quarter of its loads and stores); the
     // additions stay in image order, so the bits do not change.
@@ -320,7 +325,10 @@ void relight_to_files(FieldReader& reader, const std::vector<LightCoefficients>&
         std::vector<Terms> terms;
         for (const LightCoefficients& k : coefficients) terms.push_back(terms_of(band, k));
         const std::vector<Image> relit = relight_blocks(terms, nullptr);
-        for (std::size_t j = 0; j < outs.size(); ++j) writers[j]->write(relit[j]);
+        // The outputs' encoders (zlib, libjpeg) are single-threaded: one output per task.
+        parallel_for_chunks(outs.size(), 1, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t j = begin; j < end; ++j) writers[j]->write(relit[j]);
+        });
         progress.advance();
     }
     for (auto& writer : writers) writer->finish();

@@ -75,6 +75,35 @@ TEST(ImageBands, SrgbTableIsTheFormulaAtEveryCode) {
     for (int x = 0; x < wide.width(); ++x) EXPECT_NEAR(wide_read.at(x, 0, 0), wide.at(x, 0, 0), 1e-6f) << x;
 }
 
+TEST(ImageBands, EightBitCodesFromTheTableAreTheEncodersCodes) {
+    // The codes OpenImageIO makes of encoded floats (how 8-bit files were written before the
+    // table) against the table's, at 2^20 linear values over [0, 1], out of range, and one
+    // float either side of each code's threshold.
+    std::vector<float> linear{-1.0f, -0.0f, 1.0f, 1.5f, 1e30f};
+    for (int i = 0; i <= (1 << 20); ++i) linear.push_back(static_cast<float>(i) / (1 << 20));
+    for (int code = 1; code < 256; ++code) {
+        float low = 0.0f, high = 1.0f;  // the threshold, by bisection on the table's encoder
+        for (int step = 0; step < 60; ++step) {
+            const float middle = 0.5f * (low + high);
+            (encode_srgb8(middle) >= code ? high : low) = middle;
+        }
+        linear.insert(linear.end(), {std::nextafter(high, 0.0f), high, std::nextafter(high, 2.0f)});
+    }
+    TempDir dir;
+    const int width = 1024, height = static_cast<int>(linear.size() / width + 1);
+    std::vector<float> encoded(static_cast<std::size_t>(width * height), 0.0f);
+    for (std::size_t i = 0; i < linear.size(); ++i) encoded[i] = linear_to_srgb(std::clamp(linear[i], 0.0f, 1.0f));
+    ImageFileWriter old_way(dir / "old.png", {.width = width, .height = height, .channels = 1, .type = SampleType::UInt8});
+    old_way.write_rows(0, height, encoded);
+    old_way.finish();
+    std::vector<std::uint8_t> codes(encoded.size());
+    ImageFileReader(dir / "old.png").read_rows(0, height, codes);
+    std::size_t checked = 0;
+    for (std::size_t i = 0; i < linear.size(); ++i, ++checked)
+        ASSERT_EQ(encode_srgb8(linear[i]), codes[i]) << "linear " << linear[i];
+    EXPECT_EQ(checked, (std::size_t{1} << 20) + 6 + 3 * 255);
+}
+
 TEST(ImageBands, BandsReadAndWrittenAreTheWholeImage) {
     TempDir dir;
     const Image image = noise_image(53, 41, 3, 7);
