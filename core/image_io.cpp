@@ -132,6 +132,13 @@ std::uint8_t encode_srgb8(float linear) {
     return encode_srgb8(linear, srgb_code_steps().data(), srgb_bucket_codes().data());
 }
 
+void encode_srgb8(std::span<const float> linear, std::span<std::uint8_t> codes) {
+    RFD_CHECK(codes.size() == linear.size());
+    const float* steps = srgb_code_steps().data();
+    const std::uint8_t* bucket_codes = srgb_bucket_codes().data();
+    for (std::size_t k = 0; k < linear.size(); ++k) codes[k] = encode_srgb8(linear[k], steps, bucket_codes);
+}
+
 ImageBandReader::ImageBandReader(const std::filesystem::path& path) : file_(path) {
     const ImageFileSpec& spec = file_.spec();
     if (spec.width <= 0 || spec.height <= 0 || spec.channels <= 0)

@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -94,6 +95,8 @@ private:
 /// The 8-bit sRGB code of a linear sample, as 8-bit files are written: clamped to [0, 1],
 /// encoded, rounded; through a table of the codes' thresholds.
 std::uint8_t encode_srgb8(float linear);
+/// The same for every sample of `linear` (finite) into `codes` (as long).
+void encode_srgb8(std::span<const float> linear, std::span<std::uint8_t> codes);
 
 /// The extension of `path` in lower case, with its dot (".exr"), as writers choose formats.
 std::string lower_extension(const std::filesystem::path& path);

@@ -133,7 +133,7 @@ double LeaveOneOut::mean_psnr_srgb8() const {
     return sum / static_cast<double>(code_squared_error.size());
 }
 
-LeaveOneOut leave_one_out(FieldReader& field, Interpolation method) {
+LeaveOneOut leave_one_out(FieldReader& field, Interpolation method, std::size_t band_bytes) {
     const std::size_t n = field.size();
     if (n < 4)
         throw InputError(SourceLocation{field.light_file().string()},
@@ -157,7 +157,7 @@ LeaveOneOut leave_one_out(FieldReader& field, Interpolation method) {
     if (eight_bit) result.code_squared_error.assign(n, 0.0);
     result.samples_per_image = static_cast<double>(field.width()) * field.height() * field.channels();
     std::vector<float> peaks(n, 0.0f);
-    const int rows = field.band_rows(n);
+    const int rows = field.band_rows(n, 0, band_bytes);
     Progress progress("leave-one-out", static_cast<std::size_t>((field.height() + rows - 1) / rows));
     for (int y0 = 0; y0 < field.height(); y0 += rows) {
         const std::vector<Image> band = field.read_band(y0, std::min(field.height(), y0 + rows));
@@ -173,15 +173,27 @@ LeaveOneOut leave_one_out(FieldReader& field, Interpolation method) {
                 }
                 double linear = 0.0, codes = 0.0;
                 float peak = peaks[j];
-                for (std::size_t s = 0; s < truth.size(); ++s) {
-                    const float predicted = k[0] * from[0][s] + k[1] * from[1][s] + k[2] * from[2][s];
-                    const double e = static_cast<double>(predicted) - truth[s];
-                    linear += e * e;
-                    if (eight_bit) {
-                        const int c = int{encode_srgb8(predicted)} - int{encode_srgb8(truth[s])};
+                // A chunk at a time: the prediction, then its codes and the image's.
+                constexpr std::size_t kChunk = 4096;
+                std::array<float, kChunk> predicted{};
+                std::array<std::uint8_t, kChunk> predicted_codes{}, true_codes{};
+                for (std::size_t first = 0; first < truth.size(); first += kChunk) {
+                    const std::size_t count = std::min(kChunk, truth.size() - first);
+                    for (std::size_t s = 0; s < count; ++s) {
+                        const std::size_t at = first + s;
+                        predicted[s] = k[0] * from[0][at] + k[1] * from[1][at] + k[2] * from[2][at];
+                        const double e = static_cast<double>(predicted[s]) - truth[at];
+                        linear += e * e;
+                        peak = std::max(peak, truth[at]);
+                    }
+                    if (!eight_bit) continue;
+                    encode_srgb8(std::span<const float>(predicted.data(), count),
+                                 std::span<std::uint8_t>(predicted_codes.data(), count));
+                    encode_srgb8(truth.subspan(first, count), std::span<std::uint8_t>(true_codes.data(), count));
+                    for (std::size_t s = 0; s < count; ++s) {
+                        const int c = int{predicted_codes[s]} - int{true_codes[s]};
                         codes += c * c;
                     }
-                    peak = std::max(peak, truth[s]);
                 }
                 // Band after band in order, whatever the thread: the sums do not depend on it.
                 result.squared_error[j] += linear;

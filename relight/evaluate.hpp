@@ -76,7 +76,9 @@ struct LeaveOneOut {
 
 /// InputError for a field of fewer than 4 images, or one whose directions left one out do
 /// not triangulate (SphericalInterpolator).
-LeaveOneOut leave_one_out(FieldReader& field, Interpolation method = Interpolation::Delaunay);
+/// `band_bytes` bounds a band (FieldReader::band_rows).
+LeaveOneOut leave_one_out(FieldReader& field, Interpolation method = Interpolation::Delaunay,
+                          std::size_t band_bytes = FieldReader::kBandBytes);
 
 /// Sum of (w0 a + w1 b + w2 c - reference)^2 over every sample (weights of images a, b, c;
 /// pass the same image with weight 0 for unused slots). Fixed order, vectorisable.

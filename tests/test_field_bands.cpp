@@ -17,6 +17,7 @@
 #include "core/image_io.hpp"
 #include "core/resample.hpp"
 #include "core/sphere.hpp"
+#include "relight/evaluate.hpp"
 #include "relight/field.hpp"
 #include "relight/interpolation.hpp"
 #include "relight/render.hpp"
@@ -237,6 +238,50 @@ TEST(RelightToFiles, SeveralLightsInOnePassAreWholeFieldRelightsBitForBit) {
     relight_to_files(reader, k, outs, 9 * 40 * 3 * 4 * 5);
     for (std::size_t j = 0; j < lights.size(); ++j)
         EXPECT_EQ(read_image(outs[j]), relight(field, k[j])) << "light set " << j;
+}
+
+TEST(LeaveOneOut, EachImageScoredAsTheFieldWithoutItPredictsIt) {
+    // Against evaluate() of the field without image j on image j alone, and the 8-bit PSNR
+    // against the relit image written as a PNG and its codes read back; in bands of 4 rows.
+    TempDir dir;
+    const auto field_path = write_noise_field(dir, "f", 7, 24, 18, ".png");
+    const ReflectanceField field = read_field(field_path);
+    FieldReader reader(field_path);
+    ASSERT_EQ(reader.sample_type(), SampleType::UInt8);
+    const LeaveOneOut loo = leave_one_out(reader, Interpolation::Delaunay, 7 * 24 * 3 * 4 * 4);
+    ASSERT_TRUE(loo.eight_bit());
+    float peak = 0.0f;
+    for (const Image& image : field.images) peak = std::max(peak, *std::max_element(image.samples().begin(), image.samples().end()));
+    EXPECT_EQ(loo.peak, peak);
+    std::size_t checked = 0;
+    for (std::size_t j = 0; j < field.size(); ++j) {
+        ReflectanceField others, held_out;
+        for (std::size_t i = 0; i < field.size(); ++i) {
+            ReflectanceField& into = i == j ? held_out : others;
+            into.directions.push_back(field.directions[i]);
+            into.images.push_back(field.images[i]);
+        }
+        const Evaluation e = evaluate(others, held_out);
+        // evaluate() rounds each difference to float, leave_one_out() keeps it in double.
+        EXPECT_NEAR(loo.squared_error[j], e.total_squared_error, 1e-7 * e.total_squared_error) << j;
+        const Image relit = render(others, {DirectionalLight{field.directions[j]}});
+        write_image(dir / "relit.png", relit);
+        std::vector<std::uint8_t> predicted(relit.samples().size()), truth(relit.samples().size());
+        ImageFileReader(dir / "relit.png").read_rows(0, relit.height(), predicted);
+        ImageFileReader(dir / "f" / ("field_000" + std::to_string(j) + ".png")).read_rows(0, relit.height(), truth);
+        double codes = 0.0;
+        for (std::size_t k = 0; k < truth.size(); ++k) codes += std::pow(static_cast<double>(predicted[k]) - truth[k], 2.0);
+        EXPECT_NEAR(loo.psnr_srgb8(j), psnr_from_mse(codes / static_cast<double>(truth.size()), 255.0), 1e-9) << j;
+        ++checked;
+    }
+    EXPECT_EQ(checked, 7u);
+    // A float field has no 8-bit PSNR; too few images is refused.
+    const auto exr = write_noise_field(dir, "g", 4, 8, 6, ".exr");
+    FieldReader floats(exr);
+    EXPECT_FALSE(leave_one_out(floats).eight_bit());
+    const auto three = write_noise_field(dir, "h", 3, 8, 6, ".exr");
+    FieldReader few(three);
+    EXPECT_THAT(error_of([&] { leave_one_out(few); }), HasSubstr("leave-one-out needs at least 4 images"));
 }
 
 }  // namespace

@@ -1,9 +1,10 @@
 # `rfd relight render` and `rfd relight eval` end to end on two small rendered fields:
 #  - render: several lights add up, two runs give byte-identical images, an env map works;
 #    several lights relit in one pass give each the bytes it has relit alone;
-#  - eval: a field against itself has no error; a sparse one has some, and --out writes the
-#    CSV and the polar map with nothing temporary left; an env map of the wrong shape is an
-#    input error naming the file; an image the .lp lists that is not there is an I/O error.
+#  - eval: --leave-one-out scores every image of one field; a field against itself has no
+#    error; a sparse one has some, and --out writes the CSV and the polar map with nothing
+#    temporary left; an env map of the wrong shape is an input error naming the file; an
+#    image the .lp lists that is not there is an I/O error.
 file(REMOVE_RECURSE ${OUT})
 function(run_rfd expected_code)
   execute_process(COMMAND ${RFD} --quiet ${ARGN} RESULT_VARIABLE code OUTPUT_VARIABLE stdout ERROR_VARIABLE stderr)
@@ -97,6 +98,21 @@ endforeach()
 file(GLOB leftovers ${OUT}/eval/*.tmp* ${OUT}/eval/.*.tmp* ${OUT}/eval/.tmp*)
 if(leftovers)
   message(FATAL_ERROR "temporary files left behind: ${leftovers}")
+endif()
+
+# Leave-one-out on the field alone: a PSNR per image (linear only: the images are float).
+run_rfd(0 relight eval ${OUT}/dense --leave-one-out --json --out ${OUT}/loo)
+string(JSON images GET "${stdout}" images)
+string(JSON eight_bit GET "${stdout}" eight_bit)
+string(JSON mean GET "${stdout}" mean_psnr_linear_db)
+string(JSON per_light LENGTH "${stdout}" per_light)
+if(NOT images EQUAL 40 OR NOT per_light EQUAL 40 OR eight_bit OR NOT mean GREATER 10)
+  message(FATAL_ERROR "leave-one-out: ${images} images, ${per_light} rows, eight_bit ${eight_bit}, mean ${mean} dB")
+endif()
+file(STRINGS ${OUT}/loo/leave_one_out.csv lines)
+list(LENGTH lines count)
+if(NOT count EQUAL 41)
+  message(FATAL_ERROR "leave_one_out.csv has ${count} lines, expected a header and 40 images")
 endif()
 
 # Under lights: one row per light, a picture per light, and a bad light rejected by name.
