@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -25,6 +26,7 @@
 #include "core/plot.hpp"
 #include "core/sphere.hpp"
 #include "core/units.hpp"
+#include "relight/basis.hpp"
 #include "relight/evaluate.hpp"
 #include "relight/field.hpp"
 #include "relight/interpolation.hpp"
@@ -200,7 +202,7 @@ void add_render(CLI::App& relight) {
 
 struct EvalOptions {
     std::string field, reference, out, interpolation = "delaunay";
-    std::vector<std::string> lights;
+    std::vector<std::string> lights, bases;
     bool json = false, leave_one_out = false;
     WindowOptions window;
 };
@@ -257,60 +259,131 @@ void evaluate_under_lights(const EvalOptions& opt, const relight::ReflectanceFie
         std::printf("  wrote %s/errors.csv and light_K.png (field | reference)\n", opt.out.c_str());
 }
 
-// relight eval --leave-one-out: per image of the field, both PSNRs, and their means.
-void evaluate_leave_one_out(const EvalOptions& opt, relight::Interpolation method) {
-    relight::FieldReader field(opt.field, opt.window.window());
-    const relight::LeaveOneOut loo = relight::leave_one_out(field, method);
-    const std::size_t n = loo.squared_error.size();
-    const char* kCodes = "PSNR in 8-bit sRGB codes (peak 255)";
-    const std::string linear_label = "PSNR linear (peak " + format_number(loo.peak, 6) + ", the brightest sample)";
+// One way of predicting a light from the others, as --basis names it.
+struct Predictor {
+    std::string name;
+    std::optional<relight::Basis> basis;            // a fitted basis, or
+    relight::Interpolation interpolation{};         // interpolation between the lights
+};
+
+std::vector<Predictor> parse_predictors(const std::vector<std::string>& names, const std::string& interpolation) {
+    std::vector<Predictor> out;
+    std::vector<std::string> all;
+    for (const std::string& name : names) {
+        if (name == "all") {
+            all.push_back(interpolation);
+            for (const auto& basis : relight::kBasisNames) all.emplace_back(basis.name);
+        } else {
+            all.push_back(name);
+        }
+    }
+    if (all.empty()) all.push_back(interpolation);
+    for (const std::string& name : all) {
+        Predictor p{name, std::nullopt, {}};
+        bool known = false;
+        for (const auto& basis : relight::kBasisNames)
+            if (name == basis.name) {
+                p.basis = basis.value;
+                known = true;
+            }
+        for (const auto& method : relight::kInterpolationNames)
+            if (name == method.name) {
+                p.interpolation = method.value;
+                known = true;
+            }
+        if (!known)
+            throw InputError("--basis: expected delaunay, solid-angle, nearest, ptm, hsh2, hsh3, hsh4 or all, got '" +
+                             name + "'");
+        out.push_back(p);
+    }
+    return out;
+}
+
+// relight eval --leave-one-out: per image of the field and per way of predicting it, both
+// PSNRs, and their means.
+void evaluate_leave_one_out(const EvalOptions& opt) {
+    const std::vector<Predictor> predictors = parse_predictors(opt.bases, opt.interpolation);
+    std::vector<relight::LeaveOneOut> scores;
+    int width = 0, height = 0;
+    std::filesystem::path light_file;
+    for (const Predictor& p : predictors) {
+        relight::FieldReader field(opt.field, opt.window.window());
+        width = field.width();
+        height = field.height();
+        scores.push_back(p.basis ? relight::leave_one_out(field, relight::BasisFit(*p.basis, field.directions()))
+                                 : relight::leave_one_out(field, p.interpolation));
+    }
+    const relight::LeaveOneOut& first = scores.front();
+    const std::size_t n = first.squared_error.size();
+    const bool eight_bit = first.eight_bit();
+    const auto text = [](double db) {
+        char buffer[32];
+        std::snprintf(buffer, sizeof buffer, "%.2f", db);
+        return std::isnan(db) ? std::string("-") : std::string(buffer);
+    };
     if (!opt.out.empty()) {
         const std::filesystem::path out(opt.out);
         ensure_directory(out);
-        CsvTable errors({"index", "theta_deg", "phi_deg", "psnr_srgb8_db", "psnr_linear_db", "squared_error"});
+        std::vector<std::string> header{"index", "theta_deg", "phi_deg"};
+        for (const Predictor& p : predictors) {
+            if (eight_bit) header.push_back("psnr_srgb8_db_" + p.name);
+            header.push_back("psnr_linear_db_" + p.name);
+        }
+        CsvTable errors(header);
         for (std::size_t j = 0; j < n; ++j) {
-            const SphericalAngles a = angles_of(loo.directions[j]);
-            errors.add_row({std::to_string(j), format_number(radians_to_degrees(a.theta), 10),
-                            format_number(radians_to_degrees(a.phi), 10),
-                            loo.eight_bit() ? format_number(loo.psnr_srgb8(j), 10) : "",
-                            format_number(loo.psnr_linear(j), 10), format_number(loo.squared_error[j], 10)});
+            const SphericalAngles a = angles_of(first.directions[j]);
+            std::vector<std::string> row{std::to_string(j), format_number(radians_to_degrees(a.theta), 10),
+                                         format_number(radians_to_degrees(a.phi), 10)};
+            for (const relight::LeaveOneOut& loo : scores) {
+                if (eight_bit) row.push_back(format_number(loo.psnr_srgb8(j), 10));
+                row.push_back(format_number(loo.psnr_linear(j), 10));
+            }
+            errors.add_row(row);
         }
         errors.write(out / "leave_one_out.csv");
     }
     if (opt.json) {
-        nlohmann::json per_light = nlohmann::json::array();
-        for (std::size_t j = 0; j < n; ++j) {
-            const SphericalAngles a = angles_of(loo.directions[j]);
-            per_light.push_back({{"theta_deg", radians_to_degrees(a.theta)},
-                                 {"phi_deg", radians_to_degrees(a.phi)},
-                                 {"psnr_srgb8_db", loo.eight_bit() ? finite_or_null(loo.psnr_srgb8(j)) : nullptr},
-                                 {"psnr_linear_db", finite_or_null(loo.psnr_linear(j))},
-                                 {"squared_error", loo.squared_error[j]}});
+        nlohmann::json per_basis = nlohmann::json::object();
+        for (std::size_t b = 0; b < predictors.size(); ++b) {
+            const relight::LeaveOneOut& loo = scores[b];
+            nlohmann::json per_light = nlohmann::json::array();
+            for (std::size_t j = 0; j < n; ++j) {
+                const SphericalAngles a = angles_of(loo.directions[j]);
+                per_light.push_back({{"theta_deg", radians_to_degrees(a.theta)},
+                                     {"phi_deg", radians_to_degrees(a.phi)},
+                                     {"psnr_srgb8_db", eight_bit ? finite_or_null(loo.psnr_srgb8(j)) : nullptr},
+                                     {"psnr_linear_db", finite_or_null(loo.psnr_linear(j))}});
+            }
+            per_basis[predictors[b].name] = {
+                {"mean_psnr_srgb8_db", eight_bit ? finite_or_null(loo.mean_psnr_srgb8()) : nullptr},
+                {"mean_psnr_linear_db", finite_or_null(loo.mean_psnr_linear())},
+                {"per_light", std::move(per_light)}};
         }
-        const nlohmann::json summary = {
-            {"field", opt.field},
-            {"interpolation", opt.interpolation},
-            {"images", n},
-            {"eight_bit", loo.eight_bit()},
-            {"peak", loo.peak},
-            {"mean_psnr_srgb8_db", loo.eight_bit() ? finite_or_null(loo.mean_psnr_srgb8()) : nullptr},
-            {"mean_psnr_linear_db", finite_or_null(loo.mean_psnr_linear())},
-            {"per_light", std::move(per_light)}};
+        const nlohmann::json summary = {{"field", opt.field},       {"images", n},
+                                        {"eight_bit", eight_bit},   {"peak", first.peak},
+                                        {"bases", std::move(per_basis)}};
         std::printf("%s\n", summary.dump(2).c_str());
         return;
     }
-    std::printf("%s (%zu images, %d x %d): each image predicted from the others, %s interpolation\n",
-                opt.field.c_str(), n, field.width(), field.height(), opt.interpolation.c_str());
-    if (loo.eight_bit())
-        std::printf("  mean %-58s %.2f dB\n", kCodes, loo.mean_psnr_srgb8());
-    else
-        std::printf("  the images are not 8-bit: no PSNR in 8-bit codes\n");
-    std::printf("  mean %-58s %.2f dB\n", linear_label.c_str(), loo.mean_psnr_linear());
-    std::printf("  %5s %9s %9s %12s %12s\n", "index", "theta", "phi", "sRGB8 dB", "linear dB");
+    std::printf("%s (%zu images, %d x %d): each image predicted from the others\n", opt.field.c_str(), n, width,
+                height);
+    std::printf("  %-12s %24s %34s\n", "", eight_bit ? "PSNR, 8-bit sRGB codes" : "",
+                ("PSNR linear (peak " + format_number(first.peak, 4) + ")").c_str());
+    for (std::size_t b = 0; b < predictors.size(); ++b)
+        std::printf("  mean %-7s %21s dB %31s dB\n", predictors[b].name.c_str(),
+                    eight_bit ? text(scores[b].mean_psnr_srgb8()).c_str() : "-",
+                    text(scores[b].mean_psnr_linear()).c_str());
+    if (!eight_bit) std::printf("  (the images are not 8-bit: no PSNR in 8-bit codes)\n");
+    std::printf("  per image, PSNR %s in dB:\n  %5s %8s %8s", eight_bit ? "in 8-bit sRGB codes" : "linear",
+                "index", "theta", "phi");
+    for (const Predictor& p : predictors) std::printf(" %9s", p.name.c_str());
+    std::printf("\n");
     for (std::size_t j = 0; j < n; ++j) {
-        const SphericalAngles a = angles_of(loo.directions[j]);
-        std::printf("  %5zu %9.3f %9.3f %12s %12.2f\n", j, radians_to_degrees(a.theta), radians_to_degrees(a.phi),
-                    loo.eight_bit() ? format_number(loo.psnr_srgb8(j), 4).c_str() : "-", loo.psnr_linear(j));
+        const SphericalAngles a = angles_of(first.directions[j]);
+        std::printf("  %5zu %8.2f %8.2f", j, radians_to_degrees(a.theta), radians_to_degrees(a.phi));
+        for (const relight::LeaveOneOut& loo : scores)
+            std::printf(" %9s", text(eight_bit ? loo.psnr_srgb8(j) : loo.psnr_linear(j)).c_str());
+        std::printf("\n");
     }
     if (!opt.out.empty()) std::printf("  wrote %s/leave_one_out.csv\n", opt.out.c_str());
 }
@@ -325,6 +398,12 @@ void add_eval(CLI::App& relight) {
                               "Judge the field alone: every image predicted from the others and compared with it "
                               "(PSNR in 8-bit sRGB for 8-bit captures, and linear), read a band of rows at a time");
     loo->excludes(reference_option);
+    cmd->add_option("--basis", opt->bases,
+                    "With --leave-one-out, how each image is predicted: delaunay, solid-angle, nearest "
+                    "(interpolation), ptm, hsh2, hsh3, hsh4 (fitted bases, relight/basis.hpp) or all; repeat to "
+                    "compare (default: --interpolation)")
+        ->needs(loo)
+        ->allow_extra_args(false);
     add_window_options(*cmd, opt->window);
     cmd->add_option("--interpolation", opt->interpolation, "delaunay, solid-angle (eq. 4.6 as written) or nearest");
     cmd->add_option("--light", opt->lights,
@@ -341,7 +420,7 @@ void add_eval(CLI::App& relight) {
         if (opt->leave_one_out) {
             if (!opt->lights.empty()) throw InputError("relight eval: --leave-one-out scores the field's own lights; "
                                                        "leave out --light");
-            evaluate_leave_one_out(*opt, method);
+            evaluate_leave_one_out(*opt);
             return;
         }
         if (opt->reference.empty())

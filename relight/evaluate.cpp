@@ -1,6 +1,8 @@
 #include "relight/evaluate.hpp"
 
 #include <algorithm>
+#include <functional>
+#include <limits>
 #include <cmath>
 #include <string>
 
@@ -121,17 +123,86 @@ double LeaveOneOut::psnr_srgb8(std::size_t j) const {
     return psnr_from_mse(code_squared_error.at(j) / samples_per_image, 255.0);
 }
 
-double LeaveOneOut::mean_psnr_linear() const {
-    double sum = 0.0;
-    for (std::size_t j = 0; j < squared_error.size(); ++j) sum += psnr_linear(j);
-    return sum / static_cast<double>(squared_error.size());
+namespace {
+
+// out(j, k): the prediction of held-out image j at sample first + k of a band (all its
+// channels' samples, in Image order), for k < count.
+using PredictChunk = std::function<void(const std::vector<Image>& band, std::size_t first, std::size_t count,
+                                        Eigen::MatrixXf& out)>;
+
+// Leave-one-out scores from `predict`, the field read a band of rows at a time and each band
+// cut into fixed chunks of samples, scored in parallel and summed in chunk order: the sums do
+// not depend on the threads. Images `predictable` says false of get NaN.
+LeaveOneOut score_left_out(FieldReader& field, const std::vector<bool>& predictable, std::size_t band_bytes,
+                           const PredictChunk& predict) {
+    const std::size_t n = field.size();
+    LeaveOneOut result;
+    result.directions = field.directions();
+    result.squared_error.assign(n, 0.0);
+    const bool eight_bit = field.sample_type() == SampleType::UInt8;
+    if (eight_bit) result.code_squared_error.assign(n, 0.0);
+    result.samples_per_image = static_cast<double>(field.width()) * field.height() * field.channels();
+    constexpr std::size_t kChunk = 2048;
+    const int rows = field.band_rows(n, 0, band_bytes);
+    float peak = 0.0f;
+    Progress progress("leave-one-out", static_cast<std::size_t>((field.height() + rows - 1) / rows));
+    for (int y0 = 0; y0 < field.height(); y0 += rows) {
+        const std::vector<Image> band = field.read_band(y0, std::min(field.height(), y0 + rows));
+        const std::size_t samples = band.front().samples().size(), chunks = (samples + kChunk - 1) / kChunk;
+        Eigen::MatrixXd linear = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(chunks));
+        Eigen::MatrixXd codes = linear;
+        std::vector<float> peaks(chunks, 0.0f);
+        parallel_for_chunks(chunks, 1, [&](std::size_t begin, std::size_t end) {
+            Eigen::MatrixXf predicted;
+            std::array<std::uint8_t, kChunk> predicted_codes{}, true_codes{};
+            std::array<float, kChunk> row{};
+            for (std::size_t chunk = begin; chunk < end; ++chunk) {
+                const std::size_t first = chunk * kChunk, count = std::min(kChunk, samples - first);
+                predict(band, first, count, predicted);
+                for (std::size_t j = 0; j < n; ++j) {
+                    const std::span<const float> truth = band[j].samples().subspan(first, count);
+                    for (const float v : truth) peaks[chunk] = std::max(peaks[chunk], v);
+                    if (!predictable[j]) continue;
+                    double sum = 0.0;
+                    for (std::size_t k = 0; k < count; ++k) {
+                        row[k] = predicted(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(k));
+                        const double e = static_cast<double>(row[k]) - truth[k];
+                        sum += e * e;
+                    }
+                    linear(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(chunk)) = sum;
+                    if (!eight_bit) continue;
+                    encode_srgb8(std::span<const float>(row.data(), count),
+                                 std::span<std::uint8_t>(predicted_codes.data(), count));
+                    encode_srgb8(truth, std::span<std::uint8_t>(true_codes.data(), count));
+                    double code_sum = 0.0;
+                    for (std::size_t k = 0; k < count; ++k) {
+                        const int c = int{predicted_codes[k]} - int{true_codes[k]};
+                        code_sum += c * c;
+                    }
+                    codes(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(chunk)) = code_sum;
+                }
+            }
+        });
+        for (std::size_t j = 0; j < n; ++j)
+            for (std::size_t chunk = 0; chunk < chunks; ++chunk) {
+                result.squared_error[j] += linear(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(chunk));
+                if (eight_bit)
+                    result.code_squared_error[j] += codes(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(chunk));
+            }
+        for (const float v : peaks) peak = std::max(peak, v);
+        progress.advance();
+    }
+    progress.finish();
+    result.peak = peak;
+    for (std::size_t j = 0; j < n; ++j)
+        if (!predictable[j]) {
+            result.squared_error[j] = std::numeric_limits<double>::quiet_NaN();
+            if (eight_bit) result.code_squared_error[j] = std::numeric_limits<double>::quiet_NaN();
+        }
+    return result;
 }
 
-double LeaveOneOut::mean_psnr_srgb8() const {
-    double sum = 0.0;
-    for (std::size_t j = 0; j < code_squared_error.size(); ++j) sum += psnr_srgb8(j);
-    return sum / static_cast<double>(code_squared_error.size());
-}
+}  // namespace
 
 LeaveOneOut leave_one_out(FieldReader& field, Interpolation method, std::size_t band_bytes) {
     const std::size_t n = field.size();
@@ -150,62 +221,66 @@ LeaveOneOut leave_one_out(FieldReader& field, Interpolation method, std::size_t 
         for (std::size_t k = 0; k < w.count; ++k) w.index[k] += w.index[k] >= j ? 1 : 0;
         weights[j] = w;
     }
-    LeaveOneOut result;
-    result.directions = directions;
-    result.squared_error.assign(n, 0.0);
-    const bool eight_bit = field.sample_type() == SampleType::UInt8;
-    if (eight_bit) result.code_squared_error.assign(n, 0.0);
-    result.samples_per_image = static_cast<double>(field.width()) * field.height() * field.channels();
-    std::vector<float> peaks(n, 0.0f);
-    const int rows = field.band_rows(n, 0, band_bytes);
-    Progress progress("leave-one-out", static_cast<std::size_t>((field.height() + rows - 1) / rows));
-    for (int y0 = 0; y0 < field.height(); y0 += rows) {
-        const std::vector<Image> band = field.read_band(y0, std::min(field.height(), y0 + rows));
-        parallel_for_chunks(n, 1, [&](std::size_t begin, std::size_t end) {
-            for (std::size_t j = begin; j < end; ++j) {
-                const InterpolationWeights& w = weights[j];
-                const std::span<const float> truth = band[j].samples();
-                std::array<const float*, 3> from{};
-                std::array<float, 3> k{};
-                for (std::size_t t = 0; t < 3; ++t) {
-                    from[t] = band[w.index[t < w.count ? t : 0]].samples().data();
-                    k[t] = t < w.count ? static_cast<float>(w.weight[t]) : 0.0f;
-                }
-                double linear = 0.0, codes = 0.0;
-                float peak = peaks[j];
-                // A chunk at a time: the prediction, then its codes and the image's.
-                constexpr std::size_t kChunk = 4096;
-                std::array<float, kChunk> predicted{};
-                std::array<std::uint8_t, kChunk> predicted_codes{}, true_codes{};
-                for (std::size_t first = 0; first < truth.size(); first += kChunk) {
-                    const std::size_t count = std::min(kChunk, truth.size() - first);
-                    for (std::size_t s = 0; s < count; ++s) {
-                        const std::size_t at = first + s;
-                        predicted[s] = k[0] * from[0][at] + k[1] * from[1][at] + k[2] * from[2][at];
-                        const double e = static_cast<double>(predicted[s]) - truth[at];
-                        linear += e * e;
-                        peak = std::max(peak, truth[at]);
-                    }
-                    if (!eight_bit) continue;
-                    encode_srgb8(std::span<const float>(predicted.data(), count),
-                                 std::span<std::uint8_t>(predicted_codes.data(), count));
-                    encode_srgb8(truth.subspan(first, count), std::span<std::uint8_t>(true_codes.data(), count));
-                    for (std::size_t s = 0; s < count; ++s) {
-                        const int c = int{predicted_codes[s]} - int{true_codes[s]};
-                        codes += c * c;
-                    }
-                }
-                // Band after band in order, whatever the thread: the sums do not depend on it.
-                result.squared_error[j] += linear;
-                if (eight_bit) result.code_squared_error[j] += codes;
-                peaks[j] = peak;
+    const auto predict = [&](const std::vector<Image>& band, std::size_t first, std::size_t count,
+                             Eigen::MatrixXf& out) {
+        out.resize(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(count));
+        for (std::size_t j = 0; j < n; ++j) {
+            const InterpolationWeights& w = weights[j];
+            std::array<const float*, 3> from{};
+            std::array<float, 3> k{};
+            for (std::size_t t = 0; t < 3; ++t) {
+                from[t] = band[w.index[t < w.count ? t : 0]].samples().data() + first;
+                k[t] = t < w.count ? static_cast<float>(w.weight[t]) : 0.0f;
             }
-        });
-        progress.advance();
-    }
-    progress.finish();
-    result.peak = *std::max_element(peaks.begin(), peaks.end());
-    return result;
+            for (std::size_t s = 0; s < count; ++s)
+                out(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(s)) =
+                    k[0] * from[0][s] + k[1] * from[1][s] + k[2] * from[2][s];
+        }
+    };
+    return score_left_out(field, std::vector<bool>(n, true), band_bytes, predict);
 }
+
+LeaveOneOut leave_one_out(FieldReader& field, const BasisFit& fit, std::size_t band_bytes) {
+    RFD_CHECK(fit.lights() == field.size());
+    const std::size_t n = field.size();
+    std::vector<bool> predictable(n);
+    // The PRESS residual: y_j minus the prediction without j is r_j / (1 - h_jj).
+    Eigen::VectorXd inverse_gap(static_cast<Eigen::Index>(n));
+    for (std::size_t j = 0; j < n; ++j) {
+        predictable[j] = fit.predictable_without(j);
+        inverse_gap[static_cast<Eigen::Index>(j)] =
+            predictable[j] ? 1.0 / (1.0 - fit.leverage()[static_cast<Eigen::Index>(j)]) : 0.0;
+    }
+    const auto predict = [&](const std::vector<Image>& band, std::size_t first, std::size_t count,
+                             Eigen::MatrixXf& out) {
+        Eigen::MatrixXd y(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(count));
+        for (std::size_t i = 0; i < n; ++i)
+            for (std::size_t s = 0; s < count; ++s)
+                y(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(s)) = band[i].samples()[first + s];
+        const Eigen::MatrixXd residual = y - fit.design() * (fit.solve() * y);
+        out = (y - inverse_gap.asDiagonal() * residual).cast<float>();
+    };
+    return score_left_out(field, predictable, band_bytes, predict);
+}
+
+namespace {
+
+// The mean over images of the PSNR of each one's summed squared error, NaN ones left out.
+double mean_psnr(const std::vector<double>& squared_errors, double samples_per_image, double peak) {
+    double sum = 0.0;
+    std::size_t count = 0;
+    for (const double e : squared_errors)
+        if (!std::isnan(e)) {
+            sum += psnr_from_mse(e / samples_per_image, peak);
+            ++count;
+        }
+    return sum / static_cast<double>(count);
+}
+
+}  // namespace
+
+double LeaveOneOut::mean_psnr_linear() const { return mean_psnr(squared_error, samples_per_image, peak); }
+
+double LeaveOneOut::mean_psnr_srgb8() const { return mean_psnr(code_squared_error, samples_per_image, 255.0); }
 
 }  // namespace rfd::relight

@@ -17,6 +17,7 @@
 
 #include <Eigen/Core>
 
+#include "relight/basis.hpp"
 #include "relight/field.hpp"
 #include "relight/interpolation.hpp"
 #include "relight/render.hpp"
@@ -69,7 +70,8 @@ struct LeaveOneOut {
     bool eight_bit() const { return !code_squared_error.empty(); }
     double psnr_linear(std::size_t j) const;
     double psnr_srgb8(std::size_t j) const;
-    /// Means over the held-out images of their PSNRs, as RTI evaluations average them.
+    /// Means over the held-out images of their PSNRs, as RTI evaluations average them
+    /// (images with NaN errors left out).
     double mean_psnr_linear() const;
     double mean_psnr_srgb8() const;
 };
@@ -79,6 +81,10 @@ struct LeaveOneOut {
 /// `band_bytes` bounds a band (FieldReader::band_rows).
 LeaveOneOut leave_one_out(FieldReader& field, Interpolation method = Interpolation::Delaunay,
                           std::size_t band_bytes = FieldReader::kBandBytes);
+/// The same for a fitted basis (relight/basis.hpp), each light's prediction that of the fit
+/// without it (in closed form). A light the others cannot determine the fit without (leverage
+/// 1) has NaN errors and is left out of the means.
+LeaveOneOut leave_one_out(FieldReader& field, const BasisFit& fit, std::size_t band_bytes = FieldReader::kBandBytes);
 
 /// Sum of (w0 a + w1 b + w2 c - reference)^2 over every sample (weights of images a, b, c;
 /// pass the same image with weight 0 for unused slots). Fixed order, vectorisable.
