@@ -153,14 +153,9 @@ void add_render(CLI::App& relight) {
         for (const auto& lights : renders)
             coefficients.push_back(relight::light_coefficients(interpolator, lights, method));
         const auto t1 = std::chrono::steady_clock::now();
-        relight::relight_to_files(field, coefficients, outs);
+        const std::size_t decoded = relight::relight_to_files(field, coefficients, outs);
         const auto t2 = std::chrono::steady_clock::now();
         const auto seconds = [](auto a, auto b) { return std::chrono::duration<double>(b - a).count(); };
-        std::vector<bool> needed(field.size(), false);
-        for (const auto& k : coefficients)
-            for (std::size_t i = 0; i < field.size(); ++i)
-                needed[i] = needed[i] || !k.k.row(static_cast<Eigen::Index>(i)).isZero();
-        const auto decoded = static_cast<std::size_t>(std::count(needed.begin(), needed.end(), true));
         if (opt->json) {
             nlohmann::json images = nlohmann::json::array();
             for (std::size_t j = 0; j < outs.size(); ++j) {

@@ -150,6 +150,14 @@ ImageBandReader::ImageBandReader(const std::filesystem::path& path) : file_(path
                              std::to_string(static_cast<long>(kMaxRowSamples)) + " samples a row may hold");
 }
 
+template <typename Code>
+void ImageBandReader::read_codes(std::vector<Code>& buffer, SampleType type, int y0, int y1, int x0, Image& out) {
+    buffer.resize(static_cast<std::size_t>(y1 - y0) * width() * channels());
+    file_.read_rows(y0, y1, type, buffer.data());
+    const float* table = linear_table<Code>().data();
+    deinterleave(buffer, width(), channels(), x0, out, [table](Code v) { return table[v]; });
+}
+
 Image ImageBandReader::read(int y0, int y1, int x0, int x1) {
     if (x1 == 0) x1 = width();
     RFD_CHECK(0 <= y0 && y0 < y1 && y1 <= height() && 0 <= x0 && x0 < x1 && x1 <= width());
@@ -157,20 +165,8 @@ Image ImageBandReader::read(int y0, int y1, int x0, int x1) {
     const std::size_t samples = static_cast<std::size_t>(y1 - y0) * width() * channels;
     Image out(x1 - x0, y1 - y0, channels);
     switch (file_.spec().type) {
-    case SampleType::UInt8: {
-        bytes_.resize(samples);
-        file_.read_rows(y0, y1, SampleType::UInt8, bytes_.data());
-        const float* table = linear_table<std::uint8_t>().data();
-        deinterleave(bytes_, width(), channels, x0, out, [table](std::uint8_t v) { return table[v]; });
-        break;
-    }
-    case SampleType::UInt16: {
-        words_.resize(samples);
-        file_.read_rows(y0, y1, SampleType::UInt16, words_.data());
-        const float* table = linear_table<std::uint16_t>().data();
-        deinterleave(words_, width(), channels, x0, out, [table](std::uint16_t v) { return table[v]; });
-        break;
-    }
+    case SampleType::UInt8: read_codes(bytes_, SampleType::UInt8, y0, y1, x0, out); break;
+    case SampleType::UInt16: read_codes(words_, SampleType::UInt16, y0, y1, x0, out); break;
     default:
         floats_.resize(samples);
         file_.read_rows(y0, y1, SampleType::Float32, floats_.data());

@@ -65,6 +65,10 @@ public:
     Image read(int y0, int y1, int x0 = 0, int x1 = 0);
 
 private:
+    // Rows of 8- or 16-bit sRGB codes, decoded through their table into `out`.
+    template <typename Code>
+    void read_codes(std::vector<Code>& buffer, SampleType type, int y0, int y1, int x0, Image& out);
+
     ImageFileReader file_;
     std::vector<std::uint8_t> bytes_;     // a band of an 8-bit file, as stored, reused
     std::vector<std::uint16_t> words_;    // of a 16-bit file

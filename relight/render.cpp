@@ -299,7 +299,7 @@ Image relight(const std::vector<Image>& images, const LightCoefficients& coeffic
     return out;
 }
 
-void relight_to_files(FieldReader& reader, const std::vector<LightCoefficients>& coefficients,
+std::size_t relight_to_files(FieldReader& reader, const std::vector<LightCoefficients>& coefficients,
                       const std::vector<std::filesystem::path>& outs, std::size_t band_bytes) {
     RFD_CHECK(coefficients.size() == outs.size() && !outs.empty());
     // The images some light needs: the others are never decoded.
@@ -333,6 +333,7 @@ void relight_to_files(FieldReader& reader, const std::vector<LightCoefficients>&
     }
     for (auto& writer : writers) writer->finish();
     progress.finish();
+    return images;
 }
 
 Image render(const ReflectanceField& field, const std::vector<Light>& lights, Interpolation method) {

@@ -98,8 +98,8 @@ Image relight(const std::vector<Image>& images, const LightCoefficients& coeffic
 /// the images some light needs are decoded, each once, and memory holds one band of them
 /// (FieldReader::kBandBytes), whatever the field's size. The same samples as relight() of
 /// the whole field. Nothing is at an output's path until every band is written.
-/// `band_bytes` bounds a band (FieldReader::band_rows).
-void relight_to_files(FieldReader& reader, const std::vector<LightCoefficients>& coefficients,
+/// `band_bytes` bounds a band (FieldReader::band_rows). Returns how many images were decoded.
+std::size_t relight_to_files(FieldReader& reader, const std::vector<LightCoefficients>& coefficients,
                       const std::vector<std::filesystem::path>& outs,
                       std::size_t band_bytes = FieldReader::kBandBytes);
 
