@@ -13,11 +13,15 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/commands.hpp"
+#include "core/config.hpp"
 #include "core/error.hpp"
+#include "core/files.hpp"
 #include "core/image_io.hpp"
 #include "core/sphere.hpp"
+#include "core/text.hpp"
 #include "core/units.hpp"
 #include "relight/calibration.hpp"
+#include "relight/sphere_detection.hpp"
 #include "relight/field.hpp"
 #include "relight/hdr.hpp"
 
@@ -163,75 +167,366 @@ void add_hdr_command(CLI::App& capture) {
     });
 }
 
+// The camera the photographs were taken with: a focal length in pixels given, or one in 35 mm
+// film terms (given, or the first photograph's EXIF) scaled by the image diagonal; else
+// orthographic, as RTIBuilder and CNR relight assume.
+struct CameraChoice {
+    relight::CalibrationCamera camera;
+    std::string source;
+};
+
+CameraChoice choose_camera(double focal_px, double focal_35mm, const fs::path& first_image) {
+    const ImageBandReader first(first_image);
+    const int width = first.width(), height = first.height();
+    constexpr double kFilmDiagonalMm = 43.266615305567875;  // 36 x 24 mm
+    const double diagonal = std::hypot(static_cast<double>(width), static_cast<double>(height));
+    if (focal_px > 0.0) return {relight::pinhole_camera(focal_px, width, height), "--focal-length-px"};
+    if (focal_35mm > 0.0)
+        return {relight::pinhole_camera(focal_35mm * diagonal / kFilmDiagonalMm, width, height),
+                "--focal-length-35mm " + format_number(focal_35mm) + " mm"};
+    if (first.spec().focal_length_35mm)
+        return {relight::pinhole_camera(*first.spec().focal_length_35mm * diagonal / kFilmDiagonalMm, width, height),
+                "the EXIF 35 mm focal length of " + first_image.filename().string() + ", " +
+                    format_number(*first.spec().focal_length_35mm) + " mm"};
+    return {relight::CalibrationCamera{}, "orthographic: no focal length given or in the EXIF"};
+}
+
+// The user's corrections: spheres' outlines, photographs to leave out, the focal length.
+struct Overrides {
+    std::vector<relight::MirrorSphere> spheres;
+    std::vector<std::string> drop;
+    double focal_length_px = 0.0;
+};
+
+Overrides read_overrides(const fs::path& file) {
+    ConfigTable doc = ConfigTable::parse_file(file);
+    Overrides o;
+    if (const auto f = doc.optional_number("focal_length_px", 1.0, 1e7)) o.focal_length_px = *f;
+    if (doc.has("sphere"))
+        for (ConfigTable& sphere : doc.table_array("sphere")) {
+            const std::vector<double> circle = sphere.numbers("circle_px", 3, -1e7, 1e7);
+            if (!(circle[2] > 0.0)) sphere.fail("circle_px", "expected [CX, CY, R] with a radius R > 0 pixels");
+            o.spheres.push_back({circle[0], circle[1], circle[2]});
+            sphere.finish();
+        }
+    if (doc.has("drop")) o.drop = doc.strings("drop");
+    doc.finish();
+    return o;
+}
+
+std::string overrides_text(const std::vector<relight::CalibrationSphere>& spheres, double focal_length_px,
+                           const std::vector<std::string>& drop) {
+    std::string text = "# rfd capture calibrate --overrides: edit a sphere's circle, list photographs to drop.\n";
+    if (focal_length_px > 0.0) text += "focal_length_px = " + format_number(focal_length_px) + "\n";
+    text += "drop = [";
+    for (std::size_t i = 0; i < drop.size(); ++i) text += (i ? ", " : "") + toml_string(drop[i]);
+    text += "]\n";
+    for (const auto& s : spheres)
+        text += "\n[[sphere]]\ncircle_px = [" + format_number(s.outline.centre_x) + ", " +
+                format_number(s.outline.centre_y) + ", " + format_number(s.outline.radius) + "]\n";
+    return text;
+}
+
+// The photographs named by --drop: file names (or paths) as given, or 1-based numbers.
+std::vector<bool> dropped_images(const std::vector<std::string>& images, const std::vector<std::string>& drop,
+                                 const std::string& what) {
+    std::vector<bool> dropped(images.size(), false);
+    for (const std::string& name : drop) {
+        bool matched = false;
+        for (std::size_t i = 0; i < images.size(); ++i)
+            if (images[i] == name || fs::path(images[i]).filename() == name) dropped[i] = matched = true;
+        if (!matched && !name.empty() && std::all_of(name.begin(), name.end(), [](unsigned char c) { return std::isdigit(c); })) {
+            const std::size_t number = std::stoul(name);
+            if (number >= 1 && number <= images.size()) dropped[number - 1] = matched = true;
+        }
+        if (!matched)
+            throw InputError(what + ": '" + name + "' is none of the photographs (a file name, or a number from 1 to " +
+                             std::to_string(images.size()) + ")");
+    }
+    return dropped;
+}
+
 void add_calibrate_command(CLI::App& capture) {
     auto* cmd = capture.add_subcommand(
-        "calibrate", "Light directions from the highlight on a mirror sphere, one photograph per light, into a .lp file");
+        "calibrate", "Light directions from the highlights on calibration spheres (chrome or black glossy), found in "
+                     "the photographs by themselves, into a .lp file");
     struct Options {
-        std::string sphere;
-        std::vector<std::string> mirror_images;
+        std::vector<std::string> spheres;
+        std::vector<std::string> images;
         std::vector<std::string> field_images;
+        std::vector<std::string> drop;
+        std::string overrides;
+        std::string save_overrides;
+        std::string compare;
         std::string out;
+        double focal_px = 0.0;
+        double focal_35mm = 0.0;
+        double sphere_diameter_mm = 0.0;
         bool json = false;
     };
     auto opt = std::make_shared<Options>();
-    cmd->add_option("MIRROR_IMAGES", opt->mirror_images, "Photographs of the mirror sphere, one per light")->required();
-    cmd->add_option("--sphere", opt->sphere,
-                    "Outline of the sphere in the images, CX,CY,R: centre and radius in pixels from the "
-                    "top-left corner (pixel centres at .5)")
+    cmd->add_option("IMAGES", opt->images,
+                    "Photographs, one per light: the capture with its spheres in view, or photographs of a mirror "
+                    "sphere")
         ->required();
+    cmd->add_option("--sphere", opt->spheres,
+                    "A sphere's outline CX,CY,R in pixels from the top-left corner (pixel centres at .5), repeat for "
+                    "several; default: found in the photographs")
+        ->allow_extra_args(false)
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    cmd->add_option("--overrides", opt->overrides,
+                    "TOML file of corrections: [[sphere]] circle_px = [CX, CY, R], drop = [names], focal_length_px "
+                    "(write one with --save-overrides)");
+    cmd->add_option("--save-overrides", opt->save_overrides,
+                    "Write the spheres used, the focal length and the photographs dropped as an --overrides file");
+    cmd->add_option("--drop", opt->drop, "Leave a photograph out of the light file (a file name or a number from 1); repeat for several")
+        ->allow_extra_args(false)
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    auto* focal_px = cmd->add_option("--focal-length-px", opt->focal_px,
+                                     "The camera's focal length in pixels (default: from --focal-length-35mm or "
+                                     "the EXIF; else the camera is taken as distant)")
+                         ->check(CLI::PositiveNumber);
+    cmd->add_option("--focal-length-35mm", opt->focal_35mm,
+                       "The lens's 35 mm-equivalent focal length in mm (default: the first photograph's EXIF)")
+        ->check(CLI::PositiveNumber)
+        ->excludes(focal_px);
+    cmd->add_option("--sphere-diameter-mm", opt->sphere_diameter_mm,
+                    "The spheres' diameter, to give near lights' positions in mm (default: in sphere radii)")
+        ->check(CLI::PositiveNumber);
+    cmd->add_option("--compare", opt->compare,
+                    "A light file of the true directions (the dome's own), one line per photograph: print the "
+                    "angular error of each light");
     cmd->add_option("--out", opt->out, "Light file to write (.lp)")->required();
     cmd->add_option("--images", opt->field_images,
-                    "Field images to list in the light file, in the same order (default: the mirror images)");
+                    "Field images to list in the light file, in the same order (default: the photographs)");
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
     cmd->callback([opt] {
-        if (!opt->field_images.empty() && opt->field_images.size() != opt->mirror_images.size())
+        if (!opt->field_images.empty() && opt->field_images.size() != opt->images.size())
             throw InputError("--images: got " + std::to_string(opt->field_images.size()) + " field images for " +
-                             std::to_string(opt->mirror_images.size()) + " mirror-sphere images; expected one each");
-        const relight::MirrorSphere sphere = parse_sphere(opt->sphere);
-        const std::vector<fs::path> mirrors(opt->mirror_images.begin(), opt->mirror_images.end());
-        const std::vector<std::string>& listed = opt->field_images.empty() ? opt->mirror_images : opt->field_images;
+                             std::to_string(opt->images.size()) + " mirror-sphere images; expected one each");
+        Overrides overrides;
+        if (!opt->overrides.empty()) overrides = read_overrides(opt->overrides);
+        std::vector<relight::MirrorSphere> given = overrides.spheres;
+        if (!opt->spheres.empty()) {
+            given.clear();
+            for (const std::string& text : opt->spheres) given.push_back(parse_sphere(text));
+        }
+        std::vector<std::string> drop = overrides.drop;
+        drop.insert(drop.end(), opt->drop.begin(), opt->drop.end());
+        const std::vector<bool> dropped = dropped_images(opt->images, drop, opt->overrides.empty() ? "--drop" : "--drop/--overrides");
+        std::vector<relight::LightEntry> truth;
+        if (!opt->compare.empty()) {
+            truth = relight::read_light_file(opt->compare);
+            if (truth.size() != opt->images.size())
+                throw InputError(SourceLocation{opt->compare}, "lists " + std::to_string(truth.size()) + " lights for " +
+                                                                   std::to_string(opt->images.size()) +
+                                                                   " photographs; expected one per photograph");
+        }
+        const std::vector<std::string>& listed = opt->field_images.empty() ? opt->images : opt->field_images;
         std::vector<std::string> names;
         for (const std::string& image : listed) names.push_back(name_in_light_file(image, opt->out));
 
-        const std::vector<relight::CalibratedLight> lights = relight::calibrate_lights(mirrors, sphere);
-        std::vector<Eigen::Vector3d> directions;
-        for (const auto& light : lights) directions.push_back(light.highlight.direction);
-        relight::write_light_file(opt->out, names, directions);
+        const std::vector<fs::path> photos(opt->images.begin(), opt->images.end());
+        const CameraChoice camera =
+            choose_camera(opt->focal_px > 0.0 ? opt->focal_px : overrides.focal_length_px, opt->focal_35mm, photos.front());
+        const relight::CaptureCalibration calibration = relight::calibrate_capture(photos, {camera.camera, given});
 
-        nlohmann::json entries = nlohmann::json::array();
-        if (!opt->json)
-            std::printf("calibrated %zu light(s) into %s\n  %-28s %9s %9s %8s %8s\n", lights.size(), opt->out.c_str(),
-                        "mirror image", "theta deg", "phi deg", "x px", "y px");
-        for (std::size_t i = 0; i < lights.size(); ++i) {
-            const relight::Highlight& h = lights[i].highlight;
-            const SphericalAngles angles = angles_of(h.direction);
-            const double theta = radians_to_degrees(angles.theta), phi = radians_to_degrees(angles.phi);
-            if (h.touches_rim)
-                std::fprintf(stderr, "rfd: warning: %s: the highlight reaches the rim of the sphere; the light is "
-                                     "nearly behind it and its direction less certain\n",
-                             opt->mirror_images[i].c_str());
-            if (opt->json) {
-                entries.push_back({{"mirror_image", opt->mirror_images[i]},
-                                   {"listed_as", names[i]},
-                                   {"direction", {h.direction.x(), h.direction.y(), h.direction.z()}},
-                                   {"theta_deg", theta},
-                                   {"phi_deg", phi},
-                                   {"centroid_px", {h.centroid.x(), h.centroid.y()}},
-                                   {"highlight_pixels", h.pixels},
-                                   {"touches_rim", h.touches_rim}});
-            } else {
-                std::printf("  %-28s %9.3f %9.3f %8.2f %8.2f%s\n", fs::path(opt->mirror_images[i]).filename().c_str(),
-                            theta, phi, h.centroid.x(), h.centroid.y(), h.direction.z() <= 0.0 ? "  (below the horizon)" : "");
+        // Every photograph kept needs a light.
+        for (std::size_t i = 0; i < photos.size(); ++i) {
+            const relight::CalibratedImageLight& light = calibration.lights[i];
+            if (dropped[i] || light.spheres_used > 0) continue;
+            std::string why;
+            for (std::size_t s = 0; s < light.highlights.size(); ++s)
+                why += (s ? "; " : "") + (light.highlights.size() > 1 ? "sphere " + std::to_string(s + 1) + ": " : "") +
+                       relight::highlight_problem(light.highlights[s]);
+            throw InputError(SourceLocation{opt->images[i]},
+                             why + (dropped.size() > 1 ? " (leave it out with --drop " + fs::path(opt->images[i]).filename().string() + ")" : ""));
+        }
+        std::vector<std::string> kept_names;
+        std::vector<Eigen::Vector3d> directions;
+        for (std::size_t i = 0; i < photos.size(); ++i)
+            if (!dropped[i]) {
+                kept_names.push_back(names[i]);
+                directions.push_back(calibration.lights[i].direction);
             }
+        if (directions.empty()) throw InputError("--drop: every photograph was dropped; nothing to calibrate");
+        relight::write_light_file(opt->out, kept_names, directions);
+        if (!opt->save_overrides.empty()) {
+            std::vector<std::string> dropped_names;
+            for (std::size_t i = 0; i < photos.size(); ++i)
+                if (dropped[i]) dropped_names.push_back(fs::path(opt->images[i]).filename().string());
+            write_text_file(opt->save_overrides,
+                            overrides_text(calibration.spheres, camera.camera.focal_length_px, dropped_names));
         }
+
+        std::vector<relight::SphereView> views;
+        for (const auto& s : calibration.spheres) views.emplace_back(s.outline, camera.camera);
+        // Positions are in sphere radii; a diameter in mm makes them millimetres.
+        const double unit = opt->sphere_diameter_mm > 0.0 ? 0.5 * opt->sphere_diameter_mm : 1.0;
+        const std::string unit_name = opt->sphere_diameter_mm > 0.0 ? "mm" : "sphere radii";
+
+        nlohmann::json spheres_json = nlohmann::json::array(), lights_json = nlohmann::json::array();
+        for (std::size_t s = 0; s < calibration.spheres.size(); ++s) {
+            const auto& sphere = calibration.spheres[s];
+            nlohmann::json entry = {{"circle_px", {sphere.outline.centre_x, sphere.outline.centre_y, sphere.outline.radius}},
+                                    {"highlights", sphere.highlights},
+                                    {"detected", sphere.fit.has_value()}};
+            if (sphere.aligned_rms_px) entry["aligned_rms_px"] = *sphere.aligned_rms_px;
+            entry["primary"] = static_cast<int>(s) == calibration.primary;
+            if (sphere.fit) {
+                entry["edges"] = sphere.fit->edges;
+                entry["rays"] = sphere.fit->rays;
+                entry["edge_rms_px"] = sphere.fit->rms_px;
+            }
+            spheres_json.push_back(entry);
+        }
+        double sum_error = 0.0, worst_error = 0.0, sum_disagreement = 0.0, worst_disagreement = 0.0;
+        std::size_t compared = 0, worst_error_at = 0, worst_disagreement_at = 0, disagreements = 0;
+        std::string table;
+        for (std::size_t i = 0; i < photos.size(); ++i) {
+            const relight::CalibratedImageLight& light = calibration.lights[i];
+            const SphericalAngles angles = angles_of(light.direction);
+            const double theta = radians_to_degrees(angles.theta), phi = radians_to_degrees(angles.phi);
+            nlohmann::json per_sphere = nlohmann::json::array();
+            std::string points;
+            for (const relight::Highlight& h : light.highlights) {
+                if (h.status == relight::HighlightStatus::Found) {
+                    per_sphere.push_back({{"direction", {h.direction.x(), h.direction.y(), h.direction.z()}},
+                                          {"centroid_px", {h.centroid.x(), h.centroid.y()}},
+                                          {"highlight_pixels", h.pixels},
+                                          {"touches_rim", h.touches_rim}});
+                    char cell[48];
+                    std::snprintf(cell, sizeof cell, " %8.2f %8.2f", h.centroid.x(), h.centroid.y());
+                    points += cell;
+                } else {
+                    per_sphere.push_back({{"problem", relight::highlight_problem(h)}});
+                    points += "        -        -";
+                }
+                if (h.status == relight::HighlightStatus::Found && h.touches_rim && !dropped[i])
+                    std::fprintf(stderr, "rfd: warning: %s: the highlight reaches the rim of the sphere; the light is "
+                                         "nearly behind it and its direction less certain\n",
+                                 opt->images[i].c_str());
+            }
+            nlohmann::json entry = {{"image", opt->images[i]},
+                                    {"listed_as", names[i]},
+                                    {"dropped", dropped[i]},
+                                    {"spheres", per_sphere},
+                                    {"spheres_used", light.spheres_used}};
+            char row[160];
+            std::snprintf(row, sizeof row, "  %-24s", fs::path(opt->images[i]).filename().c_str());
+            std::string line = row;
+            if (light.spheres_used > 0) {
+                entry["direction"] = {light.direction.x(), light.direction.y(), light.direction.z()};
+                entry["theta_deg"] = theta;
+                entry["phi_deg"] = phi;
+                std::snprintf(row, sizeof row, " %9.3f %9.3f", theta, phi);
+                line += row;
+            } else {
+                line += "         -         -";
+            }
+            line += points;
+            if (light.spheres_used > 1) {
+                entry["disagreement_deg"] = light.disagreement_deg;
+                std::snprintf(row, sizeof row, " %8.3f", light.disagreement_deg);
+                line += row;
+                if (!dropped[i]) {
+                    sum_disagreement += light.disagreement_deg;
+                    ++disagreements;
+                    if (light.disagreement_deg >= worst_disagreement) {
+                        worst_disagreement = light.disagreement_deg;
+                        worst_disagreement_at = i;
+                    }
+                }
+                if (const auto lamp = relight::near_light(views, light.highlights); lamp && !lamp->distant) {
+                    entry["near_light"] = {{"position", {unit * lamp->position.x(), unit * lamp->position.y(),
+                                                         unit * lamp->position.z()}},
+                                           {"distance", unit * lamp->distance},
+                                           {"residual_rms", unit * lamp->residual_rms},
+                                           {"unit", unit_name}};
+                    std::snprintf(row, sizeof row, " %10.1f", unit * lamp->distance);
+                    line += row;
+                } else {
+                    entry["near_light"] = {{"distant", true}};
+                    line += "    distant";
+                }
+            }
+            if (!truth.empty() && light.spheres_used > 0) {
+                const double error = radians_to_degrees(angle_between(light.direction, truth[i].direction));
+                entry["error_deg"] = error;
+                std::snprintf(row, sizeof row, " %8.3f", error);
+                line += row;
+                if (!dropped[i]) {
+                    sum_error += error;
+                    ++compared;
+                    if (error >= worst_error) {
+                        worst_error = error;
+                        worst_error_at = i;
+                    }
+                }
+            }
+            if (dropped[i]) line += "  (dropped)";
+            table += line + "\n";
+            lights_json.push_back(entry);
+        }
+        constexpr double kDisagreementWarnDeg = 2.0;
+        if (disagreements > 0 && worst_disagreement > kDisagreementWarnDeg && calibration.spheres.size() > 1)
+            std::fprintf(stderr,
+                         "rfd: warning: %s: the spheres' directions differ by %.2f degrees (a near lamp, or a "
+                         "highlight that is not one: check it, or --drop it)\n",
+                         opt->images[worst_disagreement_at].c_str(), worst_disagreement);
+
         if (opt->json) {
-            const nlohmann::json summary = {{"out", opt->out},
-                                            {"sphere", {{"centre_x", sphere.centre_x},
-                                                        {"centre_y", sphere.centre_y},
-                                                        {"radius", sphere.radius}}},
-                                            {"lights", entries}};
+            nlohmann::json summary = {{"out", opt->out},
+                                      {"camera", {{"focal_length_px", camera.camera.focal_length_px},
+                                                  {"source", camera.source}}},
+                                      {"candidates", calibration.candidates},
+                                      {"spheres", spheres_json},
+                                      {"lights", lights_json}};
+            if (disagreements > 0)
+                summary["disagreement_deg"] = {{"mean", sum_disagreement / static_cast<double>(disagreements)},
+                                               {"worst", worst_disagreement}};
+            if (compared > 0)
+                summary["error_deg"] = {{"mean", sum_error / static_cast<double>(compared)}, {"worst", worst_error}};
             std::printf("%s\n", summary.dump(2).c_str());
+            return;
         }
+        std::printf("camera: %s\n", camera.camera.orthographic()
+                                        ? "distant (orthographic): no focal length given or in the EXIF"
+                                        : ("pinhole, f = " + format_number(camera.camera.focal_length_px, 6) +
+                                           " px, from " + camera.source)
+                                              .c_str());
+        std::printf("%zu sphere(s)%s:\n", calibration.spheres.size(),
+                    calibration.candidates > 0
+                        ? (" found among " + std::to_string(calibration.candidates) + " specular circles").c_str()
+                        : " given");
+        for (std::size_t s = 0; s < calibration.spheres.size(); ++s) {
+            const auto& sphere = calibration.spheres[s];
+            std::printf("  sphere %zu  centre %.2f, %.2f  radius %.2f px  highlights in %d of %zu photographs",
+                        s + 1, sphere.outline.centre_x, sphere.outline.centre_y, sphere.outline.radius,
+                        sphere.highlights, photos.size());
+            if (sphere.fit)
+                std::printf("\n            outline fits %d of %d edges, rms %.2f px", sphere.fit->edges, sphere.fit->rays,
+                            sphere.fit->rms_px);
+            if (static_cast<int>(s) == calibration.primary) std::printf("; the lights' directions");
+            if (sphere.aligned_rms_px)
+                std::printf("; aligned to sphere %d's lights (distant lamps), highlights within %.2f px rms",
+                            calibration.primary + 1, *sphere.aligned_rms_px);
+            std::printf("\n");
+        }
+        std::printf("calibrated %zu light(s) into %s\n  %-24s %9s %9s", directions.size(), opt->out.c_str(),
+                    "photograph", "theta deg", "phi deg");
+        for (std::size_t s = 0; s < calibration.spheres.size(); ++s) std::printf("   x%zu px   y%zu px", s + 1, s + 1);
+        if (calibration.spheres.size() > 1) std::printf(" %8s %10s", "differ", "lamp dist");
+        if (!truth.empty()) std::printf(" %8s", "error");
+        std::printf("\n%s", table.c_str());
+        if (disagreements > 0)
+            std::printf("spheres differ by %.3f deg on average, at most %.3f (%s)\n",
+                        sum_disagreement / static_cast<double>(disagreements), worst_disagreement,
+                        fs::path(opt->images[worst_disagreement_at]).filename().c_str());
+        if (compared > 0)
+            std::printf("against %s: mean error %.3f deg, worst %.3f (%s)\n", opt->compare.c_str(),
+                        sum_error / static_cast<double>(compared), worst_error,
+                        fs::path(opt->images[worst_error_at]).filename().c_str());
     });
 }
 

@@ -327,7 +327,7 @@ std::unique_ptr<ImageFileReader::Backend> open_exr_file(const std::string& path)
 bool exr_file_covers(const ImageFileSpec& spec) {
     return !channel_names(spec.channels).empty() && (spec.type == SampleType::Half || spec.type == SampleType::Float32) &&
            (spec.compression.empty() || compression_named(spec.compression)) && spec.description.empty() &&
-           !spec.exposure_seconds;
+           !spec.exposure_seconds && !spec.focal_length_35mm;
 }
 
 std::unique_ptr<ImageFileWriter::Backend> create_exr_file(const std::string& path, const ImageFileSpec& spec,

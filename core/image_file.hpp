@@ -43,6 +43,7 @@ struct ImageFileSpec {
     std::string description;                ///< the ImageDescription text (TIFF, PNG), "" when none
     std::string compression;                ///< written: the format's compression ("zip", "rle"); "" its default
     std::optional<double> exposure_seconds; ///< the EXIF ExposureTime of a photograph
+    std::optional<double> focal_length_35mm; ///< the EXIF FocalLengthIn35mmFilm, millimetres
     /// rfd's own attributes of an EXR file ("rfd:" + key in its header), key without prefix.
     std::map<std::string, std::string> attributes;
 };

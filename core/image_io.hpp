@@ -59,6 +59,8 @@ public:
     int height() const { return file_.spec().height; }
     int channels() const { return file_.spec().channels; }
     const std::filesystem::path& path() const { return file_.path(); }
+    /// What the file says about itself (EXIF focal length, exposure).
+    const ImageFileSpec& spec() const { return file_.spec(); }
 
     /// Rows [y0, y1) of columns [x0, x1) (the whole width when x1 is 0), linear and planar.
     /// InputError naming the pixel for a sample that is NaN or infinite.

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstddef>
 #include <cstdio>
 #include <cstring>
@@ -54,6 +55,8 @@ ImageFileSpec spec_of(const OIIO::ImageSpec& spec) {
     out.compression = spec.get_string_attribute("compression");
     if (const OIIO::ParamValue* time = spec.find_attribute("ExposureTime"))
         out.exposure_seconds = static_cast<double>(time->get_float());
+    if (const OIIO::ParamValue* focal = spec.find_attribute("Exif:FocalLengthIn35mmFilm"))
+        if (focal->get_float() > 0.0f) out.focal_length_35mm = static_cast<double>(focal->get_float());
     const std::string prefix = kAttributePrefix;
     for (const OIIO::ParamValue& p : spec.extra_attribs) {
         const std::string name = p.name().string();
@@ -78,6 +81,8 @@ OIIO::ImageSpec oiio_spec(const ImageFileSpec& spec) {
     if (!spec.compression.empty()) out.attribute("compression", spec.compression);
     if (!spec.description.empty()) out.attribute("ImageDescription", spec.description);
     if (spec.exposure_seconds) out.attribute("ExposureTime", static_cast<float>(*spec.exposure_seconds));
+    if (spec.focal_length_35mm)
+        out.attribute("Exif:FocalLengthIn35mmFilm", static_cast<int>(std::lround(*spec.focal_length_35mm)));
     for (const auto& [key, value] : spec.attributes) out.attribute(kAttributePrefix + key, value);
     return out;
 }

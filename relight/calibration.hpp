@@ -30,8 +30,8 @@
 //     Highlight h = find_highlight(read_image("ball_000.png"), sphere);
 //     if (h.status == HighlightStatus::Found) use(h.direction);
 
-#include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -47,8 +47,61 @@ struct MirrorSphere {
     double radius = 0.0;    ///< pixels, > 0
 };
 
+/// How the photographs were taken. A pinhole of known focal length sees each sphere from
+/// its own direction (a sphere 7 degrees off the axis shifts its lights by as much, and its
+/// outline is an ellipse 0.75 % longer radially); without one the camera is taken as distant
+/// (orthographic), the model of RTIBuilder and CNR relight.
+struct CalibrationCamera {
+    double focal_length_px = 0.0;  ///< pixels; 0 (or less): orthographic
+    Eigen::Vector2d principal_point = Eigen::Vector2d::Zero();  ///< pixels: the image centre
+
+    bool orthographic() const { return !(focal_length_px > 0.0); }
+    /// Unit direction from the camera through an image point (field frame): -z when
+    /// orthographic.
+    Eigen::Vector3d ray(const Eigen::Vector2d& point) const;
+    /// The image point a direction from the camera passes through (perspective only).
+    Eigen::Vector2d project(const Eigen::Vector3d& direction) const;
+    /// The same camera for a crop of the image whose top-left corner is `origin`.
+    CalibrationCamera cropped(const Eigen::Vector2d& origin) const;
+};
+
+/// A pinhole camera whose principal point is the centre of a `width` x `height` image.
+CalibrationCamera pinhole_camera(double focal_length_px, int width, int height);
+
+/// A sphere as `camera` sees it. Under a pinhole, `sphere` reads as the cone of rays
+/// tangent to the sphere: its centre is the image of the ray through the sphere's centre,
+/// its radius f tan(alpha) for the cone's half-angle alpha (the outline's radius when the
+/// sphere sits on the axis); the sphere's own radius is the unit of length. Orthographic,
+/// it is the outline circle (the maps of mirror_normal and reflect_view above).
+class SphereView {
+public:
+    SphereView(const MirrorSphere& sphere, const CalibrationCamera& camera);
+
+    const MirrorSphere& sphere() const { return sphere_; }
+    const CalibrationCamera& camera() const { return camera_; }
+    /// The ray through `point` meets the sphere (pixel-centre test).
+    bool sees(const Eigen::Vector2d& point) const;
+    /// Unit normal where the ray through `point` meets the sphere (on the silhouette for
+    /// rays that miss it) and the unit view vector there (toward the camera).
+    std::pair<Eigen::Vector3d, Eigen::Vector3d> normal_and_view(const Eigen::Vector2d& point) const;
+    /// Direction toward the light a mirror at `point` shows the camera.
+    Eigen::Vector3d reflected(const Eigen::Vector2d& point) const;
+    /// The image point where the light from unit `direction` appears (the inverse of
+    /// reflected(); under a pinhole solved by fixed-point iteration, Alhazen's problem).
+    Eigen::Vector2d highlight_point(const Eigen::Vector3d& direction) const;
+    /// The sphere's centre relative to the camera, field frame, in sphere radii (pinhole);
+    /// orthographic: (x, -y, 0) of the outline's centre in radii.
+    Eigen::Vector3d centre() const;
+
+private:
+    MirrorSphere sphere_;
+    CalibrationCamera camera_;
+    Eigen::Vector3d axis_ = -Eigen::Vector3d::UnitZ();  // unit, camera to the centre
+    double sin_half_angle_ = 0.0, distance_ = 0.0;       // of the tangent cone; centre distance in radii
+};
+
 /// Sphere normal (unit, field frame) under an image point inside the outline; points on or
-/// beyond the outline get the normal on the outline (n.z = 0).
+/// beyond the outline get the normal on the outline (n.z = 0). Orthographic camera.
 Eigen::Vector3d mirror_normal(const MirrorSphere& sphere, const Eigen::Vector2d& point);
 
 /// Direction toward the light whose reflection a mirror with this normal shows to the camera:
@@ -63,7 +116,7 @@ Eigen::Vector2d highlight_point(const MirrorSphere& sphere, const Eigen::Vector3
 enum class HighlightStatus {
     Found,        ///< one blob; the fields below describe it
     None,         ///< the sphere shows no contrast (black, uniform, or saturated everywhere)
-    Multiple,     ///< more than one blob above the threshold (several lights, reflections)
+    Multiple,     ///< a second blob nearly as bright as the first (several lights)
     Overexposed,  ///< the blob covers more than a quarter of the sphere
 };
 
@@ -78,22 +131,23 @@ struct Highlight {
     float peak = 0.0f;       ///< brightest sphere pixel (channel mean)
     float background = 0.0f; ///< median sphere pixel (channel mean)
     bool touches_rim = false;  ///< the blob reaches the outermost pixel ring: may be cut off
+    double second_blob = 0.0;  ///< the next brightest blob's contrast over the chosen one's (0: none)
+    /// Multiple: each blob as bright, measured (status found), for another sphere's
+    /// direction to choose from (relight/sphere_detection.hpp).
+    std::vector<Highlight> alternatives;
+    bool chosen_by_agreement = false;  ///< found: picked among several blobs by other spheres
 };
 
 /// Finds the highlight in `image` (any channel count; the channel mean is used). Only pixels
-/// whose centres lie inside both the outline and the image are searched. Never throws.
-Highlight find_highlight(const Image& image, const MirrorSphere& sphere);
+/// whose centres lie inside both the outline and the image are searched. Of several blobs
+/// the brightest is measured; it is Multiple only when another one comes within
+/// kSecondHighlight of its contrast (two lights, not a reflection of the room). Never throws.
+Highlight find_highlight(const Image& image, const MirrorSphere& sphere, const CalibrationCamera& camera = {});
 
-/// A calibrated light: the mirror-sphere image it came from and what was found there.
-struct CalibratedLight {
-    std::filesystem::path mirror_image;
-    Highlight highlight;  ///< status is always found
-};
+/// A second blob this close to the brightest one's contrast makes a photograph ambiguous.
+inline constexpr double kSecondHighlight = 0.8;
 
-/// Reads each mirror-sphere image and finds its highlight. Throws InputError naming the image
-/// when the outline does not fit inside it or its highlight is missing, multiple or
-/// overexposed; InputError for a non-positive or non-finite radius; IoError when unreadable.
-std::vector<CalibratedLight> calibrate_lights(const std::vector<std::filesystem::path>& mirror_images,
-                                              const MirrorSphere& sphere);
+/// Why a photograph's highlight cannot be used, for messages ("" when it was found).
+std::string highlight_problem(const Highlight& highlight);
 
 }  // namespace rfd::relight

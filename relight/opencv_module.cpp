@@ -111,6 +111,17 @@ public:
         cv::Mat target = view(row, out);
         view(row, in).convertTo(target, CV_8U, scale, offset);
     }
+    std::vector<std::array<float, 3>> hough_circles(PlaneSize size, std::span<const std::uint8_t> image,
+                                                    double min_distance, double canny_threshold, double perfectness,
+                                                    int min_radius, int max_radius) const override {
+        std::vector<cv::Vec3f> found;
+        cv::HoughCircles(view(size, image), found, cv::HOUGH_GRADIENT_ALT, 1.5, min_distance, canny_threshold,
+                         perfectness, min_radius, max_radius);
+        std::vector<std::array<float, 3>> circles;
+        // OpenCV's centres count from the corner of pixel (0, 0)'s centre.
+        for (const cv::Vec3f& c : found) circles.push_back({c[0] + 0.5f, c[1] + 0.5f, c[2]});
+        return circles;
+    }
     BgrResponse robertson_calibrate(PlaneSize size, const std::vector<std::span<const std::uint8_t>>& images,
                                     const std::vector<float>& seconds, int iterations,
                                     float tolerance) const override {

@@ -82,6 +82,14 @@ public:
     /// round(v * scale + offset) clamped to 0..255, rounding half to even (OpenCV's convertTo).
     virtual void scale_to_bytes(std::span<const float> in, double scale, double offset,
                                 std::span<std::uint8_t> out) const = 0;
+    /// Circles in an 8-bit image by OpenCV's HoughCircles (HOUGH_GRADIENT_ALT): centres
+    /// (x, y in pixel coordinates, pixel centres at .5) and radii, strongest first.
+    /// `canny_threshold` is the edge detector's upper threshold, `perfectness` (0-1) how
+    /// closed a circle's edge must be, `min_distance` between centres, radii in pixels.
+    virtual std::vector<std::array<float, 3>> hough_circles(PlaneSize size, std::span<const std::uint8_t> image,
+                                                            double min_distance, double canny_threshold,
+                                                            double perfectness, int min_radius,
+                                                            int max_radius) const = 0;
     /// Robertson et al.'s response calibration from 8-bit BGR images (3 samples a pixel).
     virtual BgrResponse robertson_calibrate(PlaneSize size, const std::vector<std::span<const std::uint8_t>>& images,
                                             const std::vector<float>& seconds, int iterations,

@@ -15,7 +15,7 @@
 #include "core/image_io.hpp"
 #include "core/sphere.hpp"
 #include "core/units.hpp"
-#include "relight/calibration.hpp"
+#include "relight/sphere_detection.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace rfd::relight {
