@@ -214,16 +214,24 @@ Overrides read_overrides(const fs::path& file) {
     return o;
 }
 
-std::string overrides_text(const std::vector<relight::CalibrationSphere>& spheres, double focal_length_px,
+// The spheres go primary first: given spheres, the first gives the directions.
+std::string overrides_text(const std::vector<relight::CalibrationSphere>& spheres, int primary, double focal_length_px,
                            const std::vector<std::string>& drop) {
     std::string text = "# rfd capture calibrate --overrides: edit a sphere's circle, list photographs to drop.\n";
-    if (focal_length_px > 0.0) text += "focal_length_px = " + format_number(focal_length_px) + "\n";
+    if (focal_length_px > 0.0) text += "focal_length_px = " + format_number(focal_length_px, 17) + "\n";
     text += "drop = [";
     for (std::size_t i = 0; i < drop.size(); ++i) text += (i ? ", " : "") + toml_string(drop[i]);
     text += "]\n";
-    for (const auto& s : spheres)
-        text += "\n[[sphere]]\ncircle_px = [" + format_number(s.outline.centre_x) + ", " +
-                format_number(s.outline.centre_y) + ", " + format_number(s.outline.radius) + "]\n";
+    std::vector<std::size_t> order;
+    if (primary >= 0) order.push_back(static_cast<std::size_t>(primary));
+    for (std::size_t s = 0; s < spheres.size(); ++s)
+        if (static_cast<int>(s) != primary) order.push_back(s);
+    for (const std::size_t s : order) {
+        const relight::MirrorSphere& o = spheres[s].outline;
+        text += "\n[[sphere]]" + std::string(s == order.front() ? "  # gives the directions" : "") +
+                "\ncircle_px = [" + format_number(o.centre_x, 17) + ", " + format_number(o.centre_y, 17) + ", " +
+                format_number(o.radius, 17) + "]\n";
+    }
     return text;
 }
 
@@ -271,7 +279,8 @@ void add_calibrate_command(CLI::App& capture) {
         ->required();
     cmd->add_option("--sphere", opt->spheres,
                     "A sphere's outline CX,CY,R in pixels from the top-left corner (pixel centres at .5), repeat for "
-                    "several; default: found in the photographs")
+                    "several (the first gives the directions, the others check them); default: found in the "
+                    "photographs")
         ->allow_extra_args(false)
         ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
     cmd->add_option("--overrides", opt->overrides,
@@ -356,7 +365,8 @@ void add_calibrate_command(CLI::App& capture) {
             for (std::size_t i = 0; i < photos.size(); ++i)
                 if (dropped[i]) dropped_names.push_back(fs::path(opt->images[i]).filename().string());
             write_text_file(opt->save_overrides,
-                            overrides_text(calibration.spheres, camera.camera.focal_length_px, dropped_names));
+                            overrides_text(calibration.spheres, calibration.primary, camera.camera.focal_length_px,
+                                           dropped_names));
         }
 
         std::vector<relight::SphereView> views;

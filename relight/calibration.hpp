@@ -118,6 +118,7 @@ enum class HighlightStatus {
     None,         ///< the sphere shows no contrast (black, uniform, or saturated everywhere)
     Multiple,     ///< a second blob nearly as bright as the first (several lights)
     Overexposed,  ///< the blob covers more than a quarter of the sphere
+    Faint,        ///< far fainter than the sphere's other highlights: the lamp is hidden from it
 };
 
 struct Highlight {

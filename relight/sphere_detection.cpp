@@ -40,6 +40,9 @@ constexpr double kOuterSupport = 0.7;
 constexpr double kAlignedRmsPx = 0.35;
 // Of several blobs on a sphere, one this close to the other spheres' direction is the lamp.
 constexpr double kConfirmDeg = 5.0;
+// A highlight is at least this fraction as bright (above the sphere's median) as the
+// sphere's typical one.
+constexpr float kFaintHighlight = 0.1f;
 // Rays from a candidate's centre that must find its edge.
 constexpr double kEdgeFraction = 0.5;
 // Two detected spheres belong to one calibration when their directions agree this well
@@ -385,6 +388,23 @@ std::optional<AlignedOutline> align_outline(const MirrorSphere& start, const Cal
     return AlignedOutline{{x.x(), x.y(), x.z()}, rms};
 }
 
+// A spot far fainter than a sphere's highlights in the other photographs is not one: the
+// lamp is hidden from the sphere and the spot is a reflection, JPEG ringing or noise.
+void reject_faint(std::vector<std::vector<Highlight>>& highlights) {
+    if (highlights.empty()) return;
+    for (std::size_t s = 0; s < highlights.front().size(); ++s) {
+        std::vector<float> contrasts;
+        for (const auto& image : highlights)
+            if (image[s].status == HighlightStatus::Found) contrasts.push_back(image[s].peak - image[s].background);
+        if (contrasts.size() < 3) continue;
+        const float typical = quantile(contrasts, 0.5);
+        for (auto& image : highlights)
+            if (image[s].status == HighlightStatus::Found &&
+                image[s].peak - image[s].background < kFaintHighlight * typical)
+                image[s].status = HighlightStatus::Faint;
+    }
+}
+
 // A photograph with several bright blobs on one sphere (a glossy object's highlight mirrored
 // beside the lamp's, both clipped) takes the blob the other spheres' direction confirms:
 // the only one within kConfirmDeg of their mean.
@@ -610,6 +630,7 @@ CaptureCalibration calibrate_capture(const std::vector<fs::path>& images, const 
     std::vector<MirrorSphere> outlines;
     for (const auto& s : spheres) outlines.push_back(s.outline);
     std::vector<std::vector<Highlight>> highlights = read_highlights(images, outlines, options.camera, size);
+    reject_faint(highlights);
     for (std::size_t s = 0; s < spheres.size(); ++s)
         for (const auto& image : highlights)
             if (image[s].status == HighlightStatus::Found) ++spheres[s].highlights;
@@ -648,7 +669,9 @@ CaptureCalibration calibrate_capture(const std::vector<fs::path>& images, const 
         for (const std::size_t s : kept) used[i].push_back(highlights[i][s]);
         resolve_by_agreement(used[i]);
     }
+    result.primary = 0;  // given spheres: the first
     if (options.spheres.empty()) {
+        result.primary = -1;
         // The crispest outline gives the directions: a chrome ball's outline against a table
         // it mirrors is found to about a pixel, a black ball's to a fifth of one.
         for (std::size_t s = 0; s < result.spheres.size(); ++s)
@@ -671,6 +694,7 @@ CaptureCalibration calibrate_capture(const std::vector<fs::path>& images, const 
             std::vector<MirrorSphere> kept_outlines;
             for (const auto& sphere : result.spheres) kept_outlines.push_back(sphere.outline);
             used = read_highlights(images, kept_outlines, options.camera, size);
+            reject_faint(used);
             for (auto& image : used) resolve_by_agreement(image);
             for (std::size_t s = 0; s < result.spheres.size(); ++s) {
                 result.spheres[s].highlights = 0;

@@ -74,7 +74,7 @@ std::optional<OutlineFit> fit_sphere_outline(const CaptureBrightness& brightness
 
 struct SphereCalibrationOptions {
     CalibrationCamera camera;          ///< its principal point in the photographs' pixels
-    std::vector<MirrorSphere> spheres; ///< the user's outlines: used as they are, nothing detected
+    std::vector<MirrorSphere> spheres; ///< the user's outlines, the first giving the directions: nothing detected
 };
 
 /// A sphere the calibration used.
@@ -101,8 +101,8 @@ struct CaptureCalibration {
     std::vector<CalibrationSphere> spheres;
     std::vector<CalibratedImageLight> lights;  ///< one per photograph, in order
     int candidates = 0;                        ///< circles examined (0 when the user gave the spheres)
-    /// The detected sphere whose outline fits best (the smallest edge rms), whose directions
-    /// the lights take; -1 when the user gave the spheres (their directions are averaged).
+    /// The sphere whose directions the lights take: of detected ones, the one whose outline
+    /// fits best (the smallest edge rms); of given ones, the first.
     int primary = -1;
 };
 

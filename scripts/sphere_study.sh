@@ -1,0 +1,80 @@
+#!/usr/bin/env bash
+# The sphere-detection study of docs/results.md: scenes/dome.toml rendered under 48 lights at
+# three resolutions, each capture made camera-like (sRGB, Gaussian noise in 8-bit codes,
+# JPEG at several qualities, by oiiotool), then `rfd capture calibrate` finds the spheres by
+# itself and is compared with the lights the stage used. Prints a markdown table of mean and
+# worst angular errors. About 25 minutes on two cores.
+# Usage: scripts/sphere_study.sh RFD_BINARY OUTPUT_DIR
+set -euo pipefail
+rfd="$1"
+out="$2"
+scene="$(dirname "$0")/../scenes/dome.toml"
+mkdir -p "$out"
+vfov_deg=9.7  # scenes/dome.toml's camera
+resolutions=(612x408 1224x816 2448x1632)
+noises=(0 2 4)          # standard deviation, 8-bit codes
+qualities=(png 95 85 70)
+
+# A camera-like copy of a rendered field: sRGB, noise, 8 bits, PNG or JPEG. The noise of
+# each image has its own seed.
+degrade() {
+  local field="$1" target="$2" noise="$3" quality="$4"
+  mkdir -p "$target"
+  local i=0 jobs=()
+  for exr in "$field"/field_*.exr; do
+    i=$((i + 1))
+    local name
+    name=$(basename "$exr" .exr)
+    local args=("$exr" --colorconvert linear sRGB)
+    if [ "$noise" != 0 ]; then
+      args+=(--noise:type=gaussian:mean=0:stddev=$(awk "BEGIN{print $noise/255}"):seed=$i)
+    fi
+    args+=(-d uint8)
+    if [ "$quality" = png ]; then
+      args+=(-o "$target/$name.png")
+    else
+      args+=(--compression "jpeg:$quality" -o "$target/$name.jpg")
+    fi
+    oiiotool "${args[@]}" &
+    jobs+=($!)
+    if [ ${#jobs[@]} -ge 2 ]; then wait "${jobs[0]}"; jobs=("${jobs[@]:1}"); fi
+  done
+  wait
+}
+
+echo "| resolution | noise (codes) | PNG mean / worst | JPEG q95 | JPEG q85 | JPEG q70 |"
+echo "|---|---|---|---|---|---|"
+for resolution in "${resolutions[@]}"; do
+  field="$out/render_$resolution"
+  if [ ! -f "$field/field.lp" ]; then
+    "$rfd" --quiet capture render "$scene" --lights 48 --resolution "$resolution" --out "$field" > /dev/null
+  fi
+  height=${resolution#*x}
+  focal=$(awk "BEGIN{printf \"%.4f\", ($height / 2) / (sin($vfov_deg * 3.14159265358979 / 360) / cos($vfov_deg * 3.14159265358979 / 360))}")
+  for noise in "${noises[@]}"; do
+    row="| $resolution | $noise |"
+    for quality in "${qualities[@]}"; do
+      capture="$out/capture_${resolution}_n${noise}_$quality"
+      degrade "$field" "$capture" "$noise" "$quality"
+      ext=jpg
+      [ "$quality" = png ] && ext=png
+      "$rfd" --quiet capture calibrate "$capture"/field_*."$ext" --focal-length-px "$focal" \
+        --out "$capture/lights.lp" --compare "$field/field.lp" --json > "$capture/calibrate.json" 2> "$capture/calibrate.log" \
+        || { row="$row failed |"; continue; }
+      cell=$(awk '/"error_deg"/{f=1} f&&/"mean"/{gsub(/[",]/,"");m=$2} f&&/"worst"/{gsub(/[",]/,"");w=$2; printf "%.2f / %.2f", m, w; exit}' "$capture/calibrate.json")
+      row="$row $cell |"
+      rm -f "$capture"/field_*."$ext"
+    done
+    echo "$row"
+  done
+done
+
+# The camera's model matters: the same 1 Mpx capture with the camera taken as distant.
+capture="$out/orthographic_1224x816"
+degrade "$out/render_1224x816" "$capture" 2 85
+"$rfd" --quiet capture calibrate "$capture"/field_*.jpg --out "$capture/lights.lp" \
+  --compare "$out/render_1224x816/field.lp" --json > "$capture/calibrate.json" 2> "$capture/calibrate.log" || true
+echo
+echo "1224x816, noise 2, JPEG q85, camera taken as distant (no focal length):" \
+  "$(awk '/"error_deg"/{f=1} f&&/"mean"/{gsub(/[",]/,"");m=$2} f&&/"worst"/{gsub(/[",]/,"");w=$2; printf "mean %.2f, worst %.2f deg", m, w; exit}' "$capture/calibrate.json")"
+rm -f "$capture"/field_*.jpg
