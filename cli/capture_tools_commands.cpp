@@ -478,8 +478,10 @@ void add_calibrate_command(CLI::App& capture) {
             table += line + "\n";
             lights_json.push_back(entry);
         }
+        // Worth a look: a light the spheres read far less alike than the others.
         constexpr double kDisagreementWarnDeg = 2.0;
-        if (disagreements > 0 && worst_disagreement > kDisagreementWarnDeg && calibration.spheres.size() > 1)
+        if (disagreements > 0 && calibration.spheres.size() > 1 &&
+            worst_disagreement > std::max(kDisagreementWarnDeg, 3.0 * sum_disagreement / static_cast<double>(disagreements)))
             std::fprintf(stderr,
                          "rfd: warning: %s: the spheres' directions differ by %.2f degrees (a near lamp, or a "
                          "highlight that is not one: check it, or --drop it)\n",

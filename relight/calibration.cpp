@@ -272,6 +272,9 @@ std::string highlight_problem(const Highlight& h) {
         case HighlightStatus::Overexposed:
             return "the highlight covers " + std::to_string(static_cast<int>(h.coverage * 100.0 + 0.5)) +
                    "% of the mirror sphere: overexposed or not a mirror sphere (expected a small spot)";
+        case HighlightStatus::Inconsistent:
+            return "its direction is " + format_number(h.off_primary_deg, 3) +
+                   " degrees from the primary sphere's: a reflection, not the lamp";
         case HighlightStatus::Faint:
             return "the brightest spot on the sphere is far fainter than its highlights in the other photographs "
                    "(a reflection or noise): the lamp is hidden from it";

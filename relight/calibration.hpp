@@ -119,6 +119,7 @@ enum class HighlightStatus {
     Multiple,     ///< a second blob nearly as bright as the first (several lights)
     Overexposed,  ///< the blob covers more than a quarter of the sphere
     Faint,        ///< far fainter than the sphere's other highlights: the lamp is hidden from it
+    Inconsistent, ///< its direction is far from the primary sphere's: a reflection, not the lamp
 };
 
 struct Highlight {
@@ -137,6 +138,7 @@ struct Highlight {
     /// direction to choose from (relight/sphere_detection.hpp).
     std::vector<Highlight> alternatives;
     bool chosen_by_agreement = false;  ///< found: picked among several blobs by other spheres
+    double off_primary_deg = 0.0;      ///< inconsistent: its angle to the primary sphere's direction
 };
 
 /// Finds the highlight in `image` (any channel count; the channel mean is used). Only pixels

@@ -431,6 +431,22 @@ void resolve_by_agreement(std::vector<Highlight>& image) {
     }
 }
 
+// The other spheres' readings of a photograph checked against the primary's: an ambiguous
+// one resolved by agreement, then one pointing far from the primary's direction (a
+// reflection taken for the lamp) set aside.
+void check_against_primary(std::vector<Highlight>& image, std::size_t primary) {
+    resolve_by_agreement(image);
+    if (image[primary].status != HighlightStatus::Found) return;
+    for (std::size_t s = 0; s < image.size(); ++s) {
+        if (s == primary || image[s].status != HighlightStatus::Found) continue;
+        const double off = radians_to_degrees(angle_between(image[s].direction, image[primary].direction));
+        if (off > kAgreementDeg) {
+            image[s].status = HighlightStatus::Inconsistent;
+            image[s].off_primary_deg = off;
+        }
+    }
+}
+
 double median_angle_deg(const std::vector<std::vector<Highlight>>& highlights, std::size_t a, std::size_t b) {
     std::vector<float> angles;
     for (const auto& image : highlights)
@@ -664,27 +680,27 @@ CaptureCalibration calibrate_capture(const std::vector<fs::path>& images, const 
     }
 
     for (const std::size_t s : kept) result.spheres.push_back(spheres[s]);
+    result.primary = 0;  // given spheres: the first
+    if (options.spheres.empty()) {
+        // The crispest outline gives the directions: a chrome ball's outline against a table
+        // it mirrors is found to about a pixel, a black ball's to a fifth of one.
+        for (std::size_t s = 1; s < result.spheres.size(); ++s)
+            if (result.spheres[s].fit->rms_px < result.spheres[static_cast<std::size_t>(result.primary)].fit->rms_px)
+                result.primary = static_cast<int>(s);
+    }
+    const auto primary = static_cast<std::size_t>(result.primary);
     std::vector<std::vector<Highlight>> used(images.size());
     for (std::size_t i = 0; i < images.size(); ++i) {
         for (const std::size_t s : kept) used[i].push_back(highlights[i][s]);
-        resolve_by_agreement(used[i]);
+        check_against_primary(used[i], primary);
     }
-    result.primary = 0;  // given spheres: the first
     if (options.spheres.empty()) {
-        result.primary = -1;
-        // The crispest outline gives the directions: a chrome ball's outline against a table
-        // it mirrors is found to about a pixel, a black ball's to a fifth of one.
-        for (std::size_t s = 0; s < result.spheres.size(); ++s)
-            if (result.primary < 0 || result.spheres[s].fit->rms_px <
-                                          result.spheres[static_cast<std::size_t>(result.primary)].fit->rms_px)
-                result.primary = static_cast<int>(s);
         // The others' outlines, aligned to its lights where distant lamps explain their
         // highlights to a fraction of a pixel; then their highlights are read again.
         bool aligned = false;
         for (std::size_t s = 0; s < result.spheres.size(); ++s) {
             if (static_cast<int>(s) == result.primary) continue;
-            const auto fit = align_outline(result.spheres[s].outline, options.camera, used, s,
-                                           static_cast<std::size_t>(result.primary));
+            const auto fit = align_outline(result.spheres[s].outline, options.camera, used, s, primary);
             if (!fit) continue;
             result.spheres[s].outline = fit->sphere;
             result.spheres[s].aligned_rms_px = fit->rms_px;
@@ -695,13 +711,13 @@ CaptureCalibration calibrate_capture(const std::vector<fs::path>& images, const 
             for (const auto& sphere : result.spheres) kept_outlines.push_back(sphere.outline);
             used = read_highlights(images, kept_outlines, options.camera, size);
             reject_faint(used);
-            for (auto& image : used) resolve_by_agreement(image);
-            for (std::size_t s = 0; s < result.spheres.size(); ++s) {
-                result.spheres[s].highlights = 0;
-                for (const auto& image : used)
-                    if (image[s].status == HighlightStatus::Found) ++result.spheres[s].highlights;
-            }
+            for (auto& image : used) check_against_primary(image, primary);
         }
+    }
+    for (std::size_t s = 0; s < result.spheres.size(); ++s) {
+        result.spheres[s].highlights = 0;
+        for (const auto& image : used)
+            if (image[s].status == HighlightStatus::Found) ++result.spheres[s].highlights;
     }
     for (const auto& image : used) {
         CalibratedImageLight light;
