@@ -167,10 +167,15 @@ void add_capture_commands(CLI::App& capture) {
         std::string resolution;
         std::uint64_t seed = 0;
         int samples = 0;
+        double dome_radius_mm = 0.0;
         bool json = false;
     };
     auto opt = std::make_shared<Options>();
     cmd->add_option("SCENE", opt->scene, "Scene TOML file (docs/formats.md)")->required();
+    cmd->add_option("--dome-radius-mm", opt->dome_radius_mm,
+                    "Near lamps, as a dome's: each this far from the scene's origin along its direction, of the "
+                    "size its kernel subtends from there (default: distant lights)")
+        ->check(CLI::PositiveNumber);
     cmd->add_option("--lights", opt->lights,
                     "Light count N (near-uniform upper hemisphere) or a .lp light file")->required();
     cmd->add_option("--out", opt->out, "Output field folder (view_XX/ sub-folders for several cameras)")
@@ -194,7 +199,7 @@ void add_capture_commands(CLI::App& capture) {
         const Lights lights = read_lights(opt->lights, scene.seed);
 
         relight::StageRender run =
-            relight::render_field(scene, lights.directions, kernels_of(lights, kernel), opt->out);
+            relight::render_field(scene, lights.directions, kernels_of(lights, kernel), opt->out, opt->dome_radius_mm);
         run.kernel = kernel;
         run.light_source = lights.source;
         if (opt->json)

@@ -270,6 +270,7 @@ void add_calibrate_command(CLI::App& capture) {
         double focal_px = 0.0;
         double focal_35mm = 0.0;
         double sphere_diameter_mm = 0.0;
+        bool near_lamps = false;
         bool json = false;
     };
     auto opt = std::make_shared<Options>();
@@ -302,6 +303,9 @@ void add_calibrate_command(CLI::App& capture) {
     cmd->add_option("--sphere-diameter-mm", opt->sphere_diameter_mm,
                     "The spheres' diameter, to give near lights' positions in mm (default: in sphere radii)")
         ->check(CLI::PositiveNumber);
+    cmd->add_flag("--near-lamps", opt->near_lamps,
+                  "The lamps are near (a dome, a hand-held lamp): write each light's direction from the object "
+                  "(under the image centre, on the spheres' table) to its lamp, placed from two spheres or more");
     cmd->add_option("--compare", opt->compare,
                     "A light file of the true directions (the dome's own), one line per photograph: print the "
                     "angular error of each light");
@@ -338,7 +342,11 @@ void add_calibrate_command(CLI::App& capture) {
         const std::vector<fs::path> photos(opt->images.begin(), opt->images.end());
         const CameraChoice camera =
             choose_camera(opt->focal_px > 0.0 ? opt->focal_px : overrides.focal_length_px, opt->focal_35mm, photos.front());
-        const relight::CaptureCalibration calibration = relight::calibrate_capture(photos, {camera.camera, given});
+        const relight::CaptureCalibration calibration =
+            relight::calibrate_capture(photos, {camera.camera, given, opt->near_lamps});
+        if (opt->near_lamps && calibration.spheres.size() < 2)
+            throw InputError("--near-lamps: lamps are placed from two spheres or more; " +
+                             std::to_string(calibration.spheres.size()) + " found (give them with --sphere)");
 
         // Every photograph kept needs a light.
         for (std::size_t i = 0; i < photos.size(); ++i) {
@@ -369,8 +377,6 @@ void add_calibrate_command(CLI::App& capture) {
                                            dropped_names));
         }
 
-        std::vector<relight::SphereView> views;
-        for (const auto& s : calibration.spheres) views.emplace_back(s.outline, camera.camera);
         // Positions are in sphere radii; a diameter in mm makes them millimetres.
         const double unit = opt->sphere_diameter_mm > 0.0 ? 0.5 * opt->sphere_diameter_mm : 1.0;
         const std::string unit_name = opt->sphere_diameter_mm > 0.0 ? "mm" : "sphere radii";
@@ -447,7 +453,7 @@ void add_calibrate_command(CLI::App& capture) {
                         worst_disagreement_at = i;
                     }
                 }
-                if (const auto lamp = relight::near_light(views, light.highlights); lamp && !lamp->distant) {
+                if (const auto& lamp = light.lamp; lamp && !lamp->distant) {
                     entry["near_light"] = {{"position", {unit * lamp->position.x(), unit * lamp->position.y(),
                                                          unit * lamp->position.z()}},
                                            {"distance", unit * lamp->distance},
@@ -535,6 +541,14 @@ void add_calibrate_command(CLI::App& capture) {
             std::printf("spheres differ by %.3f deg on average, at most %.3f (%s)\n",
                         sum_disagreement / static_cast<double>(disagreements), worst_disagreement,
                         fs::path(opt->images[worst_disagreement_at]).filename().c_str());
+        // Spheres that see a lamp from directions this far apart on average are seeing a
+        // near lamp from two places, not misreading a distant one.
+        constexpr double kNearHintDeg = 3.0;
+        if (!opt->near_lamps && disagreements > 0 &&
+            sum_disagreement / static_cast<double>(disagreements) > kNearHintDeg)
+            std::printf("the spheres differ by %.1f deg on average: the lamps may be near (see 'lamp dist'); "
+                        "--near-lamps writes directions from the object\n",
+                        sum_disagreement / static_cast<double>(disagreements));
         if (compared > 0)
             std::printf("against %s: mean error %.3f deg, worst %.3f (%s)\n", opt->compare.c_str(),
                         sum_error / static_cast<double>(compared), worst_error,

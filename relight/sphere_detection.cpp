@@ -46,9 +46,10 @@ constexpr float kFaintHighlight = 0.1f;
 // Rays from a candidate's centre that must find its edge.
 constexpr double kEdgeFraction = 0.5;
 // Two detected spheres belong to one calibration when their directions agree this well
-// (median over the photographs). Generous: lamps at a dome's radius differ by tens of
-// degrees between spheres a fifth of it apart.
-constexpr double kAgreementDeg = 20.0;
+// (median over the photographs), and a sphere's reading this far from the primary's is not
+// the lamp. Generous: lamps at a dome's radius differ by 20 degrees and more between
+// spheres a third of it apart.
+constexpr double kAgreementDeg = 45.0;
 
 float quantile(std::vector<float> values, double q) {
     if (values.empty()) return 0.0f;
@@ -316,7 +317,7 @@ std::optional<MirrorSphere> most_crossed_circle(const std::vector<RayEdges>& ray
 // distant lamps put them: Gauss-Newton on the centre and radius with Tukey's weights. Taken
 // only when the lamps are distant enough for one outline to explain every highlight (rms
 // within kAlignedRmsPx, nine in ten within three times that) and it moves the outline by
-// less than a tenth of its radius.
+// less than a quarter of its radius.
 struct AlignedOutline {
     MirrorSphere sphere;
     double rms_px = 0.0;
@@ -384,7 +385,7 @@ std::optional<AlignedOutline> align_outline(const MirrorSphere& start, const Cal
     }
     const double rms = std::sqrt(sum2 / static_cast<double>(seen.size()));
     const double moved = (x - Eigen::Vector3d(start.centre_x, start.centre_y, start.radius)).norm();
-    if (rms > kAlignedRmsPx || 10 * close < 9 * seen.size() || moved > 0.1 * start.radius) return std::nullopt;
+    if (rms > kAlignedRmsPx || 10 * close < 9 * seen.size() || moved > 0.25 * start.radius) return std::nullopt;
     return AlignedOutline{{x.x(), x.y(), x.z()}, rms};
 }
 
@@ -719,6 +720,9 @@ CaptureCalibration calibrate_capture(const std::vector<fs::path>& images, const 
         for (const auto& image : used)
             if (image[s].status == HighlightStatus::Found) ++result.spheres[s].highlights;
     }
+    std::vector<SphereView> views;
+    for (const auto& sphere : result.spheres) views.emplace_back(sphere.outline, options.camera);
+    const Eigen::Vector3d object = object_point(views);
     for (const auto& image : used) {
         CalibratedImageLight light;
         light.highlights = image;
@@ -737,9 +741,28 @@ CaptureCalibration calibrate_capture(const std::vector<fs::path>& images, const 
             light.direction = light.highlights[static_cast<std::size_t>(result.primary)].direction;
         else if (light.spheres_used > 0 && sum.norm() > 1e-12)
             light.direction = sum.normalized();
+        if (views.size() > 1) light.lamp = near_light(views, light.highlights);
+        if (options.near_lamps && light.lamp && !light.lamp->distant)
+            light.direction = (light.lamp->position - object).normalized();
         result.lights.push_back(std::move(light));
     }
     return result;
+}
+
+Eigen::Vector3d object_point(const std::vector<SphereView>& spheres) {
+    RFD_CHECK(!spheres.empty());
+    if (spheres.front().camera().orthographic()) {
+        // Depth unknown: the spheres' mean position, one radius below their centres.
+        Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+        for (const SphereView& view : spheres) mean += view.centre();
+        return mean / static_cast<double>(spheres.size()) - Eigen::Vector3d::UnitZ();
+    }
+    double depth = 0.0;
+    for (const SphereView& view : spheres) depth += -view.centre().z();
+    depth = depth / static_cast<double>(spheres.size()) + 1.0;
+    // Where the camera's axis meets the plane of the spheres' lowest points.
+    const Eigen::Vector3d axis = spheres.front().camera().ray(spheres.front().camera().principal_point);
+    return axis * (depth / -axis.z());
 }
 
 std::vector<CalibratedLight> calibrate_lights(const std::vector<fs::path>& mirror_images, const MirrorSphere& sphere,

@@ -75,6 +75,10 @@ std::optional<OutlineFit> fit_sphere_outline(const CaptureBrightness& brightness
 struct SphereCalibrationOptions {
     CalibrationCamera camera;          ///< its principal point in the photographs' pixels
     std::vector<MirrorSphere> spheres; ///< the user's outlines, the first giving the directions: nothing detected
+    /// The lamps are near (a dome, a hand-held lamp): each light's direction is the one from
+    /// the object (object_point()) to its lamp placed by near_light(), where two spheres or
+    /// more see it.
+    bool near_lamps = false;
 };
 
 /// A sphere the calibration used.
@@ -87,6 +91,14 @@ struct CalibrationSphere {
     std::optional<double> aligned_rms_px;
 };
 
+/// A lamp placed from two spheres or more.
+struct NearLight {
+    Eigen::Vector3d position = Eigen::Vector3d::Zero();  ///< field frame, sphere radii from the camera
+    double distance = 0.0;      ///< from the spheres' mean centre, sphere radii
+    double residual_rms = 0.0;  ///< the rays' distances to the position, sphere radii
+    bool distant = false;       ///< the rays are parallel to within their scatter: a distant light
+};
+
 /// One photograph's light.
 struct CalibratedImageLight {
     std::vector<Highlight> highlights;  ///< one per sphere, in the order of CaptureCalibration::spheres
@@ -95,6 +107,7 @@ struct CalibratedImageLight {
     /// primary, the mean of the spheres' that do.
     Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();
     double disagreement_deg = 0.0;      ///< largest angle between two spheres' directions
+    std::optional<NearLight> lamp;       ///< placed from two spheres or more
 };
 
 struct CaptureCalibration {
@@ -125,13 +138,9 @@ struct CalibratedLight {
 std::vector<CalibratedLight> calibrate_lights(const std::vector<std::filesystem::path>& mirror_images,
                                               const MirrorSphere& sphere, const CalibrationCamera& camera = {});
 
-/// A lamp placed from two spheres or more.
-struct NearLight {
-    Eigen::Vector3d position = Eigen::Vector3d::Zero();  ///< field frame, sphere radii from the camera
-    double distance = 0.0;      ///< from the spheres' mean centre, sphere radii
-    double residual_rms = 0.0;  ///< the rays' distances to the position, sphere radii
-    bool distant = false;       ///< the rays are parallel to within their scatter: a distant light
-};
+/// The object's centre as the spheres place it: where the camera's axis meets the plane of
+/// the spheres' lowest points (the table they sit on), field frame, sphere radii.
+Eigen::Vector3d object_point(const std::vector<SphereView>& spheres);
 
 /// The point nearest the rays from each sphere's centre along its direction (unit, toward the
 /// light); spheres whose highlight was not found are left out. nullopt with fewer than two.

@@ -7,6 +7,7 @@
 #include "core/error.hpp"
 #include "core/parallel.hpp"
 #include "core/progress.hpp"
+#include "core/units.hpp"
 #include "relight/brdf.hpp"
 #include "relight/ray_scene.hpp"
 
@@ -57,6 +58,7 @@ struct ShadingPoint {
 };
 
 struct EscapedPath {
+    Eigen::Vector3f origin;     // world, the path's last vertex
     Eigen::Vector3f direction;  // world
     Eigen::Array3f weight;
 };
@@ -142,6 +144,7 @@ public:
             const auto hit = rays_.intersect(path.origin, path.direction, 0.0, kInfinity);
             if (!hit) {
                 EscapedPath escaped;
+                escaped.origin = path.origin.cast<float>();
                 escaped.direction = path.direction.cast<float>();
                 escaped.weight = path.weight.cast<float>();
                 row.escapes.push_back(escaped);
@@ -304,10 +307,25 @@ Image LightStage::render(const Eigen::Vector3d& direction) const {
 }
 
 Image LightStage::render(const Eigen::Vector3d& direction, const LightKernel& kernel) const {
+    return render_lit(direction, kernel, nullptr);
+}
+
+Image LightStage::render(const NearLamp& lamp) const {
+    RFD_CHECK(lamp.radius > 0.0 && lamp.reference_distance > 0.0);
+    return render_lit(lamp.position.normalized(), LightKernel::directional(), &lamp);
+}
+
+Image LightStage::render_lit(const Eigen::Vector3d& direction, const LightKernel& kernel, const NearLamp* near) const {
     const Scene& s = *scene_;
     const Cache& cache = *cache_;
     const KernelSampler sampler(kernel);
     const Eigen::Vector3d centre = (cache.field_to_world * direction.normalized()).normalized();
+    // A near lamp: a point for the surfaces (its direction, distance and inverse-square
+    // fall-off from each), a sphere of its radius for mirrors, of the radiance that gives
+    // irradiance 1 at the reference distance.
+    const Eigen::Vector3d lamp = near ? Eigen::Vector3d(cache.field_to_world * near->position) : Eigen::Vector3d::Zero();
+    const double lamp_radiance =
+        near ? near->reference_distance * near->reference_distance / (kPi * near->radius * near->radius) : 0.0;
     const bool directional = kernel.is_directional();
     const std::size_t per_sample = directional ? 1 : static_cast<std::size_t>(s.shadow_samples);
     const std::size_t strata = per_sample * static_cast<std::size_t>(s.samples_per_pixel);
@@ -317,14 +335,14 @@ Image LightStage::render(const Eigen::Vector3d& direction, const LightKernel& ke
 
     // Visibility toward w from a shading point: 0 behind an opaque object, attenuated
     // (straight chords, no refraction) through glass.
-    auto transmittance = [&](const Eigen::Vector3d& origin, const Eigen::Vector3d& w) -> Rgb {
-        if (cache.opaque.occluded(origin, w, 0.0, kInfinity)) return Rgb::Zero();
+    auto transmittance = [&](const Eigen::Vector3d& origin, const Eigen::Vector3d& w, double reach) -> Rgb {
+        if (cache.opaque.occluded(origin, w, 0.0, reach)) return Rgb::Zero();
         Rgb through = Rgb::Ones();
         if (cache.glass.empty()) return through;
         Media media;
         double t = 0.0;
         for (int crossing = 0; crossing < kMaxGlassCrossings; ++crossing) {
-            const auto hit = cache.glass.intersect(origin, w, t + eps, kInfinity);
+            const auto hit = cache.glass.intersect(origin, w, t + eps, reach);
             if (!hit) return through;
             const bool entering = w.dot(hit->normal) < 0.0;
             // A surface left without having been entered: the point sits inside it.
@@ -352,7 +370,17 @@ Image LightStage::render(const Eigen::Vector3d& direction, const LightKernel& ke
                 const auto ux = static_cast<std::size_t>(x);
                 const std::size_t pixel = y * static_cast<std::size_t>(width) + ux;
                 Rgb sum = row.background[ux].cast<double>();
-                if (!directional) {
+                if (near) {
+                    // Escaped paths that pass within the lamp's radius of its centre see it.
+                    for (std::uint32_t e = row.escape_begin[ux]; e < row.escape_begin[ux + 1]; ++e) {
+                        const EscapedPath& escaped = row.escapes[e];
+                        const Eigen::Vector3d o = escaped.origin.cast<double>();
+                        const Eigen::Vector3d d = escaped.direction.cast<double>().normalized();
+                        const double along = std::max(0.0, (lamp - o).dot(d));
+                        if ((o + along * d - lamp).norm() < near->radius)
+                            sum += escaped.weight.cast<double>() * lamp_radiance;
+                    }
+                } else if (!directional) {
                     for (std::uint32_t e = row.escape_begin[ux]; e < row.escape_begin[ux + 1]; ++e) {
                         const EscapedPath& escaped = row.escapes[e];
                         sum += escaped.weight.cast<double>() *
@@ -369,6 +397,19 @@ Image LightStage::render(const Eigen::Vector3d& direction, const LightKernel& ke
                     const Rgb albedo = point.albedo.cast<double>();
                     const Material& material = s.materials[point.material];
                     Rgb reflected = Rgb::Zero();
+                    if (near) {
+                        const Eigen::Vector3d to_lamp = lamp - origin;
+                        const double distance = to_lamp.norm();
+                        const Eigen::Vector3d w = to_lamp / distance;
+                        const double cosine = n.dot(w);
+                        if (cosine > 0.0 && ng.dot(w) > 0.0) {
+                            const double falloff = near->reference_distance * near->reference_distance / (distance * distance);
+                            reflected = surface_brdf(material, n, v, w, albedo) * cosine * falloff *
+                                        transmittance(origin, w, distance - near->radius);
+                        }
+                        sum += point.weight.cast<double>() * reflected;
+                        continue;
+                    }
                     for (std::size_t j = 0; j < per_sample; ++j) {
                         Eigen::Vector3d w = centre;
                         if (!directional) {
@@ -381,7 +422,7 @@ Image LightStage::render(const Eigen::Vector3d& direction, const LightKernel& ke
                         if (cosine <= 0.0 || ng.dot(w) <= 0.0) continue;
                         const Rgb f = surface_brdf(material, n, v, w, albedo);
                         if (f.maxCoeff() <= 0.0) continue;
-                        reflected += f * cosine * transmittance(origin, w);
+                        reflected += f * cosine * transmittance(origin, w, kInfinity);
                     }
                     sum += point.weight.cast<double>() * reflected / static_cast<double>(per_sample);
                 }

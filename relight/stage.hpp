@@ -52,6 +52,16 @@
 
 namespace rfd::relight {
 
+/// A lamp at a finite distance, as a dome's: a sphere of `radius` mm at `position` (mm, the
+/// first camera's field frame, about the world's origin), bright enough to give irradiance 1
+/// at `reference_distance` mm. Surfaces see it as a point (each from its own direction, with
+/// the inverse-square fall-off), mirrors as the sphere.
+struct NearLamp {
+    Eigen::Vector3d position = Eigen::Vector3d::UnitZ();
+    double radius = 1.0;
+    double reference_distance = 1.0;
+};
+
 class LightStage {
 public:
     /// Traces the camera paths of view `view` of `scene` (shows progress on stderr).
@@ -71,6 +81,8 @@ public:
     Image render(const Eigen::Vector3d& direction, const LightKernel& kernel) const;
     /// The same with the scene's kernel.
     Image render(const Eigen::Vector3d& direction) const;
+    /// The image under a near lamp (hard shadows: the lamp is a point for surfaces).
+    Image render(const NearLamp& lamp) const;
 
     /// Rotation from the first camera's field frame to this view's field frame: the
     /// direction this view's light file records for a light at `d` is to_view_frame() * d.
@@ -82,6 +94,7 @@ public:
 
 private:
     struct Cache;
+    Image render_lit(const Eigen::Vector3d& direction, const LightKernel& kernel, const NearLamp* near) const;
     std::unique_ptr<const Scene> scene_;
     std::size_t view_ = 0;
     std::unique_ptr<Cache> cache_;

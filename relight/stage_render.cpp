@@ -1,6 +1,8 @@
 #include "relight/stage_render.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <system_error>
 
@@ -16,13 +18,15 @@
 namespace rfd::relight {
 
 StageRender render_field(const Scene& scene, const std::vector<Eigen::Vector3d>& directions,
-                         const std::vector<LightKernel>& kernels, const std::filesystem::path& folder) {
+                         const std::vector<LightKernel>& kernels, const std::filesystem::path& folder,
+                         double dome_radius_mm) {
     using Clock = std::chrono::steady_clock;
     RFD_CHECK(directions.size() == kernels.size());
     ensure_directory(folder);
     StageRender run;
     run.views = scene.cameras.size();
     run.lights = directions.size();
+    run.dome_radius_mm = dome_radius_mm;
     double light_seconds = 0.0;
     std::vector<ViewEntry> view_entries;
     // A views file from an earlier run would list views being replaced: written last.
@@ -42,8 +46,12 @@ StageRender render_field(const Scene& scene, const std::vector<Eigen::Vector3d>&
 
         Progress progress(run.views == 1 ? "lights" : std::string("lights, ") + name, directions.size());
         for (std::size_t i = 0; i < directions.size(); ++i) {
-            field.add(stage.render(directions[i], kernels[i]), (stage.to_view_frame() * directions[i]).normalized(),
-                      kernels[i].radius);
+            // A dome's lamp subtends its kernel's radius from the origin (a tenth of a degree at least).
+            const double lamp_radius = dome_radius_mm * std::tan(std::max(kernels[i].radius, degrees_to_radians(0.1)));
+            field.add(dome_radius_mm > 0.0
+                          ? stage.render(NearLamp{dome_radius_mm * directions[i].normalized(), lamp_radius, dome_radius_mm})
+                          : stage.render(directions[i], kernels[i]),
+                      (stage.to_view_frame() * directions[i]).normalized(), kernels[i].radius);
             progress.advance();
         }
         progress.finish();
@@ -74,6 +82,7 @@ nlohmann::json stage_render_json(const StageRender& run, const Scene& scene, con
             {"samples_per_pixel", scene.samples_per_pixel},
             {"shadow_samples", scene.shadow_samples},
             {"seed", scene.seed},
+            {"dome_radius_mm", run.dome_radius_mm},
             {"kernel", {{"profile", to_string(run.kernel.profile)},
                         {"radius_deg", radians_to_degrees(run.kernel.radius)},
                         {"directional", run.kernel.is_directional()}}},
@@ -94,6 +103,9 @@ std::string stage_render_text(const StageRender& run, const Scene& scene, const 
     text += format_text("  kernel             %s, radius %.3g deg, %d shadow sample(s) per ray\n",
                   run.kernel.is_directional() ? "directional" : to_string(run.kernel.profile).c_str(),
                   radians_to_degrees(run.kernel.radius), scene.shadow_samples);
+    if (run.dome_radius_mm > 0.0)
+        text += format_text("  lamps              near: %.4g mm from the origin (a dome), hard shadows\n",
+                            run.dome_radius_mm);
     text += format_text("  cache              %zu shading points, %zu escaped paths\n", run.shading_points,
                   run.escaped_paths);
     text += format_text("  time               %.3f s camera paths, %.4f s per light\n",

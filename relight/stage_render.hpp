@@ -27,14 +27,19 @@ struct StageRender {
     double seconds_per_light = 0.0;  ///< lighting them, per light and view
     LightKernel kernel;              ///< the command's kernel, for the report
     std::string light_source;        ///< where the directions came from (a count, a file)
+    double dome_radius_mm = 0.0;     ///< lamps at this distance from the origin (0: distant)
 };
 
 /// Renders `directions[i]` (unit, toward the light, the first camera's field frame) with
 /// `kernels[i]` into `folder` (one camera) or folder/view_NN/ with views.txt (several, the
 /// views in the display frame: the first camera's field frame). A views.txt of an earlier
 /// run is removed first and written last.
+/// With `dome_radius_mm` > 0 the lamps are near, as a dome's: each at that distance from the
+/// world's origin along its direction, of the radius its kernel subtends from there
+/// (relight/stage.hpp NearLamp); the light file records the directions from the origin.
 StageRender render_field(const Scene& scene, const std::vector<Eigen::Vector3d>& directions,
-                         const std::vector<LightKernel>& kernels, const std::filesystem::path& folder);
+                         const std::vector<LightKernel>& kernels, const std::filesystem::path& folder,
+                         double dome_radius_mm = 0.0);
 
 /// The run for --json and as text; `scene_file` and `folder` as the user named them.
 nlohmann::json stage_render_json(const StageRender& run, const Scene& scene, const std::string& scene_file,

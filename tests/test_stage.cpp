@@ -420,6 +420,74 @@ radius_mm = 30
     EXPECT_NEAR(peak, 1 / (2 * kPi * (1 - std::cos(cap))), 1e-3 * peak);
 }
 
+TEST(Stage, NearLampLightsEachPointFromItsOwnDirection) {
+    // A near lamp 150 mm above a Lambertian sphere: each point sees it from its own
+    // direction, at its own distance (irradiance (d0 / d)^2); a mirror sphere beside it
+    // shows the lamp where the mirror law for the lamp's position puts it.
+    const Eigen::Vector3d eye(0, 0, 1000), target(0, 0, 0), white(-20, 0, 0), chrome(20, 0, 0);
+    const double fov = 4, radius = 15, albedo = 0.7;
+    const int w = 96, h = 96;
+    const Scene scene = scene_from(camera_toml(eye, target, fov, w, h, 1) + R"(
+[kernel]
+profile = "directional"
+[materials.white]
+type = "diffuse"
+albedo = [0.7, 0.7, 0.7]
+[materials.chrome]
+type = "mirror"
+reflectance = [1, 1, 1]
+[[object]]
+type = "sphere"
+material = "white"
+center_mm = [-20, 0, 0]
+radius_mm = 15
+[[object]]
+type = "sphere"
+material = "chrome"
+center_mm = [20, 0, 0]
+radius_mm = 15
+)");
+    const LightStage stage(scene);
+    const NearLamp lamp{Eigen::Vector3d(40, 60, 150), 15.0, 100.0};
+    const Image image = stage.render(lamp);
+    double worst = 0, sum = 0, sx = 0, sy = 0, peak = 0;
+    int lit = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const Eigen::Vector3d d = pinhole_ray(eye, target, Eigen::Vector3d::UnitY(), fov, w, h, x + 0.5, y + 0.5);
+            if (const auto t = ray_sphere(eye, d, white, radius)) {
+                const Eigen::Vector3d p = eye + *t * d, n = (p - white).normalized();
+                const Eigen::Vector3d to_lamp = lamp.position - p;
+                const double expected = albedo / kPi * std::max(0.0, n.dot(to_lamp.normalized())) *
+                                        (lamp.reference_distance * lamp.reference_distance) / to_lamp.squaredNorm();
+                // The chrome ball may shadow a few points facing it; compare the rest.
+                if (image.at(x, y, 0) > 0.0f || expected == 0.0) {
+                    worst = std::max(worst, std::abs(image.at(x, y, 0) - expected));
+                    ++lit;
+                }
+            } else if (ray_sphere(eye, d, chrome, radius)) {
+                // The lamp's radiance, 100^2 / (pi 15^2) = 14, over the white ball mirrored.
+                const double v = image.at(x, y, 0) > 1.0f ? image.at(x, y, 0) : 0.0;
+                peak = std::max(peak, v);
+                sum += v;
+                sx += v * (x + 0.5);
+                sy += v * (y + 0.5);
+            }
+        }
+    EXPECT_GT(lit, 700);
+    EXPECT_LT(worst, 1e-5);
+    // The mirror point: its normal halves the directions to the eye and to the lamp.
+    Eigen::Vector3d p = chrome + radius * Eigen::Vector3d::UnitZ();
+    for (int i = 0; i < 100; ++i)
+        p = chrome + radius * ((eye - p).normalized() + (lamp.position - p).normalized()).normalized();
+    const Eigen::Vector2d expected = project(eye, target, Eigen::Vector3d::UnitY(), fov, w, h, p);
+    ASSERT_GT(sum, 0);
+    EXPECT_NEAR(sx / sum, expected.x(), 0.3);
+    EXPECT_NEAR(sy / sum, expected.y(), 0.3);
+    // Inside the lamp's disc the mirror shows its radiance (one camera ray a pixel).
+    EXPECT_NEAR(peak, 1e4 / (kPi * 15.0 * 15.0), 1e-4 * peak);
+}
+
 TEST(Stage, GlassSlabShiftsAnEdgeAsSnellPredicts) {
     // A white card covers x < 0; a tilted glass slab above it displaces its edge.
     // The image spans x in [-25, 25] mm at the card, 0.31 mm per pixel: every camera ray
