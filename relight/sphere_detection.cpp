@@ -59,14 +59,41 @@ float quantile(std::vector<float> values, double q) {
     return values[static_cast<std::size_t>(k)];
 }
 
+// Tukey's biweight of a residual over its cutoff.
+double tukey(double u) { return std::abs(u) < 1.0 ? (1.0 - u * u) * (1.0 - u * u) : 0.0; }
+
+// One weighted Gauss-Newton step for three parameters: the Jacobian of `residuals` by
+// central differences (1e-4, pixels), `r` the residuals at `x`, `w` their weights.
+template <typename Residuals>
+Eigen::Vector3d gauss_newton_step(const Residuals& residuals, const Eigen::Vector3d& x, const Eigen::VectorXd& r,
+                                  const Eigen::VectorXd& w) {
+    constexpr double kStep = 1e-4;
+    Eigen::MatrixXd jacobian(r.size(), 3);
+    Eigen::VectorXd plus(r.size()), minus(r.size());
+    for (int k = 0; k < 3; ++k) {
+        Eigen::Vector3d a = x, b = x;
+        a(k) += kStep;
+        b(k) -= kStep;
+        residuals(a, plus);
+        residuals(b, minus);
+        jacobian.col(k) = (plus - minus) / (2.0 * kStep);
+    }
+    return (jacobian.transpose() * w.asDiagonal() * jacobian).ldlt().solve(-(jacobian.transpose() * w.asDiagonal() * r));
+}
+
+// InputError unless the photograph `in` reads is `size`, the first one's.
+void check_size(const ImageBandReader& in, PlaneSize size) {
+    if (in.width() != size.width || in.height() != size.height)
+        throw InputError(SourceLocation{in.path().string()},
+                         "is " + std::to_string(in.width()) + "x" + std::to_string(in.height()) +
+                             "; the first photograph is " + std::to_string(size.width) + "x" +
+                             std::to_string(size.height) + " (expected one size)");
+}
+
 // One photograph's channel-mean brightness, read a band of rows at a time.
 std::vector<float> brightness_plane(const fs::path& path, PlaneSize size) {
     ImageBandReader in(path);
-    if (in.width() != size.width || in.height() != size.height)
-        throw InputError(SourceLocation{path.string()}, "is " + std::to_string(in.width()) + "x" +
-                                                            std::to_string(in.height()) + "; the first photograph is " +
-                                                            std::to_string(size.width) + "x" +
-                                                            std::to_string(size.height) + " (expected one size)");
+    check_size(in, size);
     std::vector<float> plane(size.area());
     constexpr int kBandRows = 256;
     for (int y0 = 0; y0 < size.height; y0 += kBandRows) {
@@ -119,7 +146,6 @@ OutlineFit robust_outline(const std::vector<Eigen::Vector2d>& edges, const Mirro
     const auto sphere_of = [](const Eigen::Vector3d& v) { return MirrorSphere{v.x(), v.y(), v.z()}; };
     const std::size_t n = edges.size();
     Eigen::VectorXd r(n), w(n);
-    Eigen::MatrixXd jacobian(n, 3);
     double sigma = 1.0;
     const auto residuals = [&](const Eigen::Vector3d& v, Eigen::VectorXd& out) {
         for (std::size_t i = 0; i < n; ++i) out(static_cast<Eigen::Index>(i)) = outline_residual(sphere_of(v), camera, edges[i]);
@@ -130,23 +156,9 @@ OutlineFit robust_outline(const std::vector<Eigen::Vector2d>& edges, const Mirro
         for (std::size_t i = 0; i < n; ++i) magnitudes[i] = static_cast<float>(std::abs(r(static_cast<Eigen::Index>(i))));
         sigma = std::max(0.05, 1.4826 * static_cast<double>(quantile(magnitudes, 0.5)));
         const double cutoff = 4.685 * sigma;
-        for (std::size_t i = 0; i < n; ++i) {
-            const double u = r(static_cast<Eigen::Index>(i)) / cutoff;
-            w(static_cast<Eigen::Index>(i)) = std::abs(u) < 1.0 ? (1.0 - u * u) * (1.0 - u * u) : 0.0;
-        }
-        constexpr double kStep = 1e-4;  // pixels: central differences
-        Eigen::VectorXd plus(n), minus(n);
-        for (int k = 0; k < 3; ++k) {
-            Eigen::Vector3d a = x, b = x;
-            a(k) += kStep;
-            b(k) -= kStep;
-            residuals(a, plus);
-            residuals(b, minus);
-            jacobian.col(k) = (plus - minus) / (2.0 * kStep);
-        }
-        const Eigen::Matrix3d normal = jacobian.transpose() * w.asDiagonal() * jacobian;
-        const Eigen::Vector3d gradient = jacobian.transpose() * w.asDiagonal() * r;
-        const Eigen::Vector3d step = normal.ldlt().solve(-gradient);
+        for (std::size_t i = 0; i < n; ++i)
+            w(static_cast<Eigen::Index>(i)) = tukey(r(static_cast<Eigen::Index>(i)) / cutoff);
+        const Eigen::Vector3d step = gauss_newton_step(residuals, x, r, w);
         if (!step.allFinite()) break;
         x += step;
         if (step.norm() < 1e-7) break;
@@ -183,11 +195,7 @@ std::vector<std::vector<Highlight>> read_highlights(const std::vector<fs::path>&
         for (std::size_t i = begin; i < end; ++i) {
             try {
                 ImageBandReader in(images[i]);
-                if (in.width() != size.width || in.height() != size.height)
-                    throw InputError(SourceLocation{images[i].string()},
-                                     "is " + std::to_string(in.width()) + "x" + std::to_string(in.height()) +
-                                         "; the first photograph is " + std::to_string(size.width) + "x" +
-                                         std::to_string(size.height) + " (expected one size)");
+                check_size(in, size);
                 for (const std::size_t s : order) {
                     const MirrorSphere& sphere = spheres[s];
                     const auto clamp_to = [](double v, int limit) {
@@ -347,8 +355,7 @@ std::optional<AlignedOutline> align_outline(const MirrorSphere& start, const Cal
     };
     const auto n = static_cast<Eigen::Index>(2 * seen.size());
     Eigen::Vector3d x(start.centre_x, start.centre_y, start.radius);
-    Eigen::VectorXd r(n), w(n), plus(n), minus(n);
-    Eigen::MatrixXd jacobian(n, 3);
+    Eigen::VectorXd r(n), w(n);
     double sigma = 1.0;
     for (int iteration = 0; iteration < 30; ++iteration) {
         residuals(x, r);
@@ -356,22 +363,10 @@ std::optional<AlignedOutline> align_outline(const MirrorSphere& start, const Cal
         for (std::size_t i = 0; i < seen.size(); ++i)
             distances[i] = static_cast<float>(r.segment<2>(static_cast<Eigen::Index>(2 * i)).norm());
         sigma = std::max(0.02, 1.4826 * static_cast<double>(quantile(distances, 0.5)));
-        for (std::size_t i = 0; i < seen.size(); ++i) {
-            const double u = static_cast<double>(distances[i]) / (4.685 * sigma);
-            w.segment<2>(static_cast<Eigen::Index>(2 * i)).setConstant(u < 1.0 ? (1.0 - u * u) * (1.0 - u * u) : 0.0);
-        }
-        constexpr double kStep = 1e-4;
-        for (int k = 0; k < 3; ++k) {
-            Eigen::Vector3d a = x, b = x;
-            a(k) += kStep;
-            b(k) -= kStep;
-            residuals(a, plus);
-            residuals(b, minus);
-            jacobian.col(k) = (plus - minus) / (2.0 * kStep);
-        }
-        const Eigen::Vector3d step = (jacobian.transpose() * w.asDiagonal() * jacobian)
-                                         .ldlt()
-                                         .solve(-(jacobian.transpose() * w.asDiagonal() * r));
+        for (std::size_t i = 0; i < seen.size(); ++i)
+            w.segment<2>(static_cast<Eigen::Index>(2 * i))
+                .setConstant(tukey(static_cast<double>(distances[i]) / (4.685 * sigma)));
+        const Eigen::Vector3d step = gauss_newton_step(residuals, x, r, w);
         if (!step.allFinite() || !(x.z() + step.z() > 0.0)) return std::nullopt;
         x += step;
         if (step.norm() < 1e-7) break;
