@@ -29,6 +29,8 @@
 #include "relight/basis.hpp"
 #include "relight/evaluate.hpp"
 #include "relight/field.hpp"
+#include "relight/fit_file.hpp"
+#include "relight/light_model.hpp"
 #include "relight/interpolation.hpp"
 #include "relight/render.hpp"
 
@@ -57,18 +59,72 @@ OrderedLights ordered_lights(const CLI::App& cmd, const CLI::Option* light, cons
     return out;
 }
 
+// A fit's folder (or its info.json) rather than a field's.
+bool is_fit(const std::filesystem::path& path) {
+    return path.filename() == "info.json" || std::filesystem::is_regular_file(path / "info.json");
+}
+
+// relight render FIT: one distant light per output, each written a band of rows at a time.
+void render_fit(const std::filesystem::path& fit, const OrderedLights& given, const std::string& light_file,
+                const std::vector<std::string>& out_names, bool field_options) {
+    if (field_options)
+        throw InputError("relight render: " + fit.string() +
+                         " is a fit; --envmap, --basis, --region and --scale are for fields");
+    std::vector<relight::Light> lights = given.lights;
+    std::vector<std::filesystem::path> outs;
+    if (!light_file.empty()) {
+        if (out_names.size() != 1)
+            throw InputError("relight render: with --lights, give one --out: the folder for its images");
+        ensure_directory(out_names.front());
+        bool radii = false;
+        for (const relight::LightEntry& entry : relight::read_light_file(light_file)) {
+            radii = radii || entry.kernel_radius > 0.0;
+            lights.push_back(relight::DirectionalLight{entry.direction});
+            outs.push_back(std::filesystem::path(out_names.front()) / entry.file);
+        }
+        if (radii)
+            std::fprintf(stderr, "note: %s gives its lights' disc radii; a fit is relit under point lights toward "
+                                 "their centres\n", light_file.c_str());
+    } else {
+        if (lights.empty()) throw InputError("relight render: give at least one --light, --light-dir or --lights");
+        if (out_names.size() != lights.size())
+            throw InputError("relight render: a fit is relit into one --out per light; " +
+                             std::to_string(out_names.size()) + " --out for " + std::to_string(lights.size()) +
+                             " lights");
+        for (const std::string& name : out_names) outs.emplace_back(name);
+    }
+    std::vector<Eigen::Vector3d> directions;
+    for (const relight::Light& light : lights) {
+        const auto* directional = std::get_if<relight::DirectionalLight>(&light);
+        if (directional == nullptr || !directional->irradiance.isOnes())
+            throw InputError("relight render: a fit is relit under white distant point lights (no RADIUS, no "
+                             "colour); relight the field itself for disks and coloured light");
+        directions.push_back(directional->direction.normalized());
+    }
+    const relight::FitFile file = relight::read_fit(fit);
+    relight::render_fit_to_files(fit, directions, outs);
+    std::printf("relit the %s fit %s (%d x %d, %d planes, %s) into %zu image(s)\n",
+                file.type == relight::FitType::Ptm ? "ptm" : file.type == relight::FitType::Hsh ? "hsh" : "rbf",
+                fit.string().c_str(), file.width, file.height, file.nplanes,
+                file.exact ? "linear float planes" : "8-bit planes of display values", outs.size());
+}
+
 void add_render(CLI::App& relight) {
     auto* cmd = relight.add_subcommand(
         "render", "Relight a reflectance field under distant lights or an environment map, read a band of rows at "
                   "a time (a field may be larger than memory)");
     struct Options {
-        std::string field, envmap, light_file, interpolation = "delaunay";
+        std::string field, envmap, light_file, interpolation = "delaunay", basis;
         std::vector<std::string> lights, light_dirs, outs;
+        double sigma = 0.0;
         bool json = false;
         WindowOptions window;
     };
     auto opt = std::make_shared<Options>();
-    cmd->add_option("FIELD", opt->field, "Reflectance field folder or .lp file")->required();
+    cmd->add_option("FIELD", opt->field,
+                    "Reflectance field folder or .lp file, or a fit (a folder with info.json: relight fit's, or "
+                    "CNR relight's)")
+        ->required();
     add_window_options(*cmd, opt->window);
     auto* light = cmd->add_option("--light", opt->lights,
                                   std::string("A distant light ") + kLightSyntax +
@@ -93,9 +149,21 @@ void add_render(CLI::App& relight) {
         ->required()
         ->allow_extra_args(false);
     cmd->add_option("--interpolation", opt->interpolation, "delaunay, solid-angle (eq. 4.6 as written) or nearest");
+    cmd->add_option("--basis", opt->basis,
+                    "Predict the lights with this instead of --interpolation: ptm, hsh2, hsh3, hsh4 (bases fitted to "
+                    "the field's lights) or rbf (radial basis functions, relight/light_model.hpp); each light is "
+                    "still a weighted sum of the images");
+    cmd->add_option("--sigma", opt->sigma, "With --basis rbf, the Gaussian's width (default: least leave-one-out "
+                                           "error on the field, one more pass over it)")
+        ->check(CLI::PositiveNumber);
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
     cmd->callback([opt, cmd, light, light_dir] {
         const relight::Interpolation method = parse_interpolation(opt->interpolation);
+        if (is_fit(opt->field)) {
+            render_fit(opt->field, ordered_lights(*cmd, light, light_dir, opt->lights, opt->light_dirs), opt->light_file,
+                       opt->outs, !opt->envmap.empty() || !opt->basis.empty() || !opt->window.region.empty());
+            return;
+        }
         const OrderedLights given = ordered_lights(*cmd, light, light_dir, opt->lights, opt->light_dirs);
         // Each output image and the lights it sums.
         std::vector<std::vector<relight::Light>> renders;
@@ -148,10 +216,21 @@ void add_render(CLI::App& relight) {
         }
         const auto t0 = std::chrono::steady_clock::now();
         relight::FieldReader field(opt->field, opt->window.window());
-        const relight::SphericalInterpolator interpolator(field.directions());
         std::vector<relight::LightCoefficients> coefficients;
-        for (const auto& lights : renders)
-            coefficients.push_back(relight::light_coefficients(interpolator, lights, method));
+        std::string predictor = opt->interpolation + " interpolation";
+        if (!opt->basis.empty()) {
+            relight::LightModel model = relight::parse_light_model(opt->basis);
+            if (model.kind == relight::LightModel::Kind::Rbf)
+                model.sigma = opt->sigma > 0.0 ? opt->sigma
+                                               : relight::best_rbf_sigma(relight::field_gram(field), field.directions());
+            const relight::LightWeights weights(model, field.directions());
+            for (const auto& lights : renders) coefficients.push_back(relight::light_coefficients(weights, lights));
+            predictor = model.name();
+        } else {
+            const relight::SphericalInterpolator interpolator(field.directions());
+            for (const auto& lights : renders)
+                coefficients.push_back(relight::light_coefficients(interpolator, lights, method));
+        }
         const auto t1 = std::chrono::steady_clock::now();
         const std::size_t decoded = relight::relight_to_files(field, coefficients, outs);
         const auto t2 = std::chrono::steady_clock::now();
@@ -171,6 +250,7 @@ void add_render(CLI::App& relight) {
                                             {"images", field.size()},
                                             {"images_decoded", decoded},
                                             {"interpolation", opt->interpolation},
+                                            {"predictor", predictor},
                                             {"resolution", {field.width(), field.height()}},
                                             {"outputs", std::move(images)},
                                             {"weights_seconds", seconds(t0, t1)},
@@ -178,8 +258,8 @@ void add_render(CLI::App& relight) {
             std::printf("%s\n", summary.dump(2).c_str());
             return;
         }
-        std::printf("relit %s (%zu images) into %zu image(s), %s interpolation\n", opt->field.c_str(), field.size(),
-                    outs.size(), opt->interpolation.c_str());
+        std::printf("relit %s (%zu images) into %zu image(s), %s\n", opt->field.c_str(), field.size(), outs.size(),
+                    predictor.c_str());
         std::printf("  image              %d x %d, %d channel(s) in the field\n", field.width(), field.height(),
                     field.channels());
         for (std::size_t j = 0; j < outs.size(); ++j) {
@@ -198,6 +278,7 @@ void add_render(CLI::App& relight) {
 struct EvalOptions {
     std::string field, reference, out, interpolation = "delaunay";
     std::vector<std::string> lights, bases;
+    double sigma = 0.0;
     bool json = false, leave_one_out = false;
     WindowOptions window;
 };
@@ -254,60 +335,47 @@ void evaluate_under_lights(const EvalOptions& opt, const relight::ReflectanceFie
         std::printf("  wrote %s/errors.csv and light_K.png (field | reference)\n", opt.out.c_str());
 }
 
-// One way of predicting a light from the others, as --basis names it.
-struct Predictor {
-    std::string name;
-    std::optional<relight::Basis> basis;            // a fitted basis, or
-    relight::Interpolation interpolation{};         // interpolation between the lights
-};
-
-std::vector<Predictor> parse_predictors(const std::vector<std::string>& names, const std::string& interpolation) {
-    std::vector<Predictor> out;
+// The models --basis names ("all": every one), --interpolation's when none.
+std::vector<relight::LightModel> parse_models(const std::vector<std::string>& names, const std::string& interpolation) {
     std::vector<std::string> all;
     for (const std::string& name : names) {
         if (name == "all") {
-            all.push_back(interpolation);
-            for (const auto& basis : relight::kBasisNames) all.emplace_back(basis.name);
+            for (const std::string& n : relight::light_model_names())
+                if (n == interpolation || relight::parse_light_model(n).kind != relight::LightModel::Kind::Interpolation)
+                    all.push_back(n);
         } else {
             all.push_back(name);
         }
     }
     if (all.empty()) all.push_back(interpolation);
-    for (const std::string& name : all) {
-        Predictor p{name, std::nullopt, {}};
-        bool known = false;
-        for (const auto& basis : relight::kBasisNames)
-            if (name == basis.name) {
-                p.basis = basis.value;
-                known = true;
-            }
-        for (const auto& method : relight::kInterpolationNames)
-            if (name == method.name) {
-                p.interpolation = method.value;
-                known = true;
-            }
-        if (!known)
-            throw InputError("--basis: expected delaunay, solid-angle, nearest, ptm, hsh2, hsh3, hsh4 or all, got '" +
-                             name + "'");
-        out.push_back(p);
-    }
+    std::vector<relight::LightModel> out;
+    for (const std::string& name : all) out.push_back(relight::parse_light_model(name));
     return out;
 }
 
 // relight eval --leave-one-out: per image of the field and per way of predicting it, both
 // PSNRs, and their means.
 void evaluate_leave_one_out(const EvalOptions& opt) {
-    const std::vector<Predictor> predictors = parse_predictors(opt.bases, opt.interpolation);
-    std::vector<relight::LeaveOneOut> scores;
-    int width = 0, height = 0;
-    std::filesystem::path light_file;
-    for (const Predictor& p : predictors) {
-        relight::FieldReader field(opt.field, opt.window.window());
-        width = field.width();
-        height = field.height();
-        scores.push_back(p.basis ? relight::leave_one_out(field, relight::BasisFit(*p.basis, field.directions()))
-                                 : relight::leave_one_out(field, p.interpolation));
-    }
+    std::vector<relight::LightModel> models = parse_models(opt.bases, opt.interpolation);
+    relight::FieldReader field(opt.field, opt.window.window());
+    const int width = field.width(), height = field.height();
+    if (field.size() < 4)
+        throw InputError(SourceLocation{field.light_file().string()},
+                         "leave-one-out needs at least 4 images; the field has " + std::to_string(field.size()));
+    for (relight::LightModel& model : models)
+        if (model.kind == relight::LightModel::Kind::Rbf)
+            model.sigma = opt.sigma > 0.0 ? opt.sigma
+                                          : relight::best_rbf_sigma(relight::field_gram(field), field.directions());
+    std::vector<relight::LightWeights> weights;
+    for (const relight::LightModel& model : models) weights.emplace_back(model, field.directions());
+    std::vector<const relight::LightWeights*> pointers;
+    for (const relight::LightWeights& w : weights) pointers.push_back(&w);
+    const std::vector<relight::LeaveOneOut> scores = relight::leave_one_out(field, pointers);
+    struct Named {
+        std::string name;
+    };
+    std::vector<Named> predictors;
+    for (const relight::LightModel& model : models) predictors.push_back({model.name()});
     const relight::LeaveOneOut& first = scores.front();
     const std::size_t n = first.squared_error.size();
     const bool eight_bit = first.eight_bit();
@@ -320,9 +388,10 @@ void evaluate_leave_one_out(const EvalOptions& opt) {
         const std::filesystem::path out(opt.out);
         ensure_directory(out);
         std::vector<std::string> header{"index", "theta_deg", "phi_deg"};
-        for (const Predictor& p : predictors) {
-            if (eight_bit) header.push_back("psnr_srgb8_db_" + p.name);
-            header.push_back("psnr_linear_db_" + p.name);
+        for (const relight::LightModel& model : models) {
+            const std::string name = model.kind == relight::LightModel::Kind::Rbf ? "rbf" : model.name();
+            if (eight_bit) header.push_back("psnr_srgb8_db_" + name);
+            header.push_back("psnr_linear_db_" + name);
         }
         CsvTable errors(header);
         for (std::size_t j = 0; j < n; ++j) {
@@ -349,9 +418,11 @@ void evaluate_leave_one_out(const EvalOptions& opt) {
                                      {"psnr_srgb8_db", eight_bit ? finite_or_null(loo.psnr_srgb8(j)) : nullptr},
                                      {"psnr_linear_db", finite_or_null(loo.psnr_linear(j))}});
             }
-            per_basis[predictors[b].name] = {
+            const bool rbf = models[b].kind == relight::LightModel::Kind::Rbf;
+            per_basis[rbf ? "rbf" : predictors[b].name] = {
                 {"mean_psnr_srgb8_db", eight_bit ? finite_or_null(loo.mean_psnr_srgb8()) : nullptr},
                 {"mean_psnr_linear_db", finite_or_null(loo.mean_psnr_linear())},
+                {"sigma", rbf ? nlohmann::json(models[b].sigma) : nlohmann::json()},
                 {"per_light", std::move(per_light)}};
         }
         const nlohmann::json summary = {{"field", opt.field},       {"images", n},
@@ -371,7 +442,7 @@ void evaluate_leave_one_out(const EvalOptions& opt) {
     if (!eight_bit) std::printf("  (the images are not 8-bit: no PSNR in 8-bit codes)\n");
     std::printf("  per image, PSNR %s in dB:\n  %5s %8s %8s", eight_bit ? "in 8-bit sRGB codes" : "linear",
                 "index", "theta", "phi");
-    for (const Predictor& p : predictors) std::printf(" %9s", p.name.c_str());
+    for (const Named& p : predictors) std::printf(" %9s", p.name.c_str());
     std::printf("\n");
     for (std::size_t j = 0; j < n; ++j) {
         const SphericalAngles a = angles_of(first.directions[j]);
@@ -395,10 +466,14 @@ void add_eval(CLI::App& relight) {
     loo->excludes(reference_option);
     cmd->add_option("--basis", opt->bases,
                     "With --leave-one-out, how each image is predicted: delaunay, solid-angle, nearest "
-                    "(interpolation), ptm, hsh2, hsh3, hsh4 (fitted bases, relight/basis.hpp) or all; repeat to "
-                    "compare (default: --interpolation)")
+                    "(interpolation), ptm, hsh2, hsh3, hsh4 (fitted bases, relight/basis.hpp), rbf (radial basis "
+                    "functions, relight/light_model.hpp) or all; repeat to compare, all in one pass over the field "
+                    "(default: --interpolation)")
         ->needs(loo)
         ->allow_extra_args(false);
+    cmd->add_option("--sigma", opt->sigma,
+                    "With --basis rbf, the Gaussian's width (default: least leave-one-out error on the field)")
+        ->check(CLI::PositiveNumber);
     add_window_options(*cmd, opt->window);
     cmd->add_option("--interpolation", opt->interpolation, "delaunay, solid-angle (eq. 4.6 as written) or nearest");
     cmd->add_option("--light", opt->lights,
@@ -480,6 +555,138 @@ void add_eval(CLI::App& relight) {
     });
 }
 
+// relight fit: a fitted field in CNR relight's layout (relight/fit_file.hpp), the basis given
+// or chosen by leave-one-out on the field itself.
+void add_fit(CLI::App& relight) {
+    auto* cmd = relight.add_subcommand(
+        "fit", "Fit a basis to a field and write it as CNR relight's info.json + plane_N.jpg, the files OpenLIME "
+               "opens (rfd relight render relights them)");
+    struct Options {
+        std::string field, basis = "auto", out;
+        int planes = relight::FitSpec{}.planes, quality = relight::FitSpec{}.quality;
+        double sigma = 0.0;
+        bool exact = false, json = false;
+        WindowOptions window;
+    };
+    auto opt = std::make_shared<Options>();
+    cmd->add_option("FIELD", opt->field, "Reflectance field folder or .lp file")->required();
+    cmd->add_option("--basis", opt->basis,
+                    "ptm (6 functions), hsh2, hsh3 (4, 9; hsh4 with --exact), rbf (radial basis functions over the "
+                    "lights, the samples compressed to --planes principal components, as CNR relight's rbf), or auto: "
+                    "the one of least leave-one-out error on the field, said with every candidate's");
+    cmd->add_option("--out", opt->out, "Folder for info.json and the planes")->required();
+    cmd->add_option("--planes", opt->planes, "rbf: principal components kept (3 per plane file)")
+        ->check(CLI::PositiveNumber);
+    cmd->add_option("--sigma", opt->sigma, "rbf: the Gaussian's width (default: least leave-one-out error)")
+        ->check(CLI::PositiveNumber);
+    cmd->add_option("--quality", opt->quality, "JPEG quality of the planes")->check(CLI::Range(1, 100));
+    cmd->add_flag("--exact", opt->exact,
+                  "rfd's variant: float planes of linear light (plane_N.exr), nothing quantised; OpenLIME does "
+                  "not open it");
+    add_window_options(*cmd, opt->window);
+    cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
+    cmd->callback([opt] {
+        relight::FieldReader field(opt->field, opt->window.window());
+        relight::FitSpec spec;
+        spec.planes = opt->planes;
+        spec.sigma = opt->sigma;
+        spec.exact = opt->exact;
+        spec.quality = opt->quality;
+        // The candidates' leave-one-out errors, from one pass over the field (auto, or rbf's sigma).
+        nlohmann::json candidates = nlohmann::json::array();
+        std::string chosen = opt->basis, why;
+        if (opt->basis == "auto" || (opt->basis == "rbf" && opt->sigma <= 0.0)) {
+            const relight::FieldGram gram = relight::field_gram(field);
+            std::vector<std::string> names{"ptm", "hsh2", "hsh3"};
+            if (opt->exact) names.emplace_back("hsh4");
+            names.emplace_back("rbf");
+            if (opt->basis == "rbf") names = {"rbf"};
+            double best = std::numeric_limits<double>::infinity();
+            for (const std::string& name : names) {
+                relight::LightModel model = relight::parse_light_model(name);
+                if (model.kind == relight::LightModel::Kind::Rbf) {
+                    model.sigma = relight::best_rbf_sigma(gram, field.directions());
+                    spec.sigma = opt->sigma > 0.0 ? opt->sigma : model.sigma;
+                }
+                double error = std::numeric_limits<double>::quiet_NaN();
+                try {
+                    std::vector<bool> predictable;
+                    const Eigen::MatrixXd w = relight::LightWeights(model, field.directions()).leave_one_out(predictable);
+                    if (std::all_of(predictable.begin(), predictable.end(), [](bool p) { return p; }))
+                        error = relight::leave_one_out_errors(gram, w).sum();
+                } catch (const InputError&) {
+                    // lights too few for the basis: not a candidate
+                }
+                const double psnr = std::isnan(error) ? error
+                                                      : psnr_from_mse(error / (gram.samples_per_image *
+                                                                               static_cast<double>(field.size())),
+                                                                      gram.peak);
+                candidates.push_back({{"basis", name},
+                                      {"sigma", model.kind == relight::LightModel::Kind::Rbf ? nlohmann::json(model.sigma)
+                                                                                             : nlohmann::json()},
+                                      {"loo_psnr_linear_db", finite_or_null(psnr)}});
+                if (!std::isnan(error) && error < best) {
+                    best = error;
+                    chosen = name;
+                }
+            }
+            if (!std::isfinite(best)) throw InputError("relight fit: the field's lights carry none of the bases");
+            if (opt->basis == "auto")
+                why = "least leave-one-out error (linear) of the candidates on this field";
+        }
+        if (chosen == "ptm") {
+            spec.type = relight::FitType::Ptm;
+            spec.basis = relight::Basis::Ptm;
+        } else if (chosen == "hsh2" || chosen == "hsh3" || chosen == "hsh4") {
+            spec.type = relight::FitType::Hsh;
+            spec.basis = relight::parse_light_model(chosen).basis;
+        } else if (chosen == "rbf") {
+            spec.type = relight::FitType::Rbf;
+        } else {
+            throw InputError("--basis: expected ptm, hsh2, hsh3, hsh4, rbf or auto, got '" + opt->basis + "'");
+        }
+        const relight::FitReport report = relight::fit_field(field, spec, opt->out);
+        const relight::FitFile& file = report.file;
+        if (opt->json) {
+            const nlohmann::json summary = {{"field", opt->field},
+                                            {"out", opt->out},
+                                            {"basis", chosen},
+                                            {"why", why},
+                                            {"candidates", candidates},
+                                            {"nplanes", file.nplanes},
+                                            {"sigma", file.type == relight::FitType::Rbf ? nlohmann::json(file.sigma)
+                                                                                         : nlohmann::json()},
+                                            {"exact", file.exact},
+                                            {"sampled_pixels", report.sampled_pixels},
+                                            {"kept_variance", report.kept_variance},
+                                            {"clipped_samples", report.clipped}};
+            std::printf("%s\n", summary.dump(2).c_str());
+            return;
+        }
+        if (!candidates.empty() && opt->basis == "auto") {
+            std::printf("leave-one-out on %s (%zu lights), PSNR linear:\n", opt->field.c_str(), field.size());
+            for (const auto& c : candidates) {
+                const std::string name = c["basis"];
+                std::printf("  %-5s %8s dB%s\n", name.c_str(),
+                            c["loo_psnr_linear_db"].is_null() ? "-"
+                                                             : format_number(c["loo_psnr_linear_db"].get<double>(), 4).c_str(),
+                            name == chosen ? "   <- chosen" : "");
+            }
+        }
+        std::printf("fitted %s to %s (%zu lights, %d x %d) into %s: %d planes in %d %s file(s)\n", chosen.c_str(),
+                    opt->field.c_str(), field.size(), file.width, file.height, opt->out.c_str(), file.nplanes,
+                    file.jpegs(), file.exact ? "float EXR" : "JPEG");
+        if (file.type == relight::FitType::Rbf)
+            std::printf("  rbf: sigma %.4g, %d principal components keep %.4f%% of the variance\n", file.sigma,
+                        file.nplanes, 100.0 * report.kept_variance);
+        if (!file.exact)
+            std::printf("  ranges from %zu sampled pixels; %zu plane samples clamped to them (%.3f%%)\n",
+                        report.sampled_pixels, report.clipped,
+                        100.0 * static_cast<double>(report.clipped) /
+                            (static_cast<double>(file.width) * file.height * file.nplanes));
+    });
+}
+
 }  // namespace
 
 void add_relight_commands(CLI::App& app) {
@@ -487,6 +694,7 @@ void add_relight_commands(CLI::App& app) {
                             ->require_subcommand(1);
     add_render(*relight);
     add_eval(*relight);
+    add_fit(*relight);
     add_implicit_commands(*relight);
     add_upsample_command(*relight);
 }

@@ -42,6 +42,7 @@ struct ImageFileSpec {
     double dpi_y = 0.0;
     std::string description;                ///< the ImageDescription text (TIFF, PNG), "" when none
     std::string compression;                ///< written: the format's compression ("zip", "rle"); "" its default
+    std::string jpeg_subsampling;           ///< written: a JPEG's chroma sampling ("4:4:4"); "" the library's
     std::optional<double> exposure_seconds; ///< the EXIF ExposureTime of a photograph
     std::optional<double> focal_length_35mm; ///< the EXIF FocalLengthIn35mmFilm, millimetres
     /// rfd's own attributes of an EXR file ("rfd:" + key in its header), key without prefix.

@@ -79,6 +79,7 @@ OIIO::ImageSpec oiio_spec(const ImageFileSpec& spec) {
     // time (EXR's capDate, TIFF's DateTime) unless DateTime is set.
     out.attribute("DateTime", kFixedImageDate);
     if (!spec.compression.empty()) out.attribute("compression", spec.compression);
+    if (!spec.jpeg_subsampling.empty()) out.attribute("jpeg:subsampling", spec.jpeg_subsampling);
     if (!spec.description.empty()) out.attribute("ImageDescription", spec.description);
     if (spec.exposure_seconds) out.attribute("ExposureTime", static_cast<float>(*spec.exposure_seconds));
     if (spec.focal_length_35mm)

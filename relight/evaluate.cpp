@@ -130,18 +130,22 @@ namespace {
 using PredictChunk = std::function<void(const std::vector<Image>& band, std::size_t first, std::size_t count,
                                         Eigen::MatrixXf& out)>;
 
-// Leave-one-out scores from `predict`, the field read a band of rows at a time and each band
-// cut into fixed chunks of samples, scored in parallel and summed in chunk order: the sums do
-// not depend on the threads. Images `predictable` says false of get NaN.
-LeaveOneOut score_left_out(FieldReader& field, const std::vector<bool>& predictable, std::size_t band_bytes,
-                           const PredictChunk& predict) {
-    const std::size_t n = field.size();
-    LeaveOneOut result;
-    result.directions = field.directions();
-    result.squared_error.assign(n, 0.0);
+// Leave-one-out scores of every predictor of `predictors`, the field read once, a band of
+// rows at a time, each band cut into fixed chunks of samples, scored in parallel and summed in
+// chunk order: the sums do not depend on the threads. Images `predictable[m]` says false of
+// get NaN for predictor m.
+std::vector<LeaveOneOut> score_left_out(FieldReader& field, const std::vector<std::vector<bool>>& predictable,
+                                        std::size_t band_bytes, const std::vector<PredictChunk>& predictors) {
+    const std::size_t n = field.size(), models = predictors.size();
+    RFD_CHECK(predictable.size() == models);
     const bool eight_bit = field.sample_type() == SampleType::UInt8;
-    if (eight_bit) result.code_squared_error.assign(n, 0.0);
-    result.samples_per_image = static_cast<double>(field.width()) * field.height() * field.channels();
+    std::vector<LeaveOneOut> results(models);
+    for (LeaveOneOut& result : results) {
+        result.directions = field.directions();
+        result.squared_error.assign(n, 0.0);
+        if (eight_bit) result.code_squared_error.assign(n, 0.0);
+        result.samples_per_image = static_cast<double>(field.width()) * field.height() * field.channels();
+    }
     constexpr std::size_t kChunk = 2048;
     const int rows = field.band_rows(n, 0, band_bytes);
     float peak = 0.0f;
@@ -149,8 +153,8 @@ LeaveOneOut score_left_out(FieldReader& field, const std::vector<bool>& predicta
     for (int y0 = 0; y0 < field.height(); y0 += rows) {
         const std::vector<Image> band = field.read_band(y0, std::min(field.height(), y0 + rows));
         const std::size_t samples = band.front().samples().size(), chunks = (samples + kChunk - 1) / kChunk;
-        Eigen::MatrixXd linear = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(chunks));
-        Eigen::MatrixXd codes = linear;
+        const auto N = static_cast<Eigen::Index>(n), C = static_cast<Eigen::Index>(chunks);
+        std::vector<Eigen::MatrixXd> linear(models, Eigen::MatrixXd::Zero(N, C)), codes = linear;
         std::vector<float> peaks(chunks, 0.0f);
         parallel_for_chunks(chunks, 1, [&](std::size_t begin, std::size_t end) {
             Eigen::MatrixXf predicted;
@@ -158,48 +162,61 @@ LeaveOneOut score_left_out(FieldReader& field, const std::vector<bool>& predicta
             std::array<float, kChunk> row{};
             for (std::size_t chunk = begin; chunk < end; ++chunk) {
                 const std::size_t first = chunk * kChunk, count = std::min(kChunk, samples - first);
-                predict(band, first, count, predicted);
-                for (std::size_t j = 0; j < n; ++j) {
-                    const std::span<const float> truth = band[j].samples().subspan(first, count);
-                    for (const float v : truth) peaks[chunk] = std::max(peaks[chunk], v);
-                    if (!predictable[j]) continue;
-                    double sum = 0.0;
-                    for (std::size_t k = 0; k < count; ++k) {
-                        row[k] = predicted(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(k));
-                        const double e = static_cast<double>(row[k]) - truth[k];
-                        sum += e * e;
+                for (std::size_t j = 0; j < n; ++j)
+                    for (const float v : band[j].samples().subspan(first, count)) peaks[chunk] = std::max(peaks[chunk], v);
+                for (std::size_t m = 0; m < models; ++m) {
+                    predictors[m](band, first, count, predicted);
+                    for (std::size_t j = 0; j < n; ++j) {
+                        if (!predictable[m][j]) continue;
+                        const std::span<const float> truth = band[j].samples().subspan(first, count);
+                        double sum = 0.0;
+                        for (std::size_t k = 0; k < count; ++k) {
+                            row[k] = predicted(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(k));
+                            const double e = static_cast<double>(row[k]) - truth[k];
+                            sum += e * e;
+                        }
+                        const auto J = static_cast<Eigen::Index>(j), K = static_cast<Eigen::Index>(chunk);
+                        linear[m](J, K) = sum;
+                        if (!eight_bit) continue;
+                        encode_srgb8(std::span<const float>(row.data(), count),
+                                     std::span<std::uint8_t>(predicted_codes.data(), count));
+                        encode_srgb8(truth, std::span<std::uint8_t>(true_codes.data(), count));
+                        double code_sum = 0.0;
+                        for (std::size_t k = 0; k < count; ++k) {
+                            const int c = int{predicted_codes[k]} - int{true_codes[k]};
+                            code_sum += c * c;
+                        }
+                        codes[m](J, K) = code_sum;
                     }
-                    linear(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(chunk)) = sum;
-                    if (!eight_bit) continue;
-                    encode_srgb8(std::span<const float>(row.data(), count),
-                                 std::span<std::uint8_t>(predicted_codes.data(), count));
-                    encode_srgb8(truth, std::span<std::uint8_t>(true_codes.data(), count));
-                    double code_sum = 0.0;
-                    for (std::size_t k = 0; k < count; ++k) {
-                        const int c = int{predicted_codes[k]} - int{true_codes[k]};
-                        code_sum += c * c;
-                    }
-                    codes(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(chunk)) = code_sum;
                 }
             }
         });
-        for (std::size_t j = 0; j < n; ++j)
-            for (std::size_t chunk = 0; chunk < chunks; ++chunk) {
-                result.squared_error[j] += linear(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(chunk));
-                if (eight_bit)
-                    result.code_squared_error[j] += codes(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(chunk));
-            }
+        for (std::size_t m = 0; m < models; ++m)
+            for (std::size_t j = 0; j < n; ++j)
+                for (std::size_t chunk = 0; chunk < chunks; ++chunk) {
+                    const auto J = static_cast<Eigen::Index>(j), K = static_cast<Eigen::Index>(chunk);
+                    results[m].squared_error[j] += linear[m](J, K);
+                    if (eight_bit) results[m].code_squared_error[j] += codes[m](J, K);
+                }
         for (const float v : peaks) peak = std::max(peak, v);
         progress.advance();
     }
     progress.finish();
-    result.peak = peak;
-    for (std::size_t j = 0; j < n; ++j)
-        if (!predictable[j]) {
-            result.squared_error[j] = std::numeric_limits<double>::quiet_NaN();
-            if (eight_bit) result.code_squared_error[j] = std::numeric_limits<double>::quiet_NaN();
-        }
-    return result;
+    for (std::size_t m = 0; m < models; ++m) {
+        LeaveOneOut& result = results[m];
+        result.peak = peak;
+        for (std::size_t j = 0; j < n; ++j)
+            if (!predictable[m][j]) {
+                result.squared_error[j] = std::numeric_limits<double>::quiet_NaN();
+                if (eight_bit) result.code_squared_error[j] = std::numeric_limits<double>::quiet_NaN();
+            }
+    }
+    return results;
+}
+
+LeaveOneOut score_left_out(FieldReader& field, const std::vector<bool>& predictable, std::size_t band_bytes,
+                           const PredictChunk& predict) {
+    return std::move(score_left_out(field, std::vector<std::vector<bool>>{predictable}, band_bytes, {predict}).front());
 }
 
 }  // namespace
@@ -261,6 +278,28 @@ LeaveOneOut leave_one_out(FieldReader& field, const BasisFit& fit, std::size_t b
         out = (y - inverse_gap.asDiagonal() * residual).cast<float>();
     };
     return score_left_out(field, predictable, band_bytes, predict);
+}
+
+std::vector<LeaveOneOut> leave_one_out(FieldReader& field, const std::vector<const LightWeights*>& models,
+                                       std::size_t band_bytes) {
+    const std::size_t n = field.size();
+    std::vector<std::vector<bool>> predictable(models.size());
+    std::vector<Eigen::MatrixXf> matrices;
+    for (std::size_t m = 0; m < models.size(); ++m) {
+        RFD_CHECK(models[m]->size() == n);
+        matrices.push_back(models[m]->leave_one_out(predictable[m]).cast<float>());
+    }
+    std::vector<PredictChunk> predictors;
+    for (const Eigen::MatrixXf& w : matrices)
+        predictors.emplace_back([&w, n](const std::vector<Image>& band, std::size_t first, std::size_t count,
+                                        Eigen::MatrixXf& out) {
+            Eigen::MatrixXf y(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(count));
+            for (std::size_t i = 0; i < n; ++i)
+                y.row(static_cast<Eigen::Index>(i)) =
+                    Eigen::Map<const Eigen::RowVectorXf>(band[i].samples().data() + first, static_cast<Eigen::Index>(count));
+            out.noalias() = w * y;
+        });
+    return score_left_out(field, predictable, band_bytes, predictors);
 }
 
 namespace {

@@ -20,6 +20,7 @@
 #include "relight/basis.hpp"
 #include "relight/field.hpp"
 #include "relight/interpolation.hpp"
+#include "relight/light_model.hpp"
 #include "relight/render.hpp"
 
 namespace rfd::relight {
@@ -85,6 +86,12 @@ LeaveOneOut leave_one_out(FieldReader& field, Interpolation method = Interpolati
 /// without it (in closed form). A light the others cannot determine the fit without (leverage
 /// 1) has NaN errors and is left out of the means.
 LeaveOneOut leave_one_out(FieldReader& field, const BasisFit& fit, std::size_t band_bytes = FieldReader::kBandBytes);
+
+/// The same for several models at once (relight/light_model.hpp), the field read once: each
+/// light predicted by the row of its model's leave-one-out matrix. Lights a model cannot
+/// predict have NaN errors.
+std::vector<LeaveOneOut> leave_one_out(FieldReader& field, const std::vector<const LightWeights*>& models,
+                                       std::size_t band_bytes = FieldReader::kBandBytes);
 
 /// Sum of (w0 a + w1 b + w2 c - reference)^2 over every sample (weights of images a, b, c;
 /// pass the same image with weight 0 for unused slots). Fixed order, vectorisable.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <memory>
 #include <string>
 #include <type_traits>
@@ -42,38 +43,38 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> frame_around(const Eigen::Vector3d& 
     return {u, d.cross(u)};
 }
 
-std::size_t add_directional(Eigen::MatrixX3d& k, const SphericalInterpolator& interp, const DirectionalLight& light,
-                            Interpolation method) {
+// k += w(d) scale^T for a unit d: a model's weights, added.
+using AddWeightsAt = std::function<void(Eigen::MatrixX3d& k, const Eigen::Vector3d& d, const Eigen::Vector3d& scale)>;
+
+std::size_t add_directional(Eigen::MatrixX3d& k, const AddWeightsAt& add_at, const DirectionalLight& light) {
     check_light(light);
     const Eigen::Vector3d d = light.direction.normalized();
     if (d.z() < 0.0) return 0;  // below the horizon: dropped
-    add_weights(k, interp.weights(d, method), light.irradiance);
+    add_at(k, d, light.irradiance);
     return 1;
 }
 
-std::size_t add_disk(Eigen::MatrixX3d& k, const SphericalInterpolator& interp, const DiskLight& light,
-                     Interpolation method) {
+std::size_t add_disk(Eigen::MatrixX3d& k, const AddWeightsAt& add_at, const DiskLight& light) {
     check_light(light);
     const Eigen::Vector3d d = light.direction.normalized();
     const double solid_angle = 2.0 * kPi * (1.0 - std::cos(light.radius));
-    const double step = 0.25 * mean_spacing(interp.size());
+    const double step = 0.25 * mean_spacing(static_cast<std::size_t>(k.rows()));
     const auto count = static_cast<std::size_t>(
         std::clamp(std::ceil(solid_angle / (step * step)), 16.0, 4096.0));
     const Eigen::Vector3d share = light.irradiance / static_cast<double>(count);
     for (const Eigen::Vector3d& p : cap_points(d, light.radius, count)) {
         if (p.z() < 0.0) continue;
-        add_weights(k, interp.weights(p, method), share);
+        add_at(k, p, share);
     }
     return count;
 }
 
-std::size_t add_environment(Eigen::MatrixX3d& k, const SphericalInterpolator& interp, const EnvironmentMap& map,
-                            Interpolation method) {
+std::size_t add_environment(Eigen::MatrixX3d& k, const AddWeightsAt& add_at, const EnvironmentMap& map) {
     const Image& image = map.radiance;
     check_environment_map(image);
     const int width = image.width(), height = image.height();
     const double pixel_phi = 2.0 * kPi / width, pixel_theta = kPi / height;
-    const double step = 0.25 * mean_spacing(interp.size());
+    const double step = 0.25 * mean_spacing(static_cast<std::size_t>(k.rows()));
     const int sub_theta = static_cast<int>(std::clamp(std::ceil(pixel_theta / step), 1.0, 16.0));
     const int sub_phi = static_cast<int>(std::clamp(std::ceil(pixel_phi / step), 1.0, 16.0));
     // Rows above the horizon only; each row accumulates its own k, summed in row order.
@@ -98,8 +99,7 @@ std::size_t add_environment(Eigen::MatrixX3d& k, const SphericalInterpolator& in
                     if (radiance.isZero()) continue;
                     for (int b = 0; b < sub_phi; ++b) {
                         const double phi = -kPi + u * pixel_phi + (b + 0.5) * sub_width;
-                        add_weights(kr, interp.weights(direction_from_angles(theta, phi), method),
-                                    solid_angle * radiance);
+                        add_at(kr, direction_from_angles(theta, phi), solid_angle * radiance);
                     }
                 }
             }
@@ -159,17 +159,18 @@ void check_environment_map(const Image& radiance) {
                              std::to_string(s) + ")");
 }
 
-LightCoefficients light_coefficients(const SphericalInterpolator& interpolator, const std::vector<Light>& lights,
-                                     Interpolation method) {
+namespace {
+
+LightCoefficients coefficients_of(std::size_t images, const AddWeightsAt& add_at, const std::vector<Light>& lights) {
     LightCoefficients out;
-    out.k.setZero(static_cast<Eigen::Index>(interpolator.size()), 3);
+    out.k.setZero(static_cast<Eigen::Index>(images), 3);
     for (const Light& light : lights) {
         out.weight_evaluations += std::visit(
             [&](const auto& l) -> std::size_t {
                 using T = std::decay_t<decltype(l)>;
-                if constexpr (std::is_same_v<T, DirectionalLight>) return add_directional(out.k, interpolator, l, method);
-                else if constexpr (std::is_same_v<T, DiskLight>) return add_disk(out.k, interpolator, l, method);
-                else return add_environment(out.k, interpolator, l, method);
+                if constexpr (std::is_same_v<T, DirectionalLight>) return add_directional(out.k, add_at, l);
+                else if constexpr (std::is_same_v<T, DiskLight>) return add_disk(out.k, add_at, l);
+                else return add_environment(out.k, add_at, l);
             },
             light);
     }
@@ -177,6 +178,27 @@ LightCoefficients light_coefficients(const SphericalInterpolator& interpolator, 
     out = coefficients_from(std::move(out.k));
     out.weight_evaluations = evaluations;
     return out;
+}
+
+}  // namespace
+
+LightCoefficients light_coefficients(const SphericalInterpolator& interpolator, const std::vector<Light>& lights,
+                                     Interpolation method) {
+    return coefficients_of(
+        interpolator.size(),
+        [&](Eigen::MatrixX3d& k, const Eigen::Vector3d& d, const Eigen::Vector3d& scale) {
+            add_weights(k, interpolator.weights(d, method), scale);
+        },
+        lights);
+}
+
+LightCoefficients light_coefficients(const LightWeights& weights, const std::vector<Light>& lights) {
+    return coefficients_of(
+        weights.size(),
+        [&](Eigen::MatrixX3d& k, const Eigen::Vector3d& d, const Eigen::Vector3d& scale) {
+            k += weights.at(d) * scale.transpose();
+        },
+        lights);
 }
 
 LightCoefficients coefficients_from(Eigen::MatrixX3d k) {

@@ -25,6 +25,7 @@
 #include "core/image.hpp"
 #include "relight/field.hpp"
 #include "relight/interpolation.hpp"
+#include "relight/light_model.hpp"
 
 namespace rfd::relight {
 
@@ -84,6 +85,11 @@ LightCoefficients coefficients_from(Eigen::MatrixX3d k);
 /// channels or with a negative sample, a disk radius outside (0, pi/2], non-finite values.
 LightCoefficients light_coefficients(const SphericalInterpolator& interpolator, const std::vector<Light>& lights,
                                      Interpolation method = Interpolation::Delaunay);
+
+/// The same for any model's weights (relight/light_model.hpp): a fitted basis or radial
+/// basis functions relight a field as interpolation does, each light a weighted sum of the
+/// images.
+LightCoefficients light_coefficients(const LightWeights& weights, const std::vector<Light>& lights);
 
 /// out = sum_i k_i R_i in one pass over the images, skipping zero k_i; parallel over pixel
 /// blocks, each pixel summed in image order (deterministic). `field` must have as many

@@ -1,0 +1,245 @@
+#include "relight/light_model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "core/error.hpp"
+#include "core/parallel.hpp"
+#include "core/progress.hpp"
+#include "relight/field.hpp"
+
+namespace rfd::relight {
+
+std::string LightModel::name() const {
+    switch (kind) {
+    case Kind::Interpolation: return std::string(name_of(kInterpolationNames, interpolation));
+    case Kind::Basis: return std::string(name_of(kBasisNames, basis));
+    case Kind::Rbf: break;
+    }
+    if (sigma <= 0.0) return "rbf";
+    char text[32];
+    std::snprintf(text, sizeof text, "rbf %.3g", sigma);
+    return text;
+}
+
+std::vector<std::string> light_model_names() {
+    std::vector<std::string> names;
+    for (const auto& method : kInterpolationNames) names.emplace_back(method.name);
+    for (const auto& basis : kBasisNames) names.emplace_back(basis.name);
+    names.emplace_back("rbf");
+    return names;
+}
+
+LightModel parse_light_model(const std::string& name, const std::string& option) {
+    LightModel model;
+    for (const auto& method : kInterpolationNames)
+        if (name == method.name) {
+            model.interpolation = method.value;
+            return model;
+        }
+    for (const auto& basis : kBasisNames)
+        if (name == basis.name) {
+            model.kind = LightModel::Kind::Basis;
+            model.basis = basis.value;
+            return model;
+        }
+    if (name == "rbf") {
+        model.kind = LightModel::Kind::Rbf;
+        return model;
+    }
+    std::string choices;
+    for (const std::string& n : light_model_names()) choices += (choices.empty() ? "" : ", ") + n;
+    throw InputError(option + ": expected one of " + choices + ", got '" + name + "'");
+}
+
+Eigen::VectorXd rbf_weights(const std::vector<Eigen::Vector3d>& directions, double sigma, const Eigen::Vector3d& d,
+                            std::size_t skip) {
+    RFD_CHECK(sigma > 0.0);
+    const std::size_t n = directions.size();
+    Eigen::VectorXd w = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(n));
+    // exp(-(d2 - nearest d2) / sigma^2): the same weights once normalised, without the
+    // underflow to 0 / 0 that a narrow sigma far from every light would give.
+    double nearest = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < n; ++i)
+        if (i != skip) nearest = std::min(nearest, (directions[i] - d).squaredNorm());
+    double total = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+        if (i == skip) continue;
+        const double v = std::exp(-((directions[i] - d).squaredNorm() - nearest) / (sigma * sigma));
+        w[static_cast<Eigen::Index>(i)] = v;
+        total += v;
+    }
+    w /= total;
+    // OpenLIME keeps the weights above 0.001 and normalises them again.
+    double kept = 0.0;
+    for (Eigen::Index i = 0; i < w.size(); ++i) {
+        if (w[i] <= 0.001) w[i] = 0.0;
+        kept += w[i];
+    }
+    return w / kept;
+}
+
+LightWeights::LightWeights(const LightModel& model, const std::vector<Eigen::Vector3d>& directions)
+    : model_(model), directions_(directions) {
+    for (Eigen::Vector3d& d : directions_) d.normalize();
+    switch (model.kind) {
+    case LightModel::Kind::Interpolation:
+        interpolator_ = std::make_unique<SphericalInterpolator>(directions_);
+        break;
+    case LightModel::Kind::Basis:
+        fit_ = std::make_unique<BasisFit>(model.basis, directions_);
+        break;
+    case LightModel::Kind::Rbf:
+        if (!(model.sigma > 0.0)) throw InputError("rbf needs its width sigma (> 0), chosen on the field");
+        if (directions_.size() < 2) throw InputError("rbf needs at least two lights");
+        break;
+    }
+}
+
+LightWeights::~LightWeights() = default;
+LightWeights::LightWeights(LightWeights&&) noexcept = default;
+LightWeights& LightWeights::operator=(LightWeights&&) noexcept = default;
+
+Eigen::VectorXd LightWeights::at(const Eigen::Vector3d& d) const {
+    const Eigen::Vector3d unit = d.normalized();
+    switch (model_.kind) {
+    case LightModel::Kind::Interpolation: {
+        Eigen::VectorXd w = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(size()));
+        const InterpolationWeights iw = interpolator_->weights(unit, model_.interpolation);
+        for (std::size_t k = 0; k < iw.count; ++k) w[static_cast<Eigen::Index>(iw.index[k])] += iw.weight[k];
+        return w;
+    }
+    case LightModel::Kind::Basis: return fit_->solve().transpose() * basis_values(model_.basis, unit);
+    case LightModel::Kind::Rbf: break;
+    }
+    return rbf_weights(directions_, model_.sigma, unit);
+}
+
+Eigen::MatrixXd LightWeights::leave_one_out(std::vector<bool>& predictable) const {
+    const std::size_t n = size();
+    const auto N = static_cast<Eigen::Index>(n);
+    Eigen::MatrixXd w = Eigen::MatrixXd::Zero(N, N);
+    predictable.assign(n, true);
+    switch (model_.kind) {
+    case LightModel::Kind::Interpolation:
+        for (std::size_t j = 0; j < n; ++j) {
+            std::vector<Eigen::Vector3d> others;
+            for (std::size_t i = 0; i < n; ++i)
+                if (i != j) others.push_back(directions_[i]);
+            const InterpolationWeights iw =
+                SphericalInterpolator(others).weights(directions_[j], model_.interpolation);
+            for (std::size_t k = 0; k < iw.count; ++k) {
+                const std::size_t i = iw.index[k] + (iw.index[k] >= j ? 1 : 0);
+                w(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(i)) += iw.weight[k];
+            }
+        }
+        break;
+    case LightModel::Kind::Basis: {
+        // The PRESS residual: y_j - prediction without j = r_j / (1 - h_jj), r = (I - H) y.
+        const Eigen::MatrixXd residual = Eigen::MatrixXd::Identity(N, N) - fit_->design() * fit_->solve();
+        for (std::size_t j = 0; j < n; ++j) {
+            const auto J = static_cast<Eigen::Index>(j);
+            predictable[j] = fit_->predictable_without(j);
+            if (!predictable[j]) continue;
+            w.row(J) = -residual.row(J) / (1.0 - fit_->leverage()[J]);
+            w(J, J) += 1.0;
+            w(J, J) = 0.0;  // exactly: 1 - (1 - h_jj) / (1 - h_jj)
+        }
+        break;
+    }
+    case LightModel::Kind::Rbf:
+        for (std::size_t j = 0; j < n; ++j)
+            w.row(static_cast<Eigen::Index>(j)) = rbf_weights(directions_, model_.sigma, directions_[j], j).transpose();
+        break;
+    }
+    return w;
+}
+
+FieldGram field_gram(FieldReader& field) {
+    const std::size_t n = field.size();
+    const auto N = static_cast<Eigen::Index>(n);
+    FieldGram out;
+    out.gram = Eigen::MatrixXd::Zero(N, N);
+    out.samples_per_image = static_cast<double>(field.width()) * field.height() * field.channels();
+    constexpr std::size_t kChunk = 4096;
+    const int rows = field.band_rows(n);
+    Progress progress("gram", static_cast<std::size_t>((field.height() + rows - 1) / rows));
+    for (int y0 = 0; y0 < field.height(); y0 += rows) {
+        const std::vector<Image> band = field.read_band(y0, std::min(field.height(), y0 + rows));
+        const std::size_t samples = band.front().samples().size(), chunks = (samples + kChunk - 1) / kChunk;
+        std::vector<Eigen::MatrixXd> parts(chunks);
+        std::vector<double> peaks(chunks, 0.0);
+        parallel_for_chunks(chunks, 1, [&](std::size_t begin, std::size_t end) {
+            Eigen::MatrixXd y;
+            for (std::size_t chunk = begin; chunk < end; ++chunk) {
+                const std::size_t first = chunk * kChunk, count = std::min(kChunk, samples - first);
+                y.resize(static_cast<Eigen::Index>(count), N);
+                for (std::size_t i = 0; i < n; ++i) {
+                    const float* s = band[i].samples().data() + first;
+                    for (std::size_t k = 0; k < count; ++k) {
+                        y(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(i)) = s[k];
+                        peaks[chunk] = std::max(peaks[chunk], static_cast<double>(s[k]));
+                    }
+                }
+                parts[chunk].noalias() = y.transpose() * y;
+            }
+        });
+        for (std::size_t chunk = 0; chunk < chunks; ++chunk) {  // fixed order
+            out.gram += parts[chunk];
+            out.peak = std::max(out.peak, peaks[chunk]);
+        }
+        progress.advance();
+    }
+    progress.finish();
+    return out;
+}
+
+Eigen::VectorXd leave_one_out_errors(const FieldGram& gram, const Eigen::MatrixXd& w) {
+    const Eigen::MatrixXd e = Eigen::MatrixXd::Identity(w.rows(), w.cols()) - w;
+    return ((e * gram.gram).array() * e.array()).rowwise().sum().matrix();
+}
+
+double best_rbf_sigma(const FieldGram& gram, const std::vector<Eigen::Vector3d>& directions) {
+    LightModel model;
+    model.kind = LightModel::Kind::Rbf;
+    std::vector<bool> predictable;
+    const auto error_at = [&](double log_sigma) {
+        model.sigma = std::exp(log_sigma);
+        return leave_one_out_errors(gram, LightWeights(model, directions).leave_one_out(predictable)).sum();
+    };
+    const double lo = std::log(0.02), hi = std::log(1.5);
+    constexpr int kScan = 24;
+    int best = 0;
+    std::vector<double> errors(kScan + 1);
+    for (int s = 0; s <= kScan; ++s) {
+        errors[static_cast<std::size_t>(s)] = error_at(lo + (hi - lo) * s / kScan);
+        if (errors[static_cast<std::size_t>(s)] < errors[static_cast<std::size_t>(best)]) best = s;
+    }
+    // Golden-section search between the best scan point's neighbours.
+    double a = lo + (hi - lo) * std::max(0, best - 1) / kScan, b = lo + (hi - lo) * std::min(kScan, best + 1) / kScan;
+    const double ratio = (std::sqrt(5.0) - 1.0) / 2.0;
+    double c = b - ratio * (b - a), d = a + ratio * (b - a);
+    double fc = error_at(c), fd = error_at(d);
+    for (int iteration = 0; iteration < 30; ++iteration) {
+        if (fc < fd) {
+            b = d;
+            d = c;
+            fd = fc;
+            c = b - ratio * (b - a);
+            fc = error_at(c);
+        } else {
+            a = c;
+            c = d;
+            fc = fd;
+            d = a + ratio * (b - a);
+            fd = error_at(d);
+        }
+    }
+    const double found = fc < fd ? c : d;
+    const double scanned = lo + (hi - lo) * best / kScan;
+    return std::exp(std::min(fc, fd) <= errors[static_cast<std::size_t>(best)] ? found : scanned);
+}
+
+}  // namespace rfd::relight
