@@ -361,7 +361,7 @@ void evaluate_leave_one_out(const EvalOptions& opt) {
     const int width = field.width(), height = field.height();
     if (field.size() < 4)
         throw InputError(SourceLocation{field.light_file().string()},
-                         "leave-one-out needs at least 4 images; the field has " + std::to_string(field.size()));
+                         "leave-one-out needs at least 4 images (3 left to interpolate from); the field has " + std::to_string(field.size()));
     for (relight::LightModel& model : models)
         if (model.kind == relight::LightModel::Kind::Rbf)
             model.sigma = opt.sigma > 0.0 ? opt.sigma

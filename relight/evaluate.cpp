@@ -284,20 +284,23 @@ std::vector<LeaveOneOut> leave_one_out(FieldReader& field, const std::vector<con
                                        std::size_t band_bytes) {
     const std::size_t n = field.size();
     std::vector<std::vector<bool>> predictable(models.size());
-    std::vector<Eigen::MatrixXf> matrices;
+    std::vector<Eigen::MatrixXd> matrices;
     for (std::size_t m = 0; m < models.size(); ++m) {
         RFD_CHECK(models[m]->size() == n);
-        matrices.push_back(models[m]->leave_one_out(predictable[m]).cast<float>());
+        matrices.push_back(models[m]->leave_one_out(predictable[m]));
     }
     std::vector<PredictChunk> predictors;
-    for (const Eigen::MatrixXf& w : matrices)
+    for (const Eigen::MatrixXd& w : matrices)
         predictors.emplace_back([&w, n](const std::vector<Image>& band, std::size_t first, std::size_t count,
                                         Eigen::MatrixXf& out) {
-            Eigen::MatrixXf y(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(count));
+            // In double, as the fitted bases' closed form: the float the prediction rounds to
+            // hardly ever depends on the order Eigen's kernel sums in.
+            Eigen::MatrixXd y(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(count));
             for (std::size_t i = 0; i < n; ++i)
                 y.row(static_cast<Eigen::Index>(i)) =
-                    Eigen::Map<const Eigen::RowVectorXf>(band[i].samples().data() + first, static_cast<Eigen::Index>(count));
-            out.noalias() = w * y;
+                    Eigen::Map<const Eigen::RowVectorXf>(band[i].samples().data() + first, static_cast<Eigen::Index>(count))
+                        .cast<double>();
+            out = (w * y).cast<float>();
         });
     return score_left_out(field, predictable, band_bytes, predictors);
 }
