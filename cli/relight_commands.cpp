@@ -392,6 +392,7 @@ void evaluate_leave_one_out(const EvalOptions& opt) {
             const std::string name = model.kind == relight::LightModel::Kind::Rbf ? "rbf" : model.name();
             if (eight_bit) header.push_back("psnr_srgb8_db_" + name);
             header.push_back("psnr_linear_db_" + name);
+            header.push_back("ssim_" + name);
         }
         CsvTable errors(header);
         for (std::size_t j = 0; j < n; ++j) {
@@ -401,6 +402,7 @@ void evaluate_leave_one_out(const EvalOptions& opt) {
             for (const relight::LeaveOneOut& loo : scores) {
                 if (eight_bit) row.push_back(format_number(loo.psnr_srgb8(j), 10));
                 row.push_back(format_number(loo.psnr_linear(j), 10));
+                row.push_back(format_number(loo.ssim[j], 10));
             }
             errors.add_row(row);
         }
@@ -416,12 +418,14 @@ void evaluate_leave_one_out(const EvalOptions& opt) {
                 per_light.push_back({{"theta_deg", radians_to_degrees(a.theta)},
                                      {"phi_deg", radians_to_degrees(a.phi)},
                                      {"psnr_srgb8_db", eight_bit ? finite_or_null(loo.psnr_srgb8(j)) : nullptr},
-                                     {"psnr_linear_db", finite_or_null(loo.psnr_linear(j))}});
+                                     {"psnr_linear_db", finite_or_null(loo.psnr_linear(j))},
+                                     {"ssim", finite_or_null(loo.ssim[j])}});
             }
             const bool rbf = models[b].kind == relight::LightModel::Kind::Rbf;
             per_basis[rbf ? "rbf" : predictors[b].name] = {
                 {"mean_psnr_srgb8_db", eight_bit ? finite_or_null(loo.mean_psnr_srgb8()) : nullptr},
                 {"mean_psnr_linear_db", finite_or_null(loo.mean_psnr_linear())},
+                {"mean_ssim", finite_or_null(loo.mean_ssim())},
                 {"sigma", rbf ? nlohmann::json(models[b].sigma) : nlohmann::json()},
                 {"per_light", std::move(per_light)}};
         }
@@ -433,12 +437,15 @@ void evaluate_leave_one_out(const EvalOptions& opt) {
     }
     std::printf("%s (%zu images, %d x %d): each image predicted from the others\n", opt.field.c_str(), n, width,
                 height);
-    std::printf("  %-12s %24s %34s\n", "", eight_bit ? "PSNR, 8-bit sRGB codes" : "",
-                ("PSNR linear (peak " + format_number(first.peak, 4) + ")").c_str());
-    for (std::size_t b = 0; b < predictors.size(); ++b)
-        std::printf("  mean %-7s %21s dB %31s dB\n", predictors[b].name.c_str(),
+    std::printf("  %-14s %24s %34s %14s\n", "", eight_bit ? "PSNR, 8-bit sRGB codes" : "",
+                ("PSNR linear (peak " + format_number(first.peak, 4) + ")").c_str(), "SSIM, sRGB");
+    for (std::size_t b = 0; b < predictors.size(); ++b) {
+        char ssim[32];
+        std::snprintf(ssim, sizeof ssim, "%.4f", scores[b].mean_ssim());
+        std::printf("  mean %-9s %21s dB %31s dB %14s\n", predictors[b].name.c_str(),
                     eight_bit ? text(scores[b].mean_psnr_srgb8()).c_str() : "-",
-                    text(scores[b].mean_psnr_linear()).c_str());
+                    text(scores[b].mean_psnr_linear()).c_str(), ssim);
+    }
     if (!eight_bit) std::printf("  (the images are not 8-bit: no PSNR in 8-bit codes)\n");
     std::printf("  per image, PSNR %s in dB:\n  %5s %8s %8s", eight_bit ? "in 8-bit sRGB codes" : "linear",
                 "index", "theta", "phi");

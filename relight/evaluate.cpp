@@ -4,6 +4,8 @@
 #include <functional>
 #include <limits>
 #include <cmath>
+#include <cstdint>
+#include <span>
 #include <string>
 
 #include "core/error.hpp"
@@ -130,6 +132,33 @@ namespace {
 using PredictChunk = std::function<void(const std::vector<Image>& band, std::size_t first, std::size_t count,
                                         Eigen::MatrixXf& out)>;
 
+// SSIM (Wang et al. 2004) of two 8-bit pictures, `rows` rows of `width` codes, over blocks of
+// kSsimBlock x kSsimBlock (the last ones narrower), summed over the blocks: per block
+// (2 mu_a mu_b + C1)(2 cov + C2) / ((mu_a^2 + mu_b^2 + C1)(var_a + var_b + C2)),
+// C1 = (0.01 * 255)^2, C2 = (0.03 * 255)^2.
+double block_ssim_sum(std::span<const std::uint8_t> a, std::span<const std::uint8_t> b, std::size_t width, int rows) {
+    constexpr double c1 = (0.01 * 255) * (0.01 * 255), c2 = (0.03 * 255) * (0.03 * 255);
+    double sum = 0.0;
+    for (std::size_t x0 = 0; x0 < width; x0 += kSsimBlock) {
+        const std::size_t x1 = std::min(width, x0 + kSsimBlock);
+        double sa = 0.0, sb = 0.0, saa = 0.0, sbb = 0.0, sab = 0.0;
+        for (int y = 0; y < rows; ++y)
+            for (std::size_t x = x0; x < x1; ++x) {
+                const double va = a[static_cast<std::size_t>(y) * width + x], vb = b[static_cast<std::size_t>(y) * width + x];
+                sa += va;
+                sb += vb;
+                saa += va * va;
+                sbb += vb * vb;
+                sab += va * vb;
+            }
+        const double count = static_cast<double>(rows) * static_cast<double>(x1 - x0);
+        const double ma = sa / count, mb = sb / count;
+        const double var_a = saa / count - ma * ma, var_b = sbb / count - mb * mb, cov = sab / count - ma * mb;
+        sum += (2 * ma * mb + c1) * (2 * cov + c2) / ((ma * ma + mb * mb + c1) * (var_a + var_b + c2));
+    }
+    return sum;
+}
+
 // Leave-one-out scores of every predictor of `predictors`, the field read once, a band of
 // rows at a time, each band cut into fixed chunks of samples, scored in parallel and summed in
 // chunk order: the sums do not depend on the threads. Images `predictable[m]` says false of
@@ -139,31 +168,48 @@ std::vector<LeaveOneOut> score_left_out(FieldReader& field, const std::vector<st
     const std::size_t n = field.size(), models = predictors.size();
     RFD_CHECK(predictable.size() == models);
     const bool eight_bit = field.sample_type() == SampleType::UInt8;
+    const auto width = static_cast<std::size_t>(field.width());
+    const int channels = field.channels();
     std::vector<LeaveOneOut> results(models);
     for (LeaveOneOut& result : results) {
         result.directions = field.directions();
         result.squared_error.assign(n, 0.0);
         if (eight_bit) result.code_squared_error.assign(n, 0.0);
+        result.ssim.assign(n, 0.0);
         result.samples_per_image = static_cast<double>(field.width()) * field.height() * field.channels();
     }
-    constexpr std::size_t kChunk = 2048;
-    const int rows = field.band_rows(n, 0, band_bytes);
+    // Bands of whole SSIM blocks (kSsimBlock rows), each cut into strips of a block's rows of
+    // one channel: the unit scored in parallel and summed in order.
+    const int rows = std::max(kSsimBlock, field.band_rows(n, 0, band_bytes) / kSsimBlock * kSsimBlock);
+    std::size_t blocks_per_image = 0;
     float peak = 0.0f;
     Progress progress("leave-one-out", static_cast<std::size_t>((field.height() + rows - 1) / rows));
     for (int y0 = 0; y0 < field.height(); y0 += rows) {
-        const std::vector<Image> band = field.read_band(y0, std::min(field.height(), y0 + rows));
-        const std::size_t samples = band.front().samples().size(), chunks = (samples + kChunk - 1) / kChunk;
-        const auto N = static_cast<Eigen::Index>(n), C = static_cast<Eigen::Index>(chunks);
-        std::vector<Eigen::MatrixXd> linear(models, Eigen::MatrixXd::Zero(N, C)), codes = linear;
-        std::vector<float> peaks(chunks, 0.0f);
-        parallel_for_chunks(chunks, 1, [&](std::size_t begin, std::size_t end) {
+        const int y1 = std::min(field.height(), y0 + rows), band_height = y1 - y0;
+        const std::vector<Image> band = field.read_band(y0, y1);
+        const int strips_per_channel = (band_height + kSsimBlock - 1) / kSsimBlock;
+        const std::size_t strips = static_cast<std::size_t>(strips_per_channel) * static_cast<std::size_t>(channels);
+        const std::size_t blocks_per_strip = (width + kSsimBlock - 1) / kSsimBlock;
+        blocks_per_image += strips * blocks_per_strip;
+        const auto N = static_cast<Eigen::Index>(n), S = static_cast<Eigen::Index>(strips);
+        std::vector<Eigen::MatrixXd> linear(models, Eigen::MatrixXd::Zero(N, S)), codes = linear, ssim = linear;
+        std::vector<float> peaks(strips, 0.0f);
+        parallel_for_chunks(strips, 1, [&](std::size_t begin, std::size_t end) {
             Eigen::MatrixXf predicted;
-            std::array<std::uint8_t, kChunk> predicted_codes{}, true_codes{};
-            std::array<float, kChunk> row{};
-            for (std::size_t chunk = begin; chunk < end; ++chunk) {
-                const std::size_t first = chunk * kChunk, count = std::min(kChunk, samples - first);
+            std::vector<std::uint8_t> predicted_codes, true_codes;
+            std::vector<float> row;
+            for (std::size_t strip = begin; strip < end; ++strip) {
+                const int channel = static_cast<int>(strip / static_cast<std::size_t>(strips_per_channel));
+                const int strip_y = static_cast<int>(strip % static_cast<std::size_t>(strips_per_channel)) * kSsimBlock;
+                const int strip_rows = std::min(kSsimBlock, band_height - strip_y);
+                const std::size_t first = (static_cast<std::size_t>(channel) * static_cast<std::size_t>(band_height) +
+                                           static_cast<std::size_t>(strip_y)) * width;
+                const std::size_t count = static_cast<std::size_t>(strip_rows) * width;
+                row.resize(count);
+                predicted_codes.resize(count);
+                true_codes.resize(count);
                 for (std::size_t j = 0; j < n; ++j)
-                    for (const float v : band[j].samples().subspan(first, count)) peaks[chunk] = std::max(peaks[chunk], v);
+                    for (const float v : band[j].samples().subspan(first, count)) peaks[strip] = std::max(peaks[strip], v);
                 for (std::size_t m = 0; m < models; ++m) {
                     predictors[m](band, first, count, predicted);
                     for (std::size_t j = 0; j < n; ++j) {
@@ -175,12 +221,12 @@ std::vector<LeaveOneOut> score_left_out(FieldReader& field, const std::vector<st
                             const double e = static_cast<double>(row[k]) - truth[k];
                             sum += e * e;
                         }
-                        const auto J = static_cast<Eigen::Index>(j), K = static_cast<Eigen::Index>(chunk);
+                        const auto J = static_cast<Eigen::Index>(j), K = static_cast<Eigen::Index>(strip);
                         linear[m](J, K) = sum;
+                        encode_srgb8(row, predicted_codes);
+                        encode_srgb8(truth, true_codes);
+                        ssim[m](J, K) = block_ssim_sum(predicted_codes, true_codes, width, strip_rows);
                         if (!eight_bit) continue;
-                        encode_srgb8(std::span<const float>(row.data(), count),
-                                     std::span<std::uint8_t>(predicted_codes.data(), count));
-                        encode_srgb8(truth, std::span<std::uint8_t>(true_codes.data(), count));
                         double code_sum = 0.0;
                         for (std::size_t k = 0; k < count; ++k) {
                             const int c = int{predicted_codes[k]} - int{true_codes[k]};
@@ -193,9 +239,10 @@ std::vector<LeaveOneOut> score_left_out(FieldReader& field, const std::vector<st
         });
         for (std::size_t m = 0; m < models; ++m)
             for (std::size_t j = 0; j < n; ++j)
-                for (std::size_t chunk = 0; chunk < chunks; ++chunk) {
-                    const auto J = static_cast<Eigen::Index>(j), K = static_cast<Eigen::Index>(chunk);
+                for (std::size_t strip = 0; strip < strips; ++strip) {
+                    const auto J = static_cast<Eigen::Index>(j), K = static_cast<Eigen::Index>(strip);
                     results[m].squared_error[j] += linear[m](J, K);
+                    results[m].ssim[j] += ssim[m](J, K);
                     if (eight_bit) results[m].code_squared_error[j] += codes[m](J, K);
                 }
         for (const float v : peaks) peak = std::max(peak, v);
@@ -205,11 +252,14 @@ std::vector<LeaveOneOut> score_left_out(FieldReader& field, const std::vector<st
     for (std::size_t m = 0; m < models; ++m) {
         LeaveOneOut& result = results[m];
         result.peak = peak;
-        for (std::size_t j = 0; j < n; ++j)
+        for (std::size_t j = 0; j < n; ++j) {
+            result.ssim[j] /= static_cast<double>(blocks_per_image);
             if (!predictable[m][j]) {
                 result.squared_error[j] = std::numeric_limits<double>::quiet_NaN();
+                result.ssim[j] = std::numeric_limits<double>::quiet_NaN();
                 if (eight_bit) result.code_squared_error[j] = std::numeric_limits<double>::quiet_NaN();
             }
+        }
     }
     return results;
 }
@@ -324,5 +374,16 @@ double mean_psnr(const std::vector<double>& squared_errors, double samples_per_i
 double LeaveOneOut::mean_psnr_linear() const { return mean_psnr(squared_error, samples_per_image, peak); }
 
 double LeaveOneOut::mean_psnr_srgb8() const { return mean_psnr(code_squared_error, samples_per_image, 255.0); }
+
+double LeaveOneOut::mean_ssim() const {
+    double sum = 0.0;
+    std::size_t count = 0;
+    for (const double v : ssim)
+        if (!std::isnan(v)) {
+            sum += v;
+            ++count;
+        }
+    return sum / static_cast<double>(count);
+}
 
 }  // namespace rfd::relight

@@ -60,11 +60,15 @@ LightEvaluation evaluate_under_lights(const ReflectanceField& sparse, const Refl
 /// the field read a band of rows at a time. Two PSNRs, labelled wherever they are printed:
 ///  - in 8-bit sRGB codes, peak 255, the prediction encoded as an 8-bit file would store it:
 ///    what RTI papers and tools quote, given for fields of 8-bit images;
-///  - linear, peak the field's brightest sample (relight eval's other scores).
+///  - linear, peak the field's brightest sample (relight eval's other scores);
+/// and SSIM of the 8-bit sRGB pictures.
 struct LeaveOneOut {
     std::vector<Eigen::Vector3d> directions;   ///< of the held-out images, field order
     std::vector<double> squared_error;         ///< linear, summed over each image's samples
     std::vector<double> code_squared_error;    ///< in 8-bit codes; empty unless the images are 8-bit
+    /// SSIM of the 8-bit sRGB pictures (the prediction and the image as 8-bit files store
+    /// them), the mean over blocks of kSsimBlock x kSsimBlock pixels of each channel.
+    std::vector<double> ssim;
     double peak = 0.0;                         ///< the field's brightest sample (linear)
     double samples_per_image = 0.0;
 
@@ -75,7 +79,12 @@ struct LeaveOneOut {
     /// (images with NaN errors left out).
     double mean_psnr_linear() const;
     double mean_psnr_srgb8() const;
+    double mean_ssim() const;
 };
+
+/// The SSIM blocks of LeaveOneOut: 8 x 8 pixels, as Wang et al. (2004) first windowed it, side
+/// by side so that a field read in bands of whole blocks is scored on the same blocks in any band size.
+inline constexpr int kSsimBlock = 8;
 
 /// InputError for a field of fewer than 4 images, or one whose directions left one out do
 /// not triangulate (SphericalInterpolator).

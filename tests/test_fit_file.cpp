@@ -15,6 +15,7 @@
 #include "core/error.hpp"
 #include "core/files.hpp"
 #include "core/image_file.hpp"
+#include "core/image_io.hpp"
 #include "core/sphere.hpp"
 #include "core/units.hpp"
 #include "relight/basis.hpp"
@@ -412,6 +413,81 @@ TEST(FitFile, WhatTheFormatCannotHoldIsRefused) {
     EXPECT_THAT(error_of([&] { read_fit(dir / "fit"); }), HasSubstr("field 'type': expected ptm, hsh or rbf"));
     write_text_file(dir / "fit" / "info.json", "{\"width\": ");
     EXPECT_THAT(error_of([&] { read_fit(dir / "fit"); }), HasSubstr("not valid JSON"));
+}
+
+}  // namespace
+}  // namespace rfd::relight
+
+namespace rfd::relight {
+namespace {
+
+// The block SSIM of two 8-bit pictures, written out per block from its definition.
+double ssim_of(const std::vector<int>& a, const std::vector<int>& b, int width, int height) {
+    double sum = 0.0;
+    int blocks = 0;
+    for (int by = 0; by < height; by += 8)
+        for (int bx = 0; bx < width; bx += 8) {
+            std::vector<double> va, vb;
+            for (int y = by; y < std::min(height, by + 8); ++y)
+                for (int x = bx; x < std::min(width, bx + 8); ++x) {
+                    va.push_back(a[static_cast<std::size_t>(y * width + x)]);
+                    vb.push_back(b[static_cast<std::size_t>(y * width + x)]);
+                }
+            const double n = static_cast<double>(va.size());
+            double ma = 0, mb = 0;
+            for (std::size_t k = 0; k < va.size(); ++k) {
+                ma += va[k] / n;
+                mb += vb[k] / n;
+            }
+            double sa = 0, sb = 0, sab = 0;
+            for (std::size_t k = 0; k < va.size(); ++k) {
+                sa += (va[k] - ma) * (va[k] - ma) / n;
+                sb += (vb[k] - mb) * (vb[k] - mb) / n;
+                sab += (va[k] - ma) * (vb[k] - mb) / n;
+            }
+            const double c1 = 6.5025, c2 = 58.5225;
+            sum += (2 * ma * mb + c1) * (2 * sab + c2) / ((ma * ma + mb * mb + c1) * (sa + sb + c2));
+            ++blocks;
+        }
+    return sum / blocks;
+}
+
+TEST(LeaveOneOut, SsimIsTheBlockSsimOfTheEightBitPictures) {
+    TempDir dir;
+    const auto lights = hemisphere_lights(12, 5);
+    // 20 x 13: blocks cut short at the right and bottom; one channel.
+    std::mt19937 random(1);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    FieldWriter out(dir / "f");
+    std::vector<Image> images;
+    for (const Eigen::Vector3d& d : lights) {
+        Image image(20, 13, 1);
+        for (float& v : image.samples()) v = static_cast<float>(0.05 + 0.9 * unit(random) * d.z());
+        out.add(image, d);
+        images.push_back(image);
+    }
+    out.finish();
+    FieldReader field(dir / "f");
+    const LightWeights nearest(parse_light_model("nearest"), lights);
+    // Bands of 8 rows (a small band_bytes) and of the whole picture give the same score.
+    const LeaveOneOut whole = leave_one_out(field, {&nearest}).front();
+    const LeaveOneOut banded = leave_one_out(field, {&nearest}, 1).front();
+    std::vector<bool> predictable;
+    const Eigen::MatrixXd w = nearest.leave_one_out(predictable);
+    for (std::size_t j = 0; j < lights.size(); ++j) {
+        std::vector<int> predicted, truth;
+        for (std::size_t k = 0; k < images[j].samples().size(); ++k) {
+            double v = 0.0;
+            for (std::size_t i = 0; i < lights.size(); ++i)
+                v += w(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(i)) * images[i].samples()[k];
+            predicted.push_back(encode_srgb8(static_cast<float>(v)));
+            truth.push_back(encode_srgb8(images[j].samples()[k]));
+        }
+        const double expected = ssim_of(predicted, truth, 20, 13);
+        EXPECT_NEAR(whole.ssim[j], expected, 1e-9) << j;
+        EXPECT_NEAR(banded.ssim[j], expected, 1e-9) << j;
+        EXPECT_LT(expected, 0.99);
+    }
 }
 
 }  // namespace
