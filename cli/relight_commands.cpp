@@ -599,47 +599,55 @@ void add_fit(CLI::App& relight) {
         spec.sigma = opt->sigma;
         spec.exact = opt->exact;
         spec.quality = opt->quality;
-        // The candidates' leave-one-out errors, from one pass over the field (auto, or rbf's sigma).
+        // auto: every candidate judged by leave-one-out in one pass over the field (after one
+        // for rbf's sigma), by the PSNR RTI users quote for 8-bit captures, linear otherwise.
         nlohmann::json candidates = nlohmann::json::array();
         std::string chosen = opt->basis, why;
-        if (opt->basis == "auto" || (opt->basis == "rbf" && opt->sigma <= 0.0)) {
-            const relight::FieldGram gram = relight::field_gram(field);
+        if (opt->basis == "auto") {
             std::vector<std::string> names{"ptm", "hsh2", "hsh3"};
             if (opt->exact) names.emplace_back("hsh4");
             names.emplace_back("rbf");
-            if (opt->basis == "rbf") names = {"rbf"};
-            double best = std::numeric_limits<double>::infinity();
+            std::vector<relight::LightWeights> weights;
+            std::vector<std::string> kept;
             for (const std::string& name : names) {
                 relight::LightModel model = relight::parse_light_model(name);
-                if (model.kind == relight::LightModel::Kind::Rbf) {
-                    model.sigma = relight::best_rbf_sigma(gram, field.directions());
-                    spec.sigma = opt->sigma > 0.0 ? opt->sigma : model.sigma;
-                }
-                double error = std::numeric_limits<double>::quiet_NaN();
+                if (model.kind == relight::LightModel::Kind::Rbf)
+                    spec.sigma = model.sigma = opt->sigma > 0.0 ? opt->sigma
+                                                                : relight::best_rbf_sigma(relight::field_gram(field),
+                                                                                          field.directions());
                 try {
-                    std::vector<bool> predictable;
-                    const Eigen::MatrixXd w = relight::LightWeights(model, field.directions()).leave_one_out(predictable);
-                    if (std::all_of(predictable.begin(), predictable.end(), [](bool p) { return p; }))
-                        error = relight::leave_one_out_errors(gram, w).sum();
-                } catch (const InputError&) {
-                    // lights too few for the basis: not a candidate
-                }
-                const double psnr = std::isnan(error) ? error
-                                                      : psnr_from_mse(error / (gram.samples_per_image *
-                                                                               static_cast<double>(field.size())),
-                                                                      gram.peak);
-                candidates.push_back({{"basis", name},
-                                      {"sigma", model.kind == relight::LightModel::Kind::Rbf ? nlohmann::json(model.sigma)
-                                                                                             : nlohmann::json()},
-                                      {"loo_psnr_linear_db", finite_or_null(psnr)}});
-                if (!std::isnan(error) && error < best) {
-                    best = error;
-                    chosen = name;
+                    weights.emplace_back(model, field.directions());
+                    kept.push_back(name);
+                } catch (const InputError& error) {
+                    candidates.push_back({{"basis", name}, {"refused", error.what()}});
                 }
             }
-            if (!std::isfinite(best)) throw InputError("relight fit: the field's lights carry none of the bases");
-            if (opt->basis == "auto")
-                why = "least leave-one-out error (linear) of the candidates on this field";
+            if (weights.empty()) throw InputError("relight fit: the field's lights carry none of the bases");
+            std::vector<const relight::LightWeights*> pointers;
+            for (const relight::LightWeights& w : weights) pointers.push_back(&w);
+            const std::vector<relight::LeaveOneOut> scores = relight::leave_one_out(field, pointers);
+            const bool eight_bit = scores.front().eight_bit();
+            double best = -std::numeric_limits<double>::infinity();
+            for (std::size_t m = 0; m < scores.size(); ++m) {
+                const relight::LeaveOneOut& loo = scores[m];
+                const bool all = std::none_of(loo.squared_error.begin(), loo.squared_error.end(),
+                                              [](double e) { return std::isnan(e); });
+                const double score = eight_bit ? loo.mean_psnr_srgb8() : loo.mean_psnr_linear();
+                candidates.push_back(
+                    {{"basis", kept[m]},
+                     {"sigma", kept[m] == "rbf" ? nlohmann::json(spec.sigma) : nlohmann::json()},
+                     {"mean_psnr_srgb8_db", eight_bit ? finite_or_null(loo.mean_psnr_srgb8()) : nlohmann::json()},
+                     {"mean_psnr_linear_db", finite_or_null(loo.mean_psnr_linear())},
+                     {"mean_ssim", finite_or_null(loo.mean_ssim())},
+                     {"every_light_predicted", all}});
+                if (all && score > best) {
+                    best = score;
+                    chosen = kept[m];
+                }
+            }
+            if (chosen == "auto") throw InputError("relight fit: no basis predicts every light of the field from the others");
+            why = std::string("the greatest mean leave-one-out PSNR (") +
+                  (eight_bit ? "8-bit sRGB codes, as RTI tools quote it" : "linear") + ") of the candidates";
         }
         if (chosen == "ptm") {
             spec.type = relight::FitType::Ptm;
@@ -670,15 +678,27 @@ void add_fit(CLI::App& relight) {
             std::printf("%s\n", summary.dump(2).c_str());
             return;
         }
-        if (!candidates.empty() && opt->basis == "auto") {
-            std::printf("leave-one-out on %s (%zu lights), PSNR linear:\n", opt->field.c_str(), field.size());
+        if (opt->basis == "auto") {
+            std::printf("leave-one-out on %s (%zu lights): each light predicted from the others\n", opt->field.c_str(),
+                        field.size());
+            std::printf("  %-6s %14s %14s %8s\n", "basis", "PSNR sRGB8", "PSNR linear", "SSIM");
+            const auto cell = [](const nlohmann::json& v, const char* format) {
+                char text[32];
+                if (v.is_null()) return std::string("-");
+                std::snprintf(text, sizeof text, format, v.get<double>());
+                return std::string(text);
+            };
             for (const auto& c : candidates) {
                 const std::string name = c["basis"];
-                std::printf("  %-5s %8s dB%s\n", name.c_str(),
-                            c["loo_psnr_linear_db"].is_null() ? "-"
-                                                             : format_number(c["loo_psnr_linear_db"].get<double>(), 4).c_str(),
+                if (c.contains("refused")) {
+                    std::printf("  %-6s not a candidate: %s\n", name.c_str(), c["refused"].get<std::string>().c_str());
+                    continue;
+                }
+                std::printf("  %-6s %11s dB %11s dB %8s%s\n", name.c_str(), cell(c["mean_psnr_srgb8_db"], "%.2f").c_str(),
+                            cell(c["mean_psnr_linear_db"], "%.2f").c_str(), cell(c["mean_ssim"], "%.4f").c_str(),
                             name == chosen ? "   <- chosen" : "");
             }
+            std::printf("  chosen: %s, %s\n", chosen.c_str(), why.c_str());
         }
         std::printf("fitted %s to %s (%zu lights, %d x %d) into %s: %d planes in %d %s file(s)\n", chosen.c_str(),
                     opt->field.c_str(), field.size(), file.width, file.height, opt->out.c_str(), file.nplanes,

@@ -1,5 +1,6 @@
 # `rfd relight fit` and relighting its fits end to end on a small rendered field:
-#  - --basis auto says every candidate's leave-one-out PSNR and chooses the best of them;
+#  - --basis auto says every candidate's leave-one-out PSNR and chooses the best of them (linear
+#    PSNR for this float field);
 #  - a fit is written the same, byte for byte, twice; it relights under --light-dir and a
 #    light file; an rbf fit keeps --planes components, three to a plane file;
 #  - what the format cannot hold (hsh4 in JPEG planes) and field options given with a fit are
@@ -24,7 +25,7 @@ set(best_name "")
 set(best_db -1000)
 foreach(i RANGE ${last})
   string(JSON name GET "${stdout}" candidates ${i} basis)
-  string(JSON db GET "${stdout}" candidates ${i} loo_psnr_linear_db)
+  string(JSON db GET "${stdout}" candidates ${i} mean_psnr_linear_db)
   if(db GREATER best_db)
     set(best_db ${db})
     set(best_name ${name})
