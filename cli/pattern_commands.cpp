@@ -2,6 +2,7 @@
 // (thesis 8.4) and the procedural test fields of the thesis's demonstrations.
 
 #include <chrono>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -14,12 +15,14 @@
 #include "cli/commands.hpp"
 #include "core/error.hpp"
 #include "core/files.hpp"
+#include "core/sphere.hpp"
 #include "core/text.hpp"
 #include "optics/design.hpp"
 #include "patterns/encode.hpp"
 #include "patterns/procedural.hpp"
 #include "patterns/raster.hpp"
 #include "relight/field.hpp"
+#include "relight/light_model.hpp"
 
 namespace rfd::cli {
 namespace {
@@ -59,10 +62,38 @@ EncodingResolution encoding_resolution(const optics::Design& design, const std::
     return resolution;
 }
 
+// --basis: sets options.interpolation, or options.light_model and replaces `field` by what
+// it predicts (patterns::apply_light_model); says what it chose and why.
+std::string predict_between_lights(const std::string& basis, relight::ReflectanceField& field,
+                                   patterns::EncodeOptions& options) {
+    const std::string interpolation(name_of(relight::kInterpolationNames, options.interpolation));
+    if (basis.empty()) return interpolation + " interpolation";
+    std::string why;
+    relight::LightModel model;
+    const relight::FieldGram gram = relight::field_gram(field);
+    if (basis == "auto") {
+        const relight::ModelChoice choice = relight::choose_light_model(gram, field.directions, relight::light_model_names());
+        model = choice.model;
+        why = " (least leave-one-out error of";
+        for (std::size_t c = 0; c < choice.candidates.size(); ++c)
+            why += (c == 0 ? " " : ", ") + choice.candidates[c].name() + " " + format_number(choice.psnr[c], 4) + " dB";
+        why += ", linear PSNR)";
+    } else {
+        model = relight::parse_light_model(basis);
+        if (model.kind == relight::LightModel::Kind::Rbf) model.sigma = relight::best_rbf_sigma(gram, field.directions);
+    }
+    if (model.kind == relight::LightModel::Kind::Interpolation) {
+        options.interpolation = model.interpolation;
+        return model.name() + " interpolation" + why;
+    }
+    options.light_model = model;
+    return patterns::apply_light_model(field, options) + ", blended between them" + why;
+}
+
 void add_encode_command(CLI::App& pattern) {
     auto* cmd = pattern.add_subcommand("encode", "Encode a reflectance field into a print-resolution pattern (Designs I and II)");
     struct Options {
-        std::string design, field, out, dpi, printer, compression = "rle", preview;
+        std::string design, field, out, dpi, printer, compression = "rle", preview, basis;
         optics::ModelChoice model = optics::ModelChoice::Auto;
         relight::Interpolation interpolation = relight::Interpolation::Delaunay;
         patterns::ImageFit fit = patterns::ImageFit::Cover;
@@ -77,6 +108,10 @@ void add_encode_command(CLI::App& pattern) {
     add_model_option(*cmd, opt->model);
     add_choice(*cmd, "--interpolation", opt->interpolation, relight::kInterpolationNames,
                "Between light directions: delaunay, solid-angle or nearest");
+    cmd->add_option("--basis", opt->basis,
+                    "How the field is predicted between its lights, if not by --interpolation: ptm, hsh2, hsh3, hsh4, "
+                    "rbf (relight/light_model.hpp; the field sampled by it at 4 times its directions, blended between "
+                    "them), an interpolation's name, or auto: the one of least leave-one-out error on the field");
     add_option(*cmd, patterns::kTiltOption, opt->tilt);
     add_option(*cmd, patterns::kTurnOption, opt->turn);
     add_option(*cmd, patterns::kAngleScaleOption, opt->angle_scale);
@@ -110,7 +145,9 @@ void add_encode_command(CLI::App& pattern) {
         options.window = opt->window.window();
 
         const auto start = std::chrono::steady_clock::now();
-        const relight::ReflectanceField field = patterns::load_field_for(design, opt->field, options);
+        relight::ReflectanceField field = patterns::load_field_for(design, opt->field, options);
+        const std::size_t captured = field.size();
+        const std::string predictor = predict_between_lights(opt->basis, field, options);
         const patterns::Encoder encoder(design, field, geometry, options);
         const auto prepared = std::chrono::steady_clock::now();
         patterns::WriteOptions write_options;
@@ -136,7 +173,9 @@ void add_encode_command(CLI::App& pattern) {
                 {"printer", printer_record.empty() ? nlohmann::json(nullptr) : nlohmann::json(printer_record.at("printer"))},
                 {"size_mm", {geometry.size_mm().x(), geometry.size_mm().y()}},
                 {"lenslets", encoder.lattice().count_x() * encoder.lattice().count_y()},
-                {"field_directions_used", field.size()},
+                {"field_directions_used", captured},
+                {"predictor", predictor},
+                {"predicted_directions", field.size()},
                 {"display_half_angle_deg", radians_to_degrees(encoder.display_range().max_angle_rad)},
                 {"model", std::string(optics::to_string(options.model))},
                 {"paraxial_error_dots", json_or_null(choice.paraxial_error_dots)},
@@ -157,7 +196,8 @@ void add_encode_command(CLI::App& pattern) {
                     std::string(optics::to_string(options.model)).c_str(), choice.paraxial_error_dots.value_or(0.0));
         if (options.model == optics::Model::Exact) std::printf(" (table error %.2g deg)", table_error_deg);
         std::printf("\n  field              %zu light direction(s) used, tilt %g deg, turn %g deg, angle scale %g\n",
-                    field.size(), opt->tilt, opt->turn, opt->angle_scale);
+                    captured, opt->tilt, opt->turn, opt->angle_scale);
+        std::printf("  between lights     %s\n", predictor.c_str());
         std::printf("  white              %.6g (the value printed as full transmittance)\n", encoder.white());
         if (!printer_record.empty())
             std::printf("  printer            %s (recorded: simulate and print sheet use it)\n",

@@ -44,6 +44,8 @@ void add_upsample_command(CLI::App& relight) {
     add_option(*cmd, relight::kLobeSpreadOption, u.lobe_spread_deg);
     add_option(*cmd, relight::kPriorIterationsOption, u.priors.iterations);
     add_option(*cmd, relight::kPriorProximityOption, u.priors.proximity);
+    add_option(*cmd, relight::kGuardTileOption, u.guard_tile);
+    add_option(*cmd, relight::kGuardProbesOption, u.guard_probes);
     // Checked before any work: a field is linear radiance, so only the float formats keep it.
     cmd->add_option("--format", opt->extension, "Image format of the output field: .exr or .hdr (linear float)")
         ->check(CLI::IsMember({".exr", ".hdr"}))
@@ -71,6 +73,9 @@ void add_upsample_command(CLI::App& relight) {
                                             {"lit_fraction", s.lit_fraction},
                                             {"extrapolated_fraction", s.extrapolated_fraction},
                                             {"fallback_fraction", s.fallback_fraction},
+                                            {"guard_probes", s.guard_probes},
+                                            {"guarded_tiles", s.guarded_tiles},
+                                            {"upsampled_tiles", s.upsampled_tiles},
                                             {"seconds_per_synthesized_image", per_image}};
             std::printf("%s\n", summary.dump(2).c_str());
             return;
@@ -85,6 +90,12 @@ void add_upsample_command(CLI::App& relight) {
                     100.0 * s.extrapolated_fraction);
         std::printf("  no reliable samples  %.2f %% of new pixels (linear blend instead)\n",
                     100.0 * s.fallback_fraction);
+        if (s.guard_probes > 0)
+            std::printf("  guard                %zu of %zu tiles of %d px keep the upsampled images, the rest blended "
+                        "(leave-one-out of %zu inputs)\n",
+                        s.upsampled_tiles, s.guarded_tiles, opt->upsample.guard_tile, s.guard_probes);
+        else if (opt->upsample.guard_tile > 0)
+            std::printf("  guard                none: no input lies inside the others' triangulation to judge by\n");
         std::printf("  time                 %.2f s read, %.2f s upsampling (%.3f s per new image)\n", seconds(t0, t1),
                     seconds(t1, t2), per_image);
         std::printf("  wrote %s\n", opt->out.c_str());

@@ -320,7 +320,28 @@ relight::ReflectanceField load_field_for(const optics::Design& design, const std
         out.directions.push_back(e.direction);
         out.images.push_back(std::move(image));
     }
+    apply_light_model(out, options);
     return out;
+}
+
+std::string apply_light_model(relight::ReflectanceField& field, const EncodeOptions& options) {
+    if (!options.light_model) return "";
+    const relight::LightModel& model = *options.light_model;
+    // Four times the field's directions inside its hull, at most 1 GB of images.
+    const relight::SphericalInterpolator hull(field.directions);
+    const std::vector<Eigen::Vector3d> probe = fibonacci_hemisphere(4096);
+    const auto inside = static_cast<double>(
+        std::count_if(probe.begin(), probe.end(), [&](const Eigen::Vector3d& d) { return hull.covers(d); }));
+    const double image_bytes = static_cast<double>(field.images.front().samples().size()) * sizeof(float);
+    const double wanted = std::min(4.0 * static_cast<double>(field.size()), std::max(1.0, 1e9 / image_bytes));
+    const auto total = static_cast<std::size_t>(std::ceil(wanted * 4096.0 / std::max(inside, 1.0)));
+    std::vector<Eigen::Vector3d> directions = field.directions;
+    for (const Eigen::Vector3d& d : fibonacci_hemisphere(total))
+        if (hull.covers(d)) directions.push_back(d);
+    const std::size_t captured = field.size();
+    field = relight::resampled_field(field, relight::LightWeights(model, field.directions), directions);
+    return model.name() + " fitted to the " + std::to_string(captured) + " lights, sampled at " +
+           std::to_string(directions.size()) + " directions";
 }
 
 Encoder::Encoder(const optics::Design& design, const relight::ReflectanceField& field,
@@ -778,6 +799,10 @@ PatternAttributes encode_attributes(const EncodeOptions& options) {
         attributes["region"] = std::to_string(w.x) + "," + std::to_string(w.y) + "," + std::to_string(w.width) + "," +
                                std::to_string(w.height);
     if (w.scale != 1.0) attributes["scale"] = format_number(w.scale, 17);
+    if (const auto& m = options.light_model) {
+        attributes["basis"] = m->kind == relight::LightModel::Kind::Rbf ? "rbf" : m->name();
+        if (m->kind == relight::LightModel::Kind::Rbf) attributes["rbf_sigma"] = format_number(m->sigma, 17);
+    }
     return attributes;
 }
 
@@ -797,6 +822,13 @@ EncodeOptions encode_options_of(const PatternFileInfo& info, const std::string& 
     if (const auto region = info.attributes.find("region"); region != info.attributes.end())
         options.window = relight::parse_region(region->second, file + ": rfd:region");
     options.window.scale = number_attribute(info, "scale", file, 1.0, NumberRange::Positive);
+    if (const auto basis = info.attributes.find("basis"); basis != info.attributes.end()) {
+        relight::LightModel model = relight::parse_light_model(basis->second, file + ": rfd:basis");
+        if (model.kind == relight::LightModel::Kind::Rbf)
+            model.sigma = number_attribute(info, "rbf_sigma", file, 0.0, NumberRange::Positive);
+        if (model.kind == relight::LightModel::Kind::Interpolation) options.interpolation = model.interpolation;
+        else options.light_model = model;
+    }
     return options;
 }
 

@@ -36,6 +36,7 @@
 //   write_pattern("pattern.exr", encoder, encoder.attributes());
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -47,6 +48,7 @@
 #include "patterns/raster.hpp"
 #include "relight/field.hpp"
 #include "relight/interpolation.hpp"
+#include "relight/light_model.hpp"
 
 namespace rfd::patterns {
 
@@ -100,11 +102,17 @@ struct EncodeOptions {
     std::string field_name = "field";  ///< for messages
     /// The part of each field image used (--region, --scale), applied as it is read.
     relight::ImageWindow window;
+    /// A fitted model between the field's lights (relight/light_model.hpp: a basis or rbf)
+    /// instead of interpolating the images themselves: the field is replaced by what the model
+    /// predicts at its own directions and three times as many more inside their hull (a
+    /// Fibonacci spiral), which are then interpolated. None: the images themselves.
+    std::optional<relight::LightModel> light_model;
 };
 
 /// The encoder's options as a pattern file's rfd: attributes record them, and back: model,
 /// field, tilt_deg, turn_deg, angle_scale, interpolation, fit, and region (X,Y,W,H) and
-/// scale when the field was read through a window. Numbers keep 6 significant
+/// scale when the field was read through a window, basis (and rbf_sigma, all its digits)
+/// for a fitted light model. Numbers keep 6 significant
 /// digits. Reading: absent attributes take the defaults of files written before they were
 /// recorded (paraxial, no mapping, delaunay, cover); InputError naming `file` and the
 /// attribute for a value it cannot read. The options read back allow partial coverage: a
@@ -125,8 +133,13 @@ std::vector<std::size_t> needed_field_directions(const optics::Design& design,
                                                  const std::vector<Eigen::Vector3d>& field_directions,
                                                  const EncodeOptions& options);
 
+/// `field` replaced as options.light_model says (see EncodeOptions); unchanged without one.
+/// Returns what it did, for reports ("hsh3 fitted to the 48 lights, sampled at 192
+/// directions").
+std::string apply_light_model(relight::ReflectanceField& field, const EncodeOptions& options);
+
 /// Loads a field from disk keeping only the images the encoder can need (see above), each
-/// through options.window as it is read.
+/// through options.window as it is read, then through options.light_model.
 relight::ReflectanceField load_field_for(const optics::Design& design,
                                          const std::filesystem::path& field,
                                          const EncodeOptions& options);

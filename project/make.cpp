@@ -172,6 +172,10 @@ std::vector<Step> plan(const Project& p) {
                                                                          std::to_string((*r)[2]) + "," +
                                                                          std::to_string((*r)[3])});
     if (p.source.scale) encode.arguments.insert(encode.arguments.end(), {"--scale", format_number(*p.source.scale, 17)});
+    // A captured field is predicted between its lights by what leave-one-out finds best on it.
+    const std::optional<std::string> basis = e.basis ? e.basis : p.source.field ? std::optional<std::string>("auto")
+                                                                                : std::nullopt;
+    if (basis) encode.arguments.insert(encode.arguments.end(), {"--basis", *basis});
     steps.push_back(std::move(encode));
 
     // What is printed and predicted: the direct encoding, or the pattern optimised from it.

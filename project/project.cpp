@@ -15,6 +15,7 @@
 #include "print/printer.hpp"
 #include "relight/field.hpp"
 #include "relight/interpolation.hpp"
+#include "relight/light_model.hpp"
 
 namespace rfd::project {
 namespace {
@@ -106,6 +107,11 @@ Encoding read_encoding(ConfigTable& table) {
     e.model = choice(table, "model", e.model, optics::kModelChoiceNames);
     e.interpolation = choice(table, "interpolation", e.interpolation, relight::kInterpolationNames);
     e.fit = choice(table, "fit", e.fit, patterns::kImageFitNames);
+    if (table.has("basis")) {
+        std::vector<std::string> names = relight::light_model_names();
+        names.emplace_back("auto");
+        e.basis = table.choice("basis", names);
+    }
     return e;
 }
 

@@ -5,7 +5,7 @@
 //   [project]  name, design, printer, printer_3d   (bundled names or paths)
 //   [source]   field (a folder or .lp), scene + lights + resolution, or procedural + text +
 //              resolution; region, scale
-//   [encode]   tilt_deg, turn_deg, angle_scale, model, interpolation, fit, margin_mm
+//   [encode]   tilt_deg, turn_deg, angle_scale, model, interpolation, basis, fit, margin_mm
 //   [make]     sheets, copies, moire, wedge, holder, compare_sweep, tolerance, preview_lights
 //   [optimize] enabled, iterations, spacing_mm, core_weight: the pattern is optimised through
 //              the simulator (rfd pattern optimize) and the sheets print that one, unless
@@ -57,6 +57,9 @@ struct Encoding {
     double tilt_deg = patterns::kTiltOption.fallback, turn_deg = patterns::kTurnOption.fallback;
     double angle_scale = patterns::kAngleScaleOption.fallback, margin_mm = patterns::kMarginOption.fallback;
     std::string model = "auto", interpolation = "delaunay", fit = "cover";
+    /// How the field is predicted between its lights (rfd pattern encode --basis): unset, "auto"
+    /// for a captured field ([source] field), interpolation for fields rfd makes itself.
+    std::optional<std::string> basis;
 };
 
 /// What to make besides the pattern.

@@ -4,8 +4,10 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <span>
 
 #include "core/error.hpp"
+#include "core/image.hpp"
 #include "core/parallel.hpp"
 #include "core/progress.hpp"
 #include "relight/field.hpp"
@@ -193,6 +195,88 @@ FieldGram field_gram(FieldReader& field) {
         progress.advance();
     }
     progress.finish();
+    return out;
+}
+
+FieldGram field_gram(const ReflectanceField& field) {
+    const std::size_t n = field.size();
+    const auto N = static_cast<Eigen::Index>(n);
+    FieldGram out;
+    out.gram = Eigen::MatrixXd::Zero(N, N);
+    if (n == 0) return out;
+    const std::size_t samples = field.images.front().samples().size();
+    out.samples_per_image = static_cast<double>(samples);
+    constexpr std::size_t kChunk = 4096;
+    const std::size_t chunks = (samples + kChunk - 1) / kChunk;
+    std::vector<Eigen::MatrixXd> parts(chunks);
+    std::vector<double> peaks(chunks, 0.0);
+    parallel_for_chunks(chunks, 1, [&](std::size_t begin, std::size_t end) {
+        Eigen::MatrixXd y;
+        for (std::size_t chunk = begin; chunk < end; ++chunk) {
+            const std::size_t first = chunk * kChunk, count = std::min(kChunk, samples - first);
+            y.resize(static_cast<Eigen::Index>(count), N);
+            for (std::size_t i = 0; i < n; ++i)
+                for (std::size_t k = 0; k < count; ++k) {
+                    const float v = field.images[i].samples()[first + k];
+                    y(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(i)) = v;
+                    peaks[chunk] = std::max(peaks[chunk], static_cast<double>(v));
+                }
+            parts[chunk].noalias() = y.transpose() * y;
+        }
+    });
+    for (std::size_t chunk = 0; chunk < chunks; ++chunk) {
+        out.gram += parts[chunk];
+        out.peak = std::max(out.peak, peaks[chunk]);
+    }
+    return out;
+}
+
+ModelChoice choose_light_model(const FieldGram& gram, const std::vector<Eigen::Vector3d>& directions,
+                               const std::vector<std::string>& names) {
+    ModelChoice choice;
+    double best = std::numeric_limits<double>::infinity();
+    for (const std::string& name : names) {
+        LightModel model = parse_light_model(name);
+        try {
+            if (model.kind == LightModel::Kind::Rbf) model.sigma = best_rbf_sigma(gram, directions);
+            std::vector<bool> predictable;
+            const Eigen::MatrixXd w = LightWeights(model, directions).leave_one_out(predictable);
+            if (std::find(predictable.begin(), predictable.end(), false) != predictable.end()) continue;
+            const double error = leave_one_out_errors(gram, w).sum();
+            choice.candidates.push_back(model);
+            choice.psnr.push_back(
+                psnr_from_mse(error / (gram.samples_per_image * static_cast<double>(directions.size())), gram.peak));
+            if (error < best) {
+                best = error;
+                choice.model = model;
+            }
+        } catch (const InputError&) {
+            // lights this model cannot use: not a candidate
+        }
+    }
+    if (choice.candidates.empty()) throw InputError("no way of predicting the field's lights from one another fits them");
+    return choice;
+}
+
+ReflectanceField resampled_field(const ReflectanceField& field, const LightWeights& weights,
+                                 const std::vector<Eigen::Vector3d>& directions) {
+    RFD_CHECK(weights.size() == field.size());
+    ReflectanceField out;
+    out.directions = directions;
+    out.images.resize(directions.size());
+    parallel_for_chunks(directions.size(), 1, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t k = begin; k < end; ++k) {
+            const Eigen::VectorXd w = weights.at(directions[k]);
+            Image image(field.width(), field.height(), field.channels());
+            for (std::size_t i = 0; i < field.size(); ++i) {
+                const auto wi = static_cast<float>(w[static_cast<Eigen::Index>(i)]);
+                if (wi == 0.0f) continue;
+                const std::span<const float> from = field.images[i].samples();
+                for (std::size_t s = 0; s < from.size(); ++s) image.samples()[s] += wi * from[s];
+            }
+            out.images[k] = std::move(image);
+        }
+    });
     return out;
 }
 

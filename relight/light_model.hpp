@@ -27,11 +27,10 @@
 #include <Eigen/Core>
 
 #include "relight/basis.hpp"
+#include "relight/field.hpp"
 #include "relight/interpolation.hpp"
 
 namespace rfd::relight {
-
-class FieldReader;
 
 struct LightModel {
     enum class Kind { Interpolation, Basis, Rbf };
@@ -91,6 +90,9 @@ struct FieldGram {
 /// does not depend on the threads).
 FieldGram field_gram(FieldReader& field);
 
+/// G of a field held in memory.
+FieldGram field_gram(const ReflectanceField& field);
+
 /// Per light, the squared error of predicting it from the others with leave-one-out matrix W
 /// (LightWeights::leave_one_out), summed over the field's samples: diag((I - W) G (I - W)^T).
 Eigen::VectorXd leave_one_out_errors(const FieldGram& gram, const Eigen::MatrixXd& w);
@@ -98,5 +100,20 @@ Eigen::VectorXd leave_one_out_errors(const FieldGram& gram, const Eigen::MatrixX
 /// The rbf sigma with the least leave-one-out error on the field: a golden-section search of
 /// log sigma over [0.02, 1.5] after a coarse scan (the error is not convex in sigma).
 double best_rbf_sigma(const FieldGram& gram, const std::vector<Eigen::Vector3d>& directions);
+
+/// A model chosen by leave-one-out: the one of least summed error (linear) among `names`
+/// (light_model_names()), rbf's sigma tuned first. Models the lights cannot carry, or that
+/// leave a light unpredictable, are not candidates; InputError when none is.
+struct ModelChoice {
+    LightModel model;
+    std::vector<LightModel> candidates;
+    std::vector<double> psnr;  ///< per candidate: PSNR of its summed error (linear, peak the brightest sample)
+};
+ModelChoice choose_light_model(const FieldGram& gram, const std::vector<Eigen::Vector3d>& directions,
+                               const std::vector<std::string>& names);
+
+/// `field` as `weights` predicts it at each of `directions`: image k = sum_i w_i(d_k) R_i.
+ReflectanceField resampled_field(const ReflectanceField& field, const LightWeights& weights,
+                                 const std::vector<Eigen::Vector3d>& directions);
 
 }  // namespace rfd::relight

@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <utility>
 
@@ -139,11 +140,14 @@ Separated separate_features(const ReflectanceField& field, const SphericalInterp
 
 // 2. Feature upsampling, `levels` times: a new node at the midpoint of every Delaunay edge
 // of the nodes so far, its highlights and shadow map carried half-way from the edge's ends.
-void subdivide(std::vector<Node>& nodes, int levels, int width, int height, const UpsampleOptions& options) {
+// `only` (when not empty) replaces the first level's edges: a probe subdivides the edges
+// around one direction alone.
+void subdivide(std::vector<Node>& nodes, int levels, int width, int height, const UpsampleOptions& options,
+               const std::vector<std::array<std::size_t, 2>>& only = {}) {
     for (int level = 0; level < levels; ++level) {
         std::vector<Eigen::Vector3d> directions(nodes.size());
         for (std::size_t i = 0; i < nodes.size(); ++i) directions[i] = nodes[i].direction;
-        const auto edges = delaunay_edges(directions);
+        const auto edges = level == 0 && !only.empty() ? only : delaunay_edges(directions);
         std::vector<Node> added(edges.size());
         Progress progress("subdivision level " + std::to_string(level + 1), edges.size());
         parallel_for_chunks(edges.size(), 1, [&](std::size_t begin, std::size_t end) {
@@ -166,10 +170,9 @@ void subdivide(std::vector<Node>& nodes, int levels, int width, int height, cons
     }
 }
 
-}  // namespace
-
-UpsampledField upsample_field(const ReflectanceField& field, int levels, const UpsampleOptions& options) {
-    check_options(field, levels, options);
+// The pipeline without the guard; `only` as subdivide() takes it.
+UpsampledField upsample_unguarded(const ReflectanceField& field, int levels, const UpsampleOptions& options,
+                                  const std::vector<std::array<std::size_t, 2>>& only = {}) {
     UpsampledField result;
     result.statistics.inputs = field.size();
     if (levels == 0) {
@@ -182,7 +185,7 @@ UpsampledField upsample_field(const ReflectanceField& field, int levels, const U
 
     Separated separated = separate_features(field, interpolator, options, result.statistics);
     std::vector<Node>& nodes = separated.nodes;
-    subdivide(nodes, levels, field.width(), field.height(), options);
+    subdivide(nodes, levels, field.width(), field.height(), options, only);
     if (options.lobe_samples > 0) upsampling::refit_glossy_highlights(nodes, n, options);
     // 3. and 4.: synthesis, with the image priors.
     upsampling::Synthesized synthesized =
@@ -201,6 +204,176 @@ UpsampledField upsample_field(const ReflectanceField& field, int levels, const U
     result.statistics.extrapolated_fraction = static_cast<double>(synthesized.extrapolated) / synthesized_pixels;
     result.statistics.fallback_fraction = static_cast<double>(synthesized.fallback) / synthesized_pixels;
     return result;
+}
+
+// Sum of relight(images, weights) over directions: the interpolated image.
+Image blend(const std::vector<Image>& images, const InterpolationWeights& w) {
+    Image out(images.front().width(), images.front().height(), images.front().channels());
+    for (std::size_t k = 0; k < w.count; ++k) {
+        const std::span<const float> from = images[w.index[k]].samples();
+        const auto weight = static_cast<float>(w.weight[k]);
+        for (std::size_t s = 0; s < from.size(); ++s) out.samples()[s] += weight * from[s];
+    }
+    return out;
+}
+
+// Squared differences of display values (sRGB-encoded, as 8-bit captures are judged), per
+// tile of `tile` pixels, all channels.
+std::vector<double> tile_errors(const Image& a, const Image& b, int tile, int columns, int rows) {
+    std::vector<double> out(static_cast<std::size_t>(columns * rows), 0.0);
+    for (int c = 0; c < a.channels(); ++c)
+        for (int y = 0; y < a.height(); ++y)
+            for (int x = 0; x < a.width(); ++x) {
+                const double e = linear_to_srgb(std::clamp(a.at(x, y, c), 0.0f, 1.0f)) -
+                                 linear_to_srgb(std::clamp(b.at(x, y, c), 0.0f, 1.0f));
+                out[static_cast<std::size_t>((y / tile) * columns + x / tile)] += e * e;
+            }
+    return out;
+}
+
+// Inputs to hold out: interior ones (the others' triangulation holds them), spread by
+// farthest-point sampling from the one nearest the zenith.
+std::vector<std::size_t> probe_lights(const ReflectanceField& field, std::size_t wanted) {
+    const std::size_t n = field.size();
+    std::vector<std::size_t> interior;
+    for (std::size_t j = 0; j < n; ++j) {
+        std::vector<Eigen::Vector3d> others;
+        for (std::size_t i = 0; i < n; ++i)
+            if (i != j) others.push_back(field.directions[i]);
+        if (SphericalInterpolator(others).covers(field.directions[j])) interior.push_back(j);
+    }
+    std::vector<std::size_t> chosen;
+    if (interior.empty()) return chosen;
+    std::size_t first = interior.front();
+    for (const std::size_t j : interior)
+        if (field.directions[j].z() > field.directions[first].z()) first = j;
+    chosen.push_back(first);
+    while (chosen.size() < std::min(wanted, interior.size())) {
+        std::size_t best = interior.front();
+        double farthest = -1.0;
+        for (const std::size_t j : interior) {
+            double nearest = 10.0;
+            for (const std::size_t c : chosen) nearest = std::min(nearest, angle_between(field.directions[j], field.directions[c]));
+            if (nearest > farthest) {
+                farthest = nearest;
+                best = j;
+            }
+        }
+        chosen.push_back(best);
+    }
+    return chosen;
+}
+
+}  // namespace
+
+UpsampleGuard judge_tiles(const ReflectanceField& field, const UpsampleOptions& options) {
+    UpsampleGuard guard;
+    const int tile = options.guard_tile;
+    if (tile <= 0) return guard;
+    guard.tile = tile;
+    guard.columns = (field.width() + tile - 1) / tile;
+    guard.rows = (field.height() + tile - 1) / tile;
+    const auto tiles = static_cast<std::size_t>(guard.columns * guard.rows);
+    guard.upsampled.assign(tiles, 1.0);
+    guard.probes = probe_lights(field, static_cast<std::size_t>(options.guard_probes));
+    if (guard.probes.empty()) return guard;
+    std::vector<double> up(tiles, 0.0), blended(tiles, 0.0);
+    std::vector<int> losses(tiles, 0);
+    UpsampleOptions inner = options;
+    inner.guard_tile = 0;
+    Progress progress("upsampling guard", guard.probes.size());
+    for (const std::size_t j : guard.probes) {
+        ReflectanceField others;
+        for (std::size_t i = 0; i < field.size(); ++i) {
+            if (i == j) continue;
+            others.directions.push_back(field.directions[i]);
+            others.images.push_back(field.images[i]);
+            if (!field.kernel_radii.empty()) others.kernel_radii.push_back(field.kernel_radii[i]);
+        }
+        const Eigen::Vector3d& d = field.directions[j];
+        const InterpolationWeights around = SphericalInterpolator(others.directions).weights(d);
+        // The three edges of the triangle holding the held-out light: their midpoints are the
+        // new directions the held-out light is relit from.
+        std::vector<std::array<std::size_t, 2>> edges;
+        for (std::size_t a = 0; a < 3; ++a) {
+            const std::size_t p = around.index[a], q = around.index[(a + 1) % 3];
+            edges.push_back({std::min(p, q), std::max(p, q)});
+        }
+        std::sort(edges.begin(), edges.end());
+        const UpsampledField local = upsample_unguarded(others, 1, inner, edges);
+        const Image with_upsampling =
+            blend(local.field.images, SphericalInterpolator(local.field.directions).weights(d));
+        const Image with_blending = blend(others.images, around);
+        const std::vector<double> e_up = tile_errors(with_upsampling, field.images[j], tile, guard.columns, guard.rows);
+        const std::vector<double> e_blend = tile_errors(with_blending, field.images[j], tile, guard.columns, guard.rows);
+        for (std::size_t t = 0; t < tiles; ++t) {
+            up[t] += e_up[t];
+            blended[t] += e_blend[t];
+            losses[t] += e_up[t] > e_blend[t] ? 1 : 0;
+        }
+        progress.advance();
+    }
+    progress.finish();
+    // A tile keeps the upsampled images where they win clearly in sum, and do not lose to
+    // blending for most probes.
+    for (std::size_t t = 0; t < tiles; ++t) {
+        const bool wins = up[t] < kGuardMargin * blended[t] && 2 * losses[t] <= static_cast<int>(guard.probes.size());
+        guard.upsampled[t] = wins ? 1.0 : 0.0;
+    }
+    return guard;
+}
+
+UpsampledField upsample_field(const ReflectanceField& field, int levels, const UpsampleOptions& options) {
+    check_options(field, levels, options);
+    if (options.guard_tile < 0 || options.guard_probes < 1)
+        throw InputError("the guard's tile must be >= 0 pixels (0: off) and its probes >= 1");
+    UpsampledField result = upsample_unguarded(field, levels, options);
+    if (levels == 0 || options.guard_tile == 0) return result;
+    const UpsampleGuard guard = judge_tiles(field, options);
+    result.statistics.guard_probes = guard.probes.size();
+    result.statistics.guarded_tiles = guard.upsampled.size();
+    std::size_t kept = 0;
+    for (const double u : guard.upsampled) kept += u > 0.5 ? 1 : 0;
+    result.statistics.upsampled_tiles = kept;
+    if (kept == guard.upsampled.size()) return result;
+    // Elsewhere, each new image is the inputs blended at its direction, the weights of the
+    // tiles' centres interpolated bilinearly across tile borders so no seam shows.
+    const Image weight = guard.pixel_weights(field.width(), field.height());
+    const SphericalInterpolator inputs(field.directions);
+    const std::size_t n = field.size();
+    parallel_for_chunks(result.field.size() - n, 1, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t k = n + begin; k < n + end; ++k) {
+            const Image blended = blend(field.images, inputs.weights(result.field.directions[k]));
+            Image& image = result.field.images[k];
+            for (int c = 0; c < image.channels(); ++c)
+                for (int y = 0; y < image.height(); ++y)
+                    for (int x = 0; x < image.width(); ++x) {
+                        const float w = weight.at(x, y, 0);
+                        image.at(x, y, c) = w * image.at(x, y, c) + (1.0f - w) * blended.at(x, y, c);
+                    }
+        }
+    });
+    return result;
+}
+
+Image UpsampleGuard::pixel_weights(int width, int height) const {
+    Image out(width, height, 1, 1.0f);
+    if (tile <= 0) return out;
+    const auto at = [&](int column, int row) {
+        column = std::clamp(column, 0, columns - 1);
+        row = std::clamp(row, 0, rows - 1);
+        return upsampled[static_cast<std::size_t>(row * columns + column)];
+    };
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            // Tile centres at (i + 0.5) tile.
+            const double u = (x + 0.5) / tile - 0.5, v = (y + 0.5) / tile - 0.5;
+            const int i = static_cast<int>(std::floor(u)), k = static_cast<int>(std::floor(v));
+            const double fu = u - i, fv = v - k;
+            out.at(x, y, 0) = static_cast<float>((1 - fu) * (1 - fv) * at(i, k) + fu * (1 - fv) * at(i + 1, k) +
+                                                 (1 - fu) * fv * at(i, k + 1) + fu * fv * at(i + 1, k + 1));
+        }
+    return out;
 }
 
 }  // namespace rfd::relight

@@ -109,6 +109,23 @@ struct UpsampleStatistics {
     double lit_fraction = 0.0;             ///< of input pixels labelled lit
     double extrapolated_fraction = 0.0;    ///< of synthesized pixels that needed the SH fit
     double fallback_fraction = 0.0;        ///< of synthesized pixels without reliable samples
+    std::size_t guard_probes = 0;          ///< inputs held out to judge the tiles (0: no guard)
+    std::size_t guarded_tiles = 0;         ///< tiles judged
+    std::size_t upsampled_tiles = 0;       ///< of them, those keeping the upsampled images
+};
+
+/// The guard's factor: a tile keeps the upsampled images when their leave-one-out error there
+/// is below this share of blending's.
+inline constexpr double kGuardMargin = 0.9;
+
+/// Where upsampling is trusted: per tile, 1 where the upsampled images predicted the held-out
+/// inputs better than blending did (clearly in sum, and for at least half of them), else 0.
+struct UpsampleGuard {
+    int tile = 0, columns = 0, rows = 0;
+    std::vector<double> upsampled;       ///< per tile, row-major
+    std::vector<std::size_t> probes;     ///< the inputs held out
+    /// Per pixel, the tiles' values interpolated bilinearly between their centres.
+    Image pixel_weights(int width, int height) const;
 };
 
 struct UpsampledField {
@@ -122,5 +139,12 @@ struct UpsampledField {
 /// samples 1 to 3 or a lobe spread outside (0, 180]);
 /// what SphericalInterpolator throws for its directions. Deterministic.
 UpsampledField upsample_field(const ReflectanceField& field, int levels, const UpsampleOptions& options);
+
+/// The guard of upsample_field (options.guard_tile > 0): up to options.guard_probes inputs,
+/// interior to the others' triangulation and spread over them, each held out in turn; the
+/// others upsampled around it (the three new directions on the edges of the triangle that
+/// holds it) and it relit with and without them. The errors are of display values
+/// (sRGB-encoded), as 8-bit captures are judged. No probes (no interior input): every tile 1.
+UpsampleGuard judge_tiles(const ReflectanceField& field, const UpsampleOptions& options);
 
 }  // namespace rfd::relight

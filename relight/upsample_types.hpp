@@ -47,6 +47,14 @@ inline constexpr NumberOption kLobeSpreadOption{
     "--lobe-spread", "", "deg", 0.0, 180.0, 30.0,
     "Angle from the lobe's axis within which all of a pixel's highlight samples must lie"};
 
+inline constexpr IntegerOption kGuardTileOption{
+    "--guard-tile", "", "pixels", 0, 4096, 32,
+    "Side of the tiles in which the upsampled images must beat blending in leave-one-out on the capture itself, "
+    "or are blended instead (0: no guard)"};
+inline constexpr IntegerOption kGuardProbesOption{
+    "--guard-probes", "", "", 1, 64, 8,
+    "Inputs held out, one at a time, to judge the tiles (spread over the capture's lights)"};
+
 struct UpsampleOptions {
     double f_highlight = kHighlightFactorOption.fallback;  ///< highlight where L >= f_highlight * P
     double f_lit = kLitFractionOption.fallback;             ///< region growing factor (see above)
@@ -58,6 +66,8 @@ struct UpsampleOptions {
     int lobe_samples = static_cast<int>(kLobeSamplesOption.fallback);  ///< samples of a fitted lobe (0: off)
     double lobe_spread_deg = kLobeSpreadOption.fallback;     ///< ... all within this angle of the lobe's axis
     PriorOptions priors;                                     ///< regularisation of uncertain pixels
+    int guard_tile = static_cast<int>(kGuardTileOption.fallback);      ///< tile side; 0: no guard
+    int guard_probes = static_cast<int>(kGuardProbesOption.fallback);  ///< inputs held out to judge tiles
 };
 
 /// A binary map per pixel, row-major, 1 = lit.

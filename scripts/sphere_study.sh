@@ -16,32 +16,7 @@ resolutions=(612x408 1224x816 2448x1632)
 noises=(0 2 4)          # standard deviation, 8-bit codes
 qualities=(png 95 85 70)
 
-# A camera-like copy of a rendered field: sRGB, noise, 8 bits, PNG or JPEG. The noise of
-# each image has its own seed.
-degrade() {
-  local field="$1" target="$2" noise="$3" quality="$4"
-  mkdir -p "$target"
-  local i=0 jobs=()
-  for exr in "$field"/field_*.exr; do
-    i=$((i + 1))
-    local name
-    name=$(basename "$exr" .exr)
-    local args=("$exr" --colorconvert linear sRGB)
-    if [ "$noise" != 0 ]; then
-      args+=(--noise:type=gaussian:mean=0:stddev=$(awk "BEGIN{print $noise/255}"):seed=$i)
-    fi
-    args+=(-d uint8)
-    if [ "$quality" = png ]; then
-      args+=(-o "$target/$name.png")
-    else
-      args+=(--compression "jpeg:$quality" -o "$target/$name.jpg")
-    fi
-    oiiotool "${args[@]}" &
-    jobs+=($!)
-    if [ ${#jobs[@]} -ge 2 ]; then wait "${jobs[0]}"; jobs=("${jobs[@]:1}"); fi
-  done
-  wait
-}
+source "$(dirname "$0")/camera_like.sh"
 
 echo "| resolution | noise (codes) | PNG mean / worst | JPEG q95 | JPEG q85 | JPEG q70 |"
 echo "|---|---|---|---|---|---|"
