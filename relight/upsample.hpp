@@ -89,6 +89,7 @@
 //
 // Example: UpsampledField up = upsample_field(read_field("in"), 1, UpsampleOptions{});
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -119,7 +120,11 @@ struct UpsampleStatistics {
 inline constexpr double kGuardMargin = 0.9;
 
 /// Where upsampling is trusted: per tile, 1 where the upsampled images predicted the held-out
-/// inputs better than blending did (clearly in sum, and for at least half of them), else 0.
+/// inputs better than blending did (by kGuardMargin in sum, and for at least three quarters
+/// of them), else 0.
+/// The probes are inputs inside the others' triangulation: new images on the edges of the
+/// inputs' outer ring (both ends on it, and the new images between such) are never judged
+/// and are blended everywhere.
 struct UpsampleGuard {
     int tile = 0, columns = 0, rows = 0;
     std::vector<double> upsampled;       ///< per tile, row-major
@@ -131,6 +136,8 @@ struct UpsampleGuard {
 struct UpsampledField {
     ReflectanceField field;            ///< the inputs first, in their order, then the new images
     UpsampleStatistics statistics;
+    /// Per new image, the two images (indices into field) whose edge it halves.
+    std::vector<std::array<std::size_t, 2>> parents;
 };
 
 /// Upsamples `field` by `levels` rounds of edge subdivision (0 returns it unchanged).

@@ -57,7 +57,7 @@ stage=(--resolution 256x160 --samples-per-pixel 8)
   > "$upsample/field_256.txt"
 "$rfd" capture render scenes/spheres.toml --lights 512 "${stage[@]}" --out "$upsample/reference_512" \
   > "$upsample/reference_512.txt"
-"$rfd" relight upsample "$upsample/field_256" --levels 1 --out "$upsample/upsampled" | tee "$upsample/upsample.txt"
+"$rfd" relight upsample "$upsample/field_256" --levels 1 --guard-tile 0 --out "$upsample/upsampled" | tee "$upsample/upsample.txt"
 point_lights=(20,10 35,100 50,200 65,300)
 area_lights=(30,0,7.5 30,120,7.5 60,60,7.5 60,240,7.5)
 # The truth at the point lights: the stage renders exactly those directions.
