@@ -371,11 +371,8 @@ void evaluate_leave_one_out(const EvalOptions& opt) {
     std::vector<const relight::LightWeights*> pointers;
     for (const relight::LightWeights& w : weights) pointers.push_back(&w);
     const std::vector<relight::LeaveOneOut> scores = relight::leave_one_out(field, pointers);
-    struct Named {
-        std::string name;
-    };
-    std::vector<Named> predictors;
-    for (const relight::LightModel& model : models) predictors.push_back({model.name()});
+    std::vector<std::string> names;
+    for (const relight::LightModel& model : models) names.push_back(model.name());
     const relight::LeaveOneOut& first = scores.front();
     const std::size_t n = first.squared_error.size();
     const bool eight_bit = first.eight_bit();
@@ -410,7 +407,7 @@ void evaluate_leave_one_out(const EvalOptions& opt) {
     }
     if (opt.json) {
         nlohmann::json per_basis = nlohmann::json::object();
-        for (std::size_t b = 0; b < predictors.size(); ++b) {
+        for (std::size_t b = 0; b < names.size(); ++b) {
             const relight::LeaveOneOut& loo = scores[b];
             nlohmann::json per_light = nlohmann::json::array();
             for (std::size_t j = 0; j < n; ++j) {
@@ -422,7 +419,7 @@ void evaluate_leave_one_out(const EvalOptions& opt) {
                                      {"ssim", finite_or_null(loo.ssim[j])}});
             }
             const bool rbf = models[b].kind == relight::LightModel::Kind::Rbf;
-            per_basis[rbf ? "rbf" : predictors[b].name] = {
+            per_basis[rbf ? "rbf" : names[b]] = {
                 {"mean_psnr_srgb8_db", eight_bit ? finite_or_null(loo.mean_psnr_srgb8()) : nullptr},
                 {"mean_psnr_linear_db", finite_or_null(loo.mean_psnr_linear())},
                 {"mean_ssim", finite_or_null(loo.mean_ssim())},
@@ -439,17 +436,17 @@ void evaluate_leave_one_out(const EvalOptions& opt) {
                 height);
     std::printf("  %-14s %24s %34s %14s\n", "", eight_bit ? "PSNR, 8-bit sRGB codes" : "",
                 ("PSNR linear (peak " + format_number(first.peak, 4) + ")").c_str(), "SSIM, sRGB");
-    for (std::size_t b = 0; b < predictors.size(); ++b) {
+    for (std::size_t b = 0; b < names.size(); ++b) {
         char ssim[32];
         std::snprintf(ssim, sizeof ssim, "%.4f", scores[b].mean_ssim());
-        std::printf("  mean %-9s %21s dB %31s dB %14s\n", predictors[b].name.c_str(),
+        std::printf("  mean %-9s %21s dB %31s dB %14s\n", names[b].c_str(),
                     eight_bit ? text(scores[b].mean_psnr_srgb8()).c_str() : "-",
                     text(scores[b].mean_psnr_linear()).c_str(), ssim);
     }
     if (!eight_bit) std::printf("  (the images are not 8-bit: no PSNR in 8-bit codes)\n");
     std::printf("  per image, PSNR %s in dB:\n  %5s %8s %8s", eight_bit ? "in 8-bit sRGB codes" : "linear",
                 "index", "theta", "phi");
-    for (const Named& p : predictors) std::printf(" %9s", p.name.c_str());
+    for (const std::string& name : names) std::printf(" %9s", name.c_str());
     std::printf("\n");
     for (std::size_t j = 0; j < n; ++j) {
         const SphericalAngles a = angles_of(first.directions[j]);

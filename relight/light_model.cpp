@@ -159,55 +159,15 @@ Eigen::MatrixXd LightWeights::leave_one_out(std::vector<bool>& predictable) cons
     return w;
 }
 
-FieldGram field_gram(FieldReader& field) {
-    const std::size_t n = field.size();
-    const auto N = static_cast<Eigen::Index>(n);
-    FieldGram out;
-    out.gram = Eigen::MatrixXd::Zero(N, N);
-    out.samples_per_image = static_cast<double>(field.width()) * field.height() * field.channels();
-    constexpr std::size_t kChunk = 4096;
-    const int rows = field.band_rows(n);
-    Progress progress("gram", static_cast<std::size_t>((field.height() + rows - 1) / rows));
-    for (int y0 = 0; y0 < field.height(); y0 += rows) {
-        const std::vector<Image> band = field.read_band(y0, std::min(field.height(), y0 + rows));
-        const std::size_t samples = band.front().samples().size(), chunks = (samples + kChunk - 1) / kChunk;
-        std::vector<Eigen::MatrixXd> parts(chunks);
-        std::vector<double> peaks(chunks, 0.0);
-        parallel_for_chunks(chunks, 1, [&](std::size_t begin, std::size_t end) {
-            Eigen::MatrixXd y;
-            for (std::size_t chunk = begin; chunk < end; ++chunk) {
-                const std::size_t first = chunk * kChunk, count = std::min(kChunk, samples - first);
-                y.resize(static_cast<Eigen::Index>(count), N);
-                for (std::size_t i = 0; i < n; ++i) {
-                    const float* s = band[i].samples().data() + first;
-                    for (std::size_t k = 0; k < count; ++k) {
-                        y(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(i)) = s[k];
-                        peaks[chunk] = std::max(peaks[chunk], static_cast<double>(s[k]));
-                    }
-                }
-                parts[chunk].noalias() = y.transpose() * y;
-            }
-        });
-        for (std::size_t chunk = 0; chunk < chunks; ++chunk) {  // fixed order
-            out.gram += parts[chunk];
-            out.peak = std::max(out.peak, peaks[chunk]);
-        }
-        progress.advance();
-    }
-    progress.finish();
-    return out;
-}
+namespace {
 
-FieldGram field_gram(const ReflectanceField& field) {
-    const std::size_t n = field.size();
+// G += Y^T Y over `images` (one shape), Y one row per sample, and the peak: chunks of
+// samples in parallel, summed in chunk order, so the sum does not depend on the threads.
+void add_to_gram(const std::vector<Image>& images, FieldGram& out) {
+    const std::size_t n = images.size();
     const auto N = static_cast<Eigen::Index>(n);
-    FieldGram out;
-    out.gram = Eigen::MatrixXd::Zero(N, N);
-    if (n == 0) return out;
-    const std::size_t samples = field.images.front().samples().size();
-    out.samples_per_image = static_cast<double>(samples);
     constexpr std::size_t kChunk = 4096;
-    const std::size_t chunks = (samples + kChunk - 1) / kChunk;
+    const std::size_t samples = images.front().samples().size(), chunks = (samples + kChunk - 1) / kChunk;
     std::vector<Eigen::MatrixXd> parts(chunks);
     std::vector<double> peaks(chunks, 0.0);
     parallel_for_chunks(chunks, 1, [&](std::size_t begin, std::size_t end) {
@@ -215,12 +175,13 @@ FieldGram field_gram(const ReflectanceField& field) {
         for (std::size_t chunk = begin; chunk < end; ++chunk) {
             const std::size_t first = chunk * kChunk, count = std::min(kChunk, samples - first);
             y.resize(static_cast<Eigen::Index>(count), N);
-            for (std::size_t i = 0; i < n; ++i)
+            for (std::size_t i = 0; i < n; ++i) {
+                const float* s = images[i].samples().data() + first;
                 for (std::size_t k = 0; k < count; ++k) {
-                    const float v = field.images[i].samples()[first + k];
-                    y(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(i)) = v;
-                    peaks[chunk] = std::max(peaks[chunk], static_cast<double>(v));
+                    y(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(i)) = s[k];
+                    peaks[chunk] = std::max(peaks[chunk], static_cast<double>(s[k]));
                 }
+            }
             parts[chunk].noalias() = y.transpose() * y;
         }
     });
@@ -228,6 +189,34 @@ FieldGram field_gram(const ReflectanceField& field) {
         out.gram += parts[chunk];
         out.peak = std::max(out.peak, peaks[chunk]);
     }
+}
+
+FieldGram empty_gram(std::size_t lights, double samples_per_image) {
+    FieldGram out;
+    out.gram = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(lights), static_cast<Eigen::Index>(lights));
+    out.samples_per_image = samples_per_image;
+    return out;
+}
+
+}  // namespace
+
+FieldGram field_gram(FieldReader& field) {
+    const std::size_t n = field.size();
+    FieldGram out = empty_gram(n, static_cast<double>(field.width()) * field.height() * field.channels());
+    const int rows = field.band_rows(n);
+    Progress progress("gram", static_cast<std::size_t>((field.height() + rows - 1) / rows));
+    for (int y0 = 0; y0 < field.height(); y0 += rows) {
+        add_to_gram(field.read_band(y0, std::min(field.height(), y0 + rows)), out);
+        progress.advance();
+    }
+    progress.finish();
+    return out;
+}
+
+FieldGram field_gram(const ReflectanceField& field) {
+    if (field.size() == 0) return empty_gram(0, 0.0);
+    FieldGram out = empty_gram(field.size(), static_cast<double>(field.images.front().samples().size()));
+    add_to_gram(field.images, out);
     return out;
 }
 

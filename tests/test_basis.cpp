@@ -16,6 +16,7 @@
 #include "relight/evaluate.hpp"
 #include "relight/field.hpp"
 #include "tests/support/error_of.hpp"
+#include "tests/support/scattered_lights.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace rfd::relight {
@@ -23,17 +24,8 @@ namespace {
 
 using ::testing::HasSubstr;
 using rfd::testing::error_of;
+using rfd::testing::scattered_lights;
 using rfd::testing::TempDir;
-
-// Directions over the hemisphere down to 75 degrees, from a seed.
-std::vector<Eigen::Vector3d> scattered_lights(std::size_t count, unsigned seed) {
-    std::mt19937 random(seed);
-    std::uniform_real_distribution<double> unit(0.0, 1.0);
-    std::vector<Eigen::Vector3d> out;
-    for (std::size_t i = 0; i < count; ++i)
-        out.push_back(direction_from_angles(degrees_to_radians(75.0) * std::sqrt(unit(random)), 2.0 * kPi * unit(random)));
-    return out;
-}
 
 TEST(Basis, HemisphericalHarmonicsAreOpenLimesAndTheLegendreFunctions) {
     int checked = 0;

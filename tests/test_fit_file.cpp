@@ -24,6 +24,7 @@
 #include "relight/fit_file.hpp"
 #include "relight/light_model.hpp"
 #include "tests/support/error_of.hpp"
+#include "tests/support/scattered_lights.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace rfd::relight {
@@ -31,16 +32,8 @@ namespace {
 
 using ::testing::HasSubstr;
 using rfd::testing::error_of;
+using rfd::testing::scattered_lights;
 using rfd::testing::TempDir;
-
-std::vector<Eigen::Vector3d> hemisphere_lights(std::size_t count, unsigned seed) {
-    std::mt19937 random(seed);
-    std::uniform_real_distribution<double> unit(0.0, 1.0);
-    std::vector<Eigen::Vector3d> out;
-    for (std::size_t i = 0; i < count; ++i)
-        out.push_back(direction_from_angles(degrees_to_radians(75.0) * std::sqrt(unit(random)), 2.0 * kPi * unit(random)));
-    return out;
-}
 
 // A field of smooth random shading plus a narrow highlight per pixel (no basis holds it
 // exactly), 16 x 12 x 3, as EXR.
@@ -72,7 +65,7 @@ std::filesystem::path shiny_field(const TempDir& dir, const std::vector<Eigen::V
 
 TEST(LightModel, GramLeaveOneOutIsTheStreamedOne) {
     TempDir dir;
-    const auto lights = hemisphere_lights(30, 2);
+    const auto lights = scattered_lights(30, 2);
     FieldReader field(shiny_field(dir, lights));
     const FieldGram gram = field_gram(field);
     std::size_t checked = 0;
@@ -95,7 +88,7 @@ TEST(LightModel, GramLeaveOneOutIsTheStreamedOne) {
 
 TEST(LightModel, SeveralModelsInOnePassScoreAsEachAlone) {
     TempDir dir;
-    const auto lights = hemisphere_lights(24, 8);
+    const auto lights = scattered_lights(24, 8);
     FieldReader field(shiny_field(dir, lights));
     const LightWeights delaunay(parse_light_model("delaunay"), lights), ptm(parse_light_model("ptm"), lights);
     const std::vector<LeaveOneOut> both = leave_one_out(field, {&delaunay, &ptm});
@@ -108,7 +101,7 @@ TEST(LightModel, SeveralModelsInOnePassScoreAsEachAlone) {
 }
 
 TEST(LightModel, RadialWeightsAreOpenLimes) {
-    const auto lights = hemisphere_lights(40, 3);
+    const auto lights = scattered_lights(40, 3);
     const double sigma = 0.2;
     const Eigen::Vector3d d = direction_from_angles(0.4, 0.7);
     // OpenLIME's RBF.rbf, written out: exp(-|l - d|^2 / sigma^2), normalised, those above
@@ -139,7 +132,7 @@ TEST(LightModel, RadialWeightsAreOpenLimes) {
 
 TEST(LightModel, TheChosenSigmaIsALeastLeaveOneOutError) {
     TempDir dir;
-    const auto lights = hemisphere_lights(40, 6);
+    const auto lights = scattered_lights(40, 6);
     FieldReader field(shiny_field(dir, lights));
     const FieldGram gram = field_gram(field);
     const double sigma = best_rbf_sigma(gram, lights);
@@ -236,7 +229,7 @@ TEST(FitFile, RbfPlanesWrittenByTheRulesRelightAsTheRulesSay) {
     TempDir dir;
     const int width = 8, height = 8, nplanes = 4;
     const auto codes = write_planes(dir / "rbf", width, height, nplanes, 6);
-    const auto lights = hemisphere_lights(7, 1);
+    const auto lights = scattered_lights(7, 1);
     std::mt19937 random(2);
     std::uniform_int_distribution<int> byte(0, 255);
     std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -320,7 +313,7 @@ std::filesystem::path polynomial_field(const TempDir& dir, const std::vector<Eig
 }
 
 TEST(FitFile, AFieldOfTheBasisIsFittedAndRelitBack) {
-    const auto lights = hemisphere_lights(25, 4);
+    const auto lights = scattered_lights(25, 4);
     const std::vector<Eigen::Vector3d> novel{direction_from_angles(0.2, 0.3), direction_from_angles(0.9, 2.5)};
     for (const bool exact : {true, false}) {
         TempDir dir;
@@ -352,7 +345,7 @@ TEST(FitFile, AFieldOfTheBasisIsFittedAndRelitBack) {
 TEST(FitFile, AnRbfFitKeepsWhatItsComponentsHold) {
     // Every pixel a mix of two light responses: two principal components hold it all.
     TempDir dir;
-    const auto lights = hemisphere_lights(20, 9);
+    const auto lights = scattered_lights(20, 9);
     FieldWriter out(dir / "two");
     std::mt19937 random(3);
     std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -390,7 +383,7 @@ TEST(FitFile, AnRbfFitKeepsWhatItsComponentsHold) {
 
 TEST(FitFile, WhatTheFormatCannotHoldIsRefused) {
     TempDir dir;
-    const auto lights = hemisphere_lights(25, 4);
+    const auto lights = scattered_lights(25, 4);
     FieldReader field(polynomial_field(dir, lights, false));
     FitSpec spec;
     spec.type = FitType::Hsh;
@@ -454,7 +447,7 @@ double ssim_of(const std::vector<int>& a, const std::vector<int>& b, int width, 
 
 TEST(LeaveOneOut, SsimIsTheBlockSsimOfTheEightBitPictures) {
     TempDir dir;
-    const auto lights = hemisphere_lights(12, 5);
+    const auto lights = scattered_lights(12, 5);
     // 20 x 13: blocks cut short at the right and bottom; one channel.
     std::mt19937 random(1);
     std::uniform_real_distribution<double> unit(0.0, 1.0);
