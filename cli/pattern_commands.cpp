@@ -80,7 +80,7 @@ std::string predict_between_lights(const std::string& basis, relight::Reflectanc
         why += ", linear PSNR)";
     } else {
         model = relight::parse_light_model(basis);
-        if (model.kind == relight::LightModel::Kind::Rbf) model.sigma = relight::best_rbf_sigma(gram, field.directions);
+        if (model.has_sigma()) model.sigma = relight::best_sigma(gram, field.directions, model);
     }
     if (model.kind == relight::LightModel::Kind::Interpolation) {
         options.interpolation = model.interpolation;
@@ -110,7 +110,7 @@ void add_encode_command(CLI::App& pattern) {
                "Between light directions: delaunay, solid-angle or nearest");
     cmd->add_option("--basis", opt->basis,
                     "How the field is predicted between its lights, if not by --interpolation: ptm, hsh2, hsh3, hsh4, "
-                    "rbf (relight/light_model.hpp; the field sampled by it at 4 times its directions, blended between "
+                    "rbf, bilinear (relight/light_model.hpp; the field sampled by it at 4 times its directions, blended between "
                     "them), an interpolation's name, or auto: the one of least leave-one-out error on the field");
     add_option(*cmd, patterns::kTiltOption, opt->tilt);
     add_option(*cmd, patterns::kTurnOption, opt->turn);

@@ -104,7 +104,7 @@ void render_fit(const std::filesystem::path& fit, const OrderedLights& given, co
     const relight::FitFile file = relight::read_fit(fit);
     relight::render_fit_to_files(fit, directions, outs);
     std::printf("relit the %s fit %s (%d x %d, %d planes, %s) into %zu image(s)\n",
-                file.type == relight::FitType::Ptm ? "ptm" : file.type == relight::FitType::Hsh ? "hsh" : "rbf",
+                relight::fit_type_name(file.type),
                 fit.string().c_str(), file.width, file.height, file.nplanes,
                 file.exact ? "linear float planes" : "8-bit planes of display values", outs.size());
 }
@@ -151,10 +151,11 @@ void add_render(CLI::App& relight) {
     cmd->add_option("--interpolation", opt->interpolation, "delaunay, solid-angle (eq. 4.6 as written) or nearest");
     cmd->add_option("--basis", opt->basis,
                     "Predict the lights with this instead of --interpolation: ptm, hsh2, hsh3, hsh4 (bases fitted to "
-                    "the field's lights) or rbf (radial basis functions, relight/light_model.hpp); each light is "
+                    "the field's lights), rbf (radial basis functions) or bilinear (CNR relight's grid of directions; "
+                    "both relight/light_model.hpp); each light is "
                     "still a weighted sum of the images");
-    cmd->add_option("--sigma", opt->sigma, "With --basis rbf, the Gaussian's width (default: least leave-one-out "
-                                           "error on the field, one more pass over it)")
+    cmd->add_option("--sigma", opt->sigma, "With --basis rbf (or bilinear, its prior), the Gaussian's width (default: "
+                                           "least leave-one-out error on the field, one more pass over it)")
         ->check(CLI::PositiveNumber);
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
     cmd->callback([opt, cmd, light, light_dir] {
@@ -220,9 +221,10 @@ void add_render(CLI::App& relight) {
         std::string predictor = opt->interpolation + " interpolation";
         if (!opt->basis.empty()) {
             relight::LightModel model = relight::parse_light_model(opt->basis);
-            if (model.kind == relight::LightModel::Kind::Rbf)
-                model.sigma = opt->sigma > 0.0 ? opt->sigma
-                                               : relight::best_rbf_sigma(relight::field_gram(field), field.directions());
+            if (model.has_sigma())
+                model.sigma = opt->sigma > 0.0
+                                  ? opt->sigma
+                                  : relight::best_sigma(relight::field_gram(field), field.directions(), model);
             const relight::LightWeights weights(model, field.directions());
             for (const auto& lights : renders) coefficients.push_back(relight::light_coefficients(weights, lights));
             predictor = model.name();
@@ -362,10 +364,16 @@ void evaluate_leave_one_out(const EvalOptions& opt) {
     if (field.size() < 4)
         throw InputError(SourceLocation{field.light_file().string()},
                          "leave-one-out needs at least 4 images (3 left to interpolate from); the field has " + std::to_string(field.size()));
-    for (relight::LightModel& model : models)
-        if (model.kind == relight::LightModel::Kind::Rbf)
-            model.sigma = opt.sigma > 0.0 ? opt.sigma
-                                          : relight::best_rbf_sigma(relight::field_gram(field), field.directions());
+    std::optional<relight::FieldGram> gram;
+    for (relight::LightModel& model : models) {
+        if (!model.has_sigma()) continue;
+        if (opt.sigma > 0.0) {
+            model.sigma = opt.sigma;
+            continue;
+        }
+        if (!gram) gram = relight::field_gram(field);
+        model.sigma = relight::best_sigma(*gram, field.directions(), model);
+    }
     std::vector<relight::LightWeights> weights;
     for (const relight::LightModel& model : models) weights.emplace_back(model, field.directions());
     std::vector<const relight::LightWeights*> pointers;
@@ -386,7 +394,7 @@ void evaluate_leave_one_out(const EvalOptions& opt) {
         ensure_directory(out);
         std::vector<std::string> header{"index", "theta_deg", "phi_deg"};
         for (const relight::LightModel& model : models) {
-            const std::string name = model.kind == relight::LightModel::Kind::Rbf ? "rbf" : model.name();
+            const std::string name = model.base_name();
             if (eight_bit) header.push_back("psnr_srgb8_db_" + name);
             header.push_back("psnr_linear_db_" + name);
             header.push_back("ssim_" + name);
@@ -418,12 +426,11 @@ void evaluate_leave_one_out(const EvalOptions& opt) {
                                      {"psnr_linear_db", finite_or_null(loo.psnr_linear(j))},
                                      {"ssim", finite_or_null(loo.ssim[j])}});
             }
-            const bool rbf = models[b].kind == relight::LightModel::Kind::Rbf;
-            per_basis[rbf ? "rbf" : names[b]] = {
+            per_basis[models[b].base_name()] = {
                 {"mean_psnr_srgb8_db", eight_bit ? finite_or_null(loo.mean_psnr_srgb8()) : nullptr},
                 {"mean_psnr_linear_db", finite_or_null(loo.mean_psnr_linear())},
                 {"mean_ssim", finite_or_null(loo.mean_ssim())},
-                {"sigma", rbf ? nlohmann::json(models[b].sigma) : nlohmann::json()},
+                {"sigma", models[b].has_sigma() ? nlohmann::json(models[b].sigma) : nlohmann::json()},
                 {"per_light", std::move(per_light)}};
         }
         const nlohmann::json summary = {{"field", opt.field},       {"images", n},
@@ -471,12 +478,14 @@ void add_eval(CLI::App& relight) {
     cmd->add_option("--basis", opt->bases,
                     "With --leave-one-out, how each image is predicted: delaunay, solid-angle, nearest "
                     "(interpolation), ptm, hsh2, hsh3, hsh4 (fitted bases, relight/basis.hpp), rbf (radial basis "
-                    "functions, relight/light_model.hpp) or all; repeat to compare, all in one pass over the field "
+                    "functions), bilinear (CNR relight's grid of directions; both relight/light_model.hpp) or all; "
+                    "repeat to compare, all in one pass over the field "
                     "(default: --interpolation)")
         ->needs(loo)
         ->allow_extra_args(false);
     cmd->add_option("--sigma", opt->sigma,
-                    "With --basis rbf, the Gaussian's width (default: least leave-one-out error on the field)")
+                    "With --basis rbf (or bilinear, its prior), the Gaussian's width (default: least leave-one-out "
+                    "error on the field)")
         ->check(CLI::PositiveNumber);
     add_window_options(*cmd, opt->window);
     cmd->add_option("--interpolation", opt->interpolation, "delaunay, solid-angle (eq. 4.6 as written) or nearest");
@@ -567,7 +576,8 @@ void add_fit(CLI::App& relight) {
                "opens (rfd relight render relights them)");
     struct Options {
         std::string field, basis = "auto", out;
-        int planes = relight::FitSpec{}.planes, quality = relight::FitSpec{}.quality;
+        int planes = relight::FitSpec{}.planes, quality = relight::FitSpec{}.quality,
+            resolution = relight::FitSpec{}.resolution;
         double sigma = 0.0;
         bool exact = false, json = false;
         WindowOptions window;
@@ -576,13 +586,18 @@ void add_fit(CLI::App& relight) {
     cmd->add_option("FIELD", opt->field, "Reflectance field folder or .lp file")->required();
     cmd->add_option("--basis", opt->basis,
                     "ptm (6 functions), hsh2, hsh3 (4, 9; hsh4 with --exact), rbf (radial basis functions over the "
-                    "lights, the samples compressed to --planes principal components, as CNR relight's rbf), or auto: "
-                    "the one of least leave-one-out error on the field, said with every candidate's");
+                    "lights, the samples compressed to --planes principal components, as CNR relight's rbf), "
+                    "bilinear (the samples resampled on a --resolution grid of directions, blended bilinearly, "
+                    "compressed likewise: CNR relight's bilinear), or auto: the one of least leave-one-out error on "
+                    "the field, said with every candidate's");
     cmd->add_option("--out", opt->out, "Folder for info.json and the planes")->required();
-    cmd->add_option("--planes", opt->planes, "rbf: principal components kept (3 per plane file)")
+    cmd->add_option("--planes", opt->planes, "rbf, bilinear: principal components kept (3 per plane file)")
         ->check(CLI::PositiveNumber);
-    cmd->add_option("--sigma", opt->sigma, "rbf: the Gaussian's width (default: least leave-one-out error)")
+    cmd->add_option("--sigma", opt->sigma,
+                    "rbf (bilinear: its prior): the Gaussian's width (default: least leave-one-out error)")
         ->check(CLI::PositiveNumber);
+    cmd->add_option("--resolution", opt->resolution, "bilinear: the side of the grid of directions")
+        ->check(CLI::Range(relight::kMinBilinearResolution, relight::kMaxBilinearResolution));
     cmd->add_option("--quality", opt->quality, "JPEG quality of the planes")->check(CLI::Range(1, 100));
     cmd->add_flag("--exact", opt->exact,
                   "rfd's variant: float planes of linear light (plane_N.exr), nothing quantised; OpenLIME does "
@@ -596,22 +611,29 @@ void add_fit(CLI::App& relight) {
         spec.sigma = opt->sigma;
         spec.exact = opt->exact;
         spec.quality = opt->quality;
+        spec.resolution = opt->resolution;
         // auto: every candidate judged by leave-one-out in one pass over the field (after one
-        // for rbf's sigma), by the PSNR RTI users quote for 8-bit captures, linear otherwise.
+        // for the widths of rbf and bilinear), by the PSNR RTI users quote for 8-bit captures,
+        // linear otherwise.
         nlohmann::json candidates = nlohmann::json::array();
         std::string chosen = opt->basis, why;
         if (opt->basis == "auto") {
             std::vector<std::string> names{"ptm", "hsh2", "hsh3"};
             if (opt->exact) names.emplace_back("hsh4");
             names.emplace_back("rbf");
+            names.emplace_back("bilinear");
             std::vector<relight::LightWeights> weights;
             std::vector<std::string> kept;
+            std::optional<relight::FieldGram> gram;
             for (const std::string& name : names) {
                 relight::LightModel model = relight::parse_light_model(name);
-                if (model.kind == relight::LightModel::Kind::Rbf)
-                    spec.sigma = model.sigma = opt->sigma > 0.0 ? opt->sigma
-                                                                : relight::best_rbf_sigma(relight::field_gram(field),
-                                                                                          field.directions());
+                model.resolution = opt->resolution;
+                if (model.has_sigma() && opt->sigma > 0.0) {
+                    model.sigma = opt->sigma;
+                } else if (model.has_sigma()) {
+                    if (!gram) gram = relight::field_gram(field);
+                    model.sigma = relight::best_sigma(*gram, field.directions(), model);
+                }
                 try {
                     weights.emplace_back(model, field.directions());
                     kept.push_back(name);
@@ -630,9 +652,10 @@ void add_fit(CLI::App& relight) {
                 const bool all = std::none_of(loo.squared_error.begin(), loo.squared_error.end(),
                                               [](double e) { return std::isnan(e); });
                 const double score = eight_bit ? loo.mean_psnr_srgb8() : loo.mean_psnr_linear();
+                const relight::LightModel& model = weights[m].model();
                 candidates.push_back(
                     {{"basis", kept[m]},
-                     {"sigma", kept[m] == "rbf" ? nlohmann::json(spec.sigma) : nlohmann::json()},
+                     {"sigma", model.has_sigma() ? nlohmann::json(model.sigma) : nlohmann::json()},
                      {"mean_psnr_srgb8_db", eight_bit ? finite_or_null(loo.mean_psnr_srgb8()) : nlohmann::json()},
                      {"mean_psnr_linear_db", finite_or_null(loo.mean_psnr_linear())},
                      {"mean_ssim", finite_or_null(loo.mean_ssim())},
@@ -640,6 +663,7 @@ void add_fit(CLI::App& relight) {
                 if (all && score > best) {
                     best = score;
                     chosen = kept[m];
+                    spec.sigma = model.sigma;
                 }
             }
             if (chosen == "auto") throw InputError("relight fit: no basis predicts every light of the field from the others");
@@ -654,8 +678,10 @@ void add_fit(CLI::App& relight) {
             spec.basis = relight::parse_light_model(chosen).basis;
         } else if (chosen == "rbf") {
             spec.type = relight::FitType::Rbf;
+        } else if (chosen == "bilinear") {
+            spec.type = relight::FitType::Bilinear;
         } else {
-            throw InputError("--basis: expected ptm, hsh2, hsh3, hsh4, rbf or auto, got '" + opt->basis + "'");
+            throw InputError("--basis: expected ptm, hsh2, hsh3, hsh4, rbf, bilinear or auto, got '" + opt->basis + "'");
         }
         const relight::FitReport report = relight::fit_field(field, spec, opt->out);
         const relight::FitFile& file = report.file;
@@ -666,8 +692,10 @@ void add_fit(CLI::App& relight) {
                                             {"why", why},
                                             {"candidates", candidates},
                                             {"nplanes", file.nplanes},
-                                            {"sigma", file.type == relight::FitType::Rbf ? nlohmann::json(file.sigma)
-                                                                                         : nlohmann::json()},
+                                            {"sigma", file.principal() ? nlohmann::json(file.sigma) : nlohmann::json()},
+                                            {"resolution", file.type == relight::FitType::Bilinear
+                                                               ? nlohmann::json(file.resolution)
+                                                               : nlohmann::json()},
                                             {"exact", file.exact},
                                             {"sampled_pixels", report.sampled_pixels},
                                             {"kept_variance", report.kept_variance},
@@ -703,6 +731,10 @@ void add_fit(CLI::App& relight) {
         if (file.type == relight::FitType::Rbf)
             std::printf("  rbf: sigma %.4g, %d principal components keep %.4f%% of the variance\n", file.sigma,
                         file.nplanes, 100.0 * report.kept_variance);
+        if (file.type == relight::FitType::Bilinear)
+            std::printf("  bilinear: a %d x %d grid (prior sigma %.4g), %d principal components keep %.4f%% of the "
+                        "variance\n",
+                        file.resolution, file.resolution, file.sigma, file.nplanes, 100.0 * report.kept_variance);
         if (!file.exact)
             std::printf("  ranges from %zu sampled pixels; %zu plane samples clamped to them (%.3f%%)\n",
                         report.sampled_pixels, report.clipped,

@@ -800,8 +800,8 @@ PatternAttributes encode_attributes(const EncodeOptions& options) {
                                std::to_string(w.height);
     if (w.scale != 1.0) attributes["scale"] = format_number(w.scale, 17);
     if (const auto& m = options.light_model) {
-        attributes["basis"] = m->kind == relight::LightModel::Kind::Rbf ? "rbf" : m->name();
-        if (m->kind == relight::LightModel::Kind::Rbf) attributes["rbf_sigma"] = format_number(m->sigma, 17);
+        attributes["basis"] = m->base_name();
+        if (m->has_sigma()) attributes["rbf_sigma"] = format_number(m->sigma, 17);
     }
     return attributes;
 }
@@ -824,7 +824,7 @@ EncodeOptions encode_options_of(const PatternFileInfo& info, const std::string& 
     options.window.scale = number_attribute(info, "scale", file, 1.0, NumberRange::Positive);
     if (const auto basis = info.attributes.find("basis"); basis != info.attributes.end()) {
         relight::LightModel model = relight::parse_light_model(basis->second, file + ": rfd:basis");
-        if (model.kind == relight::LightModel::Kind::Rbf)
+        if (model.has_sigma())
             model.sigma = number_attribute(info, "rbf_sigma", file, 0.0, NumberRange::Positive);
         if (model.kind == relight::LightModel::Kind::Interpolation) options.interpolation = model.interpolation;
         else options.light_model = model;

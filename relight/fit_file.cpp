@@ -29,14 +29,6 @@ constexpr int kSampleRows = 256, kSampleColumns = 256;
 // The share of a plane's sampled values its range holds (CNR relight's rangeQuantile).
 constexpr double kRangeQuantile = 0.995;
 
-const char* type_name(FitType type) {
-    switch (type) {
-    case FitType::Ptm: return "ptm";
-    case FitType::Hsh: return "hsh";
-    case FitType::Rbf: return "rbf";
-    }
-    return "";
-}
 
 // A field sample in the fit's units: display (sRGB-encoded, 0..1) or linear.
 float in_units(float linear, bool exact) {
@@ -75,16 +67,18 @@ std::vector<int> spread(int count, int most) {
     return out;
 }
 
-// The linear map from a pixel's 3 n samples (minus `offset`) to its planes: nplanes x 3 n.
+// The affine map from a pixel's 3 n samples x to its planes: matrix x + shift.
 struct PlaneMap {
-    Eigen::MatrixXd matrix;
-    Eigen::VectorXd offset;  // 3 n
+    Eigen::MatrixXd matrix;  // nplanes x 3 n
+    Eigen::VectorXd shift;   // nplanes
+
+    Eigen::MatrixXd operator()(const Eigen::MatrixXd& x) const { return (matrix * x).colwise() + shift; }
 };
 
 PlaneMap basis_plane_map(const BasisFit& fit, std::size_t n) {
     const int functions = fit.size();
     PlaneMap map{Eigen::MatrixXd::Zero(3 * functions, static_cast<Eigen::Index>(3 * n)),
-                 Eigen::VectorXd::Zero(static_cast<Eigen::Index>(3 * n))};
+                 Eigen::VectorXd::Zero(3 * functions)};
     for (int j = 0; j < functions; ++j)
         for (int c = 0; c < 3; ++c)
             for (std::size_t i = 0; i < n; ++i)
@@ -92,14 +86,24 @@ PlaneMap basis_plane_map(const BasisFit& fit, std::size_t n) {
     return map;
 }
 
-// The rbf's principal components of the sampled pixel vectors `x` (3 n x P), quantised to
+// Pixel vectors at the bilinear grid's nodes from those at the lights: row 3 g + c of the
+// result is sum_i M(g, i) x(3 i + c), i.e. (M kron I3) x.
+Eigen::MatrixXd node_matrix(const Eigen::MatrixXd& grid) {
+    Eigen::MatrixXd k = Eigen::MatrixXd::Zero(3 * grid.rows(), 3 * grid.cols());
+    for (Eigen::Index g = 0; g < grid.rows(); ++g)
+        for (Eigen::Index i = 0; i < grid.cols(); ++i)
+            for (int c = 0; c < 3; ++c) k(3 * g + c, 3 * i + c) = grid(g, i);
+    return k;
+}
+
+// The principal components of the sampled pixel vectors `x` (3 nodes x P), quantised to
 // bytes as the format stores them unless exact; fills the file's mean, components, range
 // and basis bytes, and returns the map to the planes (least squares onto the components as
 // stored) and the share of variance kept.
 PlaneMap principal_components(const Eigen::MatrixXd& x, FitFile& file, std::vector<int>& basis_bytes,
                               double& kept_variance) {
     const Eigen::Index dims = x.rows();
-    const std::size_t n = static_cast<std::size_t>(dims / 3);
+    const auto n = static_cast<std::size_t>(dims / 3);
     Eigen::VectorXd mean = x.rowwise().mean();
     if (!file.exact) mean = mean.cwiseMax(0.0).cwiseMin(1.0);
     const Eigen::MatrixXd centred = x.colwise() - mean;
@@ -148,24 +152,25 @@ PlaneMap principal_components(const Eigen::MatrixXd& x, FitFile& file, std::vect
         }
     // Least squares onto the components as stored (orthonormal only before quantisation).
     const Eigen::MatrixXd map = components.colPivHouseholderQr().solve(Eigen::MatrixXd::Identity(dims, dims));
-    return {map, mean};
+    return {map, -(map * mean)};
 }
 
 nlohmann::json info_json(const FitFile& file, const std::vector<int>& basis_bytes) {
     nlohmann::json info = {{"width", file.width},
                            {"height", file.height},
                            {"format", file.exact ? "exr" : "jpg"},
-                           {"type", type_name(file.type)},
-                           {"colorspace", file.type == FitType::Rbf ? "mrgb" : "rgb"},
+                           {"type", fit_type_name(file.type)},
+                           {"colorspace", file.principal() ? "mrgb" : "rgb"},
                            {"nplanes", file.nplanes},
                            {"quality", file.quality}};
     if (file.exact) info["linear"] = true;
     nlohmann::json lights = nlohmann::json::array();
     for (const Eigen::Vector3d& d : file.lights)
         for (int c = 0; c < 3; ++c) lights.push_back(d[c]);
-    if (file.type == FitType::Rbf) info["sigma"] = file.sigma;
+    if (file.principal()) info["sigma"] = file.sigma;  // bilinear: its prior's, for the record
+    if (file.type == FitType::Bilinear) info["resolution"] = file.resolution;
     info["lights"] = std::move(lights);
-    if (file.type == FitType::Rbf) {
+    if (file.principal()) {
         if (file.exact) {
             nlohmann::json basis = nlohmann::json::array();
             const auto add = [&](const Eigen::MatrixXd& m) {
@@ -180,7 +185,7 @@ nlohmann::json info_json(const FitFile& file, const std::vector<int>& basis_byte
         }
     }
     nlohmann::json material = {{"scale", file.scale}, {"bias", file.bias}};
-    if (file.type == FitType::Rbf) material["range"] = file.range;
+    if (file.principal()) material["range"] = file.range;
     info["materials"] = nlohmann::json::array({material});
     return info;
 }
@@ -262,6 +267,16 @@ std::vector<double> numbers_at(const nlohmann::json& object, const char* key, st
 
 }  // namespace
 
+const char* fit_type_name(FitType type) {
+    switch (type) {
+    case FitType::Ptm: return "ptm";
+    case FitType::Hsh: return "hsh";
+    case FitType::Rbf: return "rbf";
+    case FitType::Bilinear: return "bilinear";
+    }
+    return "";
+}
+
 std::filesystem::path FitFile::plane_file(const std::filesystem::path& folder, int j) const {
     return folder / ("plane_" + std::to_string(j) + (exact ? ".exr" : ".jpg"));
 }
@@ -269,13 +284,21 @@ std::filesystem::path FitFile::plane_file(const std::filesystem::path& folder, i
 void FitFile::light_weights(const Eigen::Vector3d& d, Eigen::Matrix3Xd& weights, Eigen::Vector3d& offset) const {
     weights = Eigen::Matrix3Xd::Zero(3, nplanes);
     offset.setZero();
-    if (type != FitType::Rbf) {
+    if (!principal()) {
         const Eigen::VectorXd b = basis_values(basis, d.normalized());
         for (Eigen::Index j = 0; j < b.size(); ++j)
             for (int c = 0; c < 3; ++c) weights(c, 3 * j + c) = b[j];
         return;
     }
-    const Eigen::VectorXd w = rbf_weights(lights, sigma, d.normalized());
+    // The nodes' weights: radial over the lights, or bilinear between four grid nodes.
+    Eigen::VectorXd w;
+    if (type == FitType::Rbf) {
+        w = rbf_weights(lights, sigma, d.normalized());
+    } else {
+        w = Eigen::VectorXd::Zero(mean.rows());
+        const GridCell cell = octahedral_cell(d.normalized(), resolution);
+        for (int k = 0; k < 4; ++k) w[cell.node[k]] += cell.weight[k];
+    }
     offset = mean.transpose() * w;
     for (int p = 0; p < nplanes; ++p) weights.col(p) = components[static_cast<std::size_t>(p)].transpose() * w;
 }
@@ -328,8 +351,19 @@ FitFile read_fit(const std::filesystem::path& folder) {
         if (!(file.sigma > 0.0)) throw InputError(SourceLocation{where}, "field 'sigma': expected a positive width");
         if (file.lights.empty()) throw InputError(SourceLocation{where}, "field 'lights': an rbf fit needs its lights");
         if (file.nplanes <= 0) throw InputError(SourceLocation{where}, "field 'nplanes': expected at least 1");
+    } else if (type == "bilinear") {
+        if (colorspace != "mrgb")
+            throw InputError(SourceLocation{where}, "field 'colorspace': rfd reads bilinear fits in 'mrgb', got '" +
+                                                        colorspace + "'");
+        file.type = FitType::Bilinear;
+        file.resolution = static_cast<int>(number_at(info, "resolution", where));
+        if (file.resolution < 2 || file.resolution > 256)
+            throw InputError(SourceLocation{where}, "field 'resolution': expected a grid side of 2 to 256, got " +
+                                                        std::to_string(file.resolution));
+        file.sigma = info.value("sigma", 0.0);
+        if (file.nplanes <= 0) throw InputError(SourceLocation{where}, "field 'nplanes': expected at least 1");
     } else {
-        throw InputError(SourceLocation{where}, "field 'type': expected ptm, hsh or rbf, got '" + type + "'");
+        throw InputError(SourceLocation{where}, "field 'type': expected ptm, hsh, rbf or bilinear, got '" + type + "'");
     }
     const auto planes = static_cast<std::size_t>(file.nplanes);
     if (!info.contains("materials") || !info["materials"].is_array() || info["materials"].empty())
@@ -339,8 +373,9 @@ FitFile read_fit(const std::filesystem::path& folder) {
     const nlohmann::json& material = info["materials"][0];
     file.scale = numbers_at(material, "scale", planes, where);
     file.bias = numbers_at(material, "bias", planes, where);
-    if (file.type == FitType::Rbf) {
-        const std::size_t n = file.lights.size();
+    if (file.principal()) {
+        const std::size_t n = file.type == FitType::Rbf ? file.lights.size()
+                                                         : static_cast<std::size_t>(file.resolution * file.resolution);
         const std::size_t count = (planes + 1) * n * 3;
         const std::vector<double> basis = numbers_at(info, "basis", count, where);
         if (!file.exact) file.range = numbers_at(material, "range", planes, where);
@@ -417,11 +452,17 @@ FitReport fit_field(FieldReader& field, const FitSpec& spec, const std::filesyst
 
     PlaneMap map;
     std::vector<int> basis_bytes;
-    if (spec.type == FitType::Rbf) {
-        const int most = static_cast<int>(std::min<std::size_t>(3 * n, report.sampled_pixels));
+    if (spec.type == FitType::Rbf || spec.type == FitType::Bilinear) {
+        const bool bilinear = spec.type == FitType::Bilinear;
+        LightModel model = parse_light_model(fit_type_name(spec.type));
+        model.resolution = spec.resolution;
+        file.resolution = bilinear ? spec.resolution : 0;
+        const std::size_t nodes = bilinear ? static_cast<std::size_t>(spec.resolution * spec.resolution) : n;
+        const int most = static_cast<int>(std::min<std::size_t>(3 * nodes, report.sampled_pixels));
         if (spec.planes < 1 || spec.planes > most)
-            throw InputError("--planes: an rbf fit of " + std::to_string(n) + " lights keeps 1 to " +
-                             std::to_string(most) + " components, got " + std::to_string(spec.planes));
+            throw InputError("--planes: " + std::string(fit_type_name(spec.type)) + " fit of " + std::to_string(nodes) +
+                             (bilinear ? " grid nodes" : " lights") + " keeps 1 to " + std::to_string(most) +
+                             " components, got " + std::to_string(spec.planes));
         file.nplanes = spec.planes;
         file.sigma = spec.sigma;
         if (file.sigma <= 0.0) {
@@ -433,9 +474,18 @@ FitReport fit_field(FieldReader& field, const FitSpec& spec, const std::filesyst
                     channel.row(static_cast<Eigen::Index>(i)) = sample.row(static_cast<Eigen::Index>(3 * i) + c);
                 gram.gram += channel * channel.transpose();
             }
-            file.sigma = best_rbf_sigma(gram, file.lights);
+            file.sigma = best_sigma(gram, file.lights, model);
         }
-        map = principal_components(sample, file, basis_bytes, report.kept_variance);
+        if (bilinear) {
+            // The components of the samples resampled at the grid's nodes, then the map from a
+            // pixel's samples at the lights through the nodes to the planes.
+            model.sigma = file.sigma;
+            const Eigen::MatrixXd to_nodes = node_matrix(LightWeights(model, file.lights).grid());
+            map = principal_components(to_nodes * sample, file, basis_bytes, report.kept_variance);
+            map.matrix = map.matrix * to_nodes;
+        } else {
+            map = principal_components(sample, file, basis_bytes, report.kept_variance);
+        }
     } else {
         const BasisFit fit(spec.basis, file.lights);
         file.nplanes = 3 * fit.size();
@@ -447,7 +497,7 @@ FitReport fit_field(FieldReader& field, const FitSpec& spec, const std::filesyst
     file.scale.assign(planes, 1.0);
     file.bias.assign(planes, 0.0);
     if (!spec.exact) {
-        const Eigen::MatrixXd values = map.matrix * (sample.colwise() - map.offset);
+        const Eigen::MatrixXd values = map(sample);
         for (std::size_t p = 0; p < planes; ++p) {
             std::vector<double> v(static_cast<std::size_t>(values.cols()));
             for (Eigen::Index k = 0; k < values.cols(); ++k)
@@ -476,7 +526,7 @@ FitReport fit_field(FieldReader& field, const FitSpec& spec, const std::filesyst
             for (std::size_t b = begin; b < end; ++b) {
                 const auto first = static_cast<Eigen::Index>(b * 1024);
                 const Eigen::Index count = std::min<Eigen::Index>(1024, x.cols() - first);
-                Eigen::MatrixXd v = map.matrix * (x.middleCols(first, count).colwise() - map.offset);
+                Eigen::MatrixXd v = map(x.middleCols(first, count));
                 if (!spec.exact)
                     for (Eigen::Index k = 0; k < count; ++k)
                         for (std::size_t p = 0; p < planes; ++p) {

@@ -3,10 +3,11 @@
 // (ShaderRTI, LayerRTI) opens, so that rfd's fits open in the RTI community's viewer and
 // their fits relight in rfd.
 //
-//   info.json     {"width", "height", "format": "jpg", "type": "ptm" | "hsh" | "rbf",
-//                  "colorspace": "rgb" (ptm, hsh) | "mrgb" (rbf), "nplanes", "quality",
-//                  "lights": [x, y, z, ...], "sigma" (rbf), "basis" (rbf: bytes),
-//                  "materials": [{"scale": [...], "bias": [...], "range": [...] (rbf)}]}
+//   info.json     {"width", "height", "format": "jpg", "type": "ptm" | "hsh" | "rbf" | "bilinear",
+//                  "colorspace": "rgb" (ptm, hsh) | "mrgb" (rbf, bilinear), "nplanes", "quality",
+//                  "lights": [x, y, z, ...], "sigma" (rbf), "resolution" (bilinear),
+//                  "basis" (rbf, bilinear: bytes),
+//                  "materials": [{"scale": [...], "bias": [...], "range": [...] (rbf, bilinear)}]}
 //   plane_0.jpg, ..., plane_{J-1}.jpg   J = ceil(nplanes / 3), three planes each (R, G, B)
 //
 // The rules, as OpenLIME evaluates them (values in display units, 0..1, the JPEG codes' own
@@ -19,7 +20,12 @@
 //    minor (3 n values), are mean + sum_p v_p e_p, with mean and e_p (principal components)
 //    from "basis": (nplanes + 1) blocks of 3 n bytes, the mean's block as byte / 255, each
 //    e_p as (byte - 127) / range[p]; under a light toward d the lights are blended by the
-//    radial basis weights of relight/light_model.hpp with "sigma".
+//    radial basis weights of relight/light_model.hpp with "sigma";
+//  - mrgb (bilinear, OpenLIME's 'bln'): the same with the samples at the R x R nodes of the
+//    octahedral grid of relight/light_model.hpp ("resolution" R) instead of the lights, 3 R^2
+//    values per block, blended bilinearly between the four nodes around the light. rfd fills
+//    the nodes as its bilinear light model does (the capture resampled by a least-squares
+//    grid pulled toward the rbf prior), then takes the principal components.
 //
 // rfd's exact variant keeps what quantisation would lose: "format": "exr", planes
 // plane_N.exr of float coefficients of linear light (scale 1, bias 0), "basis" as floats,
@@ -43,14 +49,17 @@ namespace rfd::relight {
 
 class FieldReader;
 
-enum class FitType { Ptm, Hsh, Rbf };
+enum class FitType { Ptm, Hsh, Rbf, Bilinear };
+/// "ptm", "hsh", "rbf", "bilinear": info.json's "type".
+const char* fit_type_name(FitType type);
 
 /// What to fit.
 struct FitSpec {
     FitType type = FitType::Ptm;
     Basis basis = Basis::Ptm;  ///< ptm: Ptm; hsh: Hsh2 or Hsh3 (Hsh4 only with `exact`)
-    int planes = 18;           ///< rbf: principal components kept (CNR relight's default)
-    double sigma = 0.0;        ///< rbf: the Gaussian's width; 0: least leave-one-out error
+    int planes = 18;           ///< rbf, bilinear: principal components kept
+    double sigma = 0.0;        ///< rbf (bilinear: its prior): the Gaussian's width; 0: least leave-one-out error
+    int resolution = 8;        ///< bilinear: the grid's side (CNR relight's default)
     bool exact = false;        ///< rfd's variant: float planes of linear light
     int quality = 95;          ///< the planes' JPEG quality
 };
@@ -65,10 +74,13 @@ struct FitFile {
     int quality = 95;
     std::vector<Eigen::Vector3d> lights;
     double sigma = 0.0;
+    int resolution = 0;                      ///< bilinear: the grid's side
     std::vector<double> scale, bias, range;  ///< per plane
-    Eigen::MatrixXd mean;                    ///< rbf: n x 3, decoded
-    std::vector<Eigen::MatrixXd> components; ///< rbf: per plane n x 3, decoded
+    Eigen::MatrixXd mean;                    ///< rbf, bilinear: nodes x 3, decoded (nodes: lights, or R^2)
+    std::vector<Eigen::MatrixXd> components; ///< rbf, bilinear: per plane nodes x 3, decoded
 
+    /// Whether the planes are principal components (colorspace mrgb).
+    bool principal() const { return type == FitType::Rbf || type == FitType::Bilinear; }
     int jpegs() const { return (nplanes + 2) / 3; }
     std::filesystem::path plane_file(const std::filesystem::path& folder, int j) const;
     /// The value of colour channel c under a light toward unit d is
@@ -85,7 +97,7 @@ FitFile read_fit(const std::filesystem::path& folder);
 struct FitReport {
     FitFile file;
     std::size_t sampled_pixels = 0;  ///< behind the ranges (and rbf's components, sigma)
-    double kept_variance = 1.0;      ///< rbf: share of the samples' variance the planes keep
+    double kept_variance = 1.0;      ///< rbf, bilinear: share of the samples' variance the planes keep
     std::size_t clipped = 0;         ///< plane samples outside their range, clamped (jpg)
 };
 

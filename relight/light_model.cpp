@@ -14,16 +14,21 @@
 
 namespace rfd::relight {
 
-std::string LightModel::name() const {
+std::string LightModel::base_name() const {
     switch (kind) {
     case Kind::Interpolation: return std::string(name_of(kInterpolationNames, interpolation));
     case Kind::Basis: return std::string(name_of(kBasisNames, basis));
-    case Kind::Rbf: break;
+    case Kind::Rbf: return "rbf";
+    case Kind::Bilinear: return "bilinear";
     }
-    if (sigma <= 0.0) return "rbf";
+    return "";
+}
+
+std::string LightModel::name() const {
+    if (!has_sigma() || sigma <= 0.0) return base_name();
     char text[32];
-    std::snprintf(text, sizeof text, "rbf %.3g", sigma);
-    return text;
+    std::snprintf(text, sizeof text, " %.3g", sigma);
+    return base_name() + text;
 }
 
 std::vector<std::string> light_model_names() {
@@ -31,6 +36,7 @@ std::vector<std::string> light_model_names() {
     for (const auto& method : kInterpolationNames) names.emplace_back(method.name);
     for (const auto& basis : kBasisNames) names.emplace_back(basis.name);
     names.emplace_back("rbf");
+    names.emplace_back("bilinear");
     return names;
 }
 
@@ -47,8 +53,8 @@ LightModel parse_light_model(const std::string& name, const std::string& option)
             model.basis = basis.value;
             return model;
         }
-    if (name == "rbf") {
-        model.kind = LightModel::Kind::Rbf;
+    if (name == "rbf" || name == "bilinear") {
+        model.kind = name == "rbf" ? LightModel::Kind::Rbf : LightModel::Kind::Bilinear;
         return model;
     }
     std::string choices;
@@ -83,6 +89,50 @@ Eigen::VectorXd rbf_weights(const std::vector<Eigen::Vector3d>& directions, doub
     return w / kept;
 }
 
+GridCell octahedral_cell(const Eigen::Vector3d& d, int resolution) {
+    RFD_CHECK(resolution >= 2);
+    const double s = d.cwiseAbs().sum(), side = resolution - 1.0;
+    // The |x|+|y|+|z| = 1 diamond rotated 45 degrees onto [-1, 1]^2, then onto the nodes.
+    const double u = std::clamp(((d.x() + d.y()) / s + 1.0) / 2.0 * side, 0.0, side);
+    const double v = std::clamp(((d.y() - d.x()) / s + 1.0) / 2.0 * side, 0.0, side);
+    const int x = std::min(resolution - 2, static_cast<int>(std::floor(u)));
+    const int y = std::min(resolution - 2, static_cast<int>(std::floor(v)));
+    const double dx = u - x, dy = v - y;
+    return {{x + y * resolution, x + 1 + y * resolution, x + (y + 1) * resolution, x + 1 + (y + 1) * resolution},
+            {(1 - dx) * (1 - dy), dx * (1 - dy), (1 - dx) * dy, dx * dy}};
+}
+
+Eigen::Vector3d octahedral_node(int x, int y, int resolution) {
+    const double side = resolution - 1.0;
+    const double u = 2.0 * x / side - 1.0, v = 2.0 * y / side - 1.0;
+    const double dx = (u - v) / 2.0, dy = (u + v) / 2.0;
+    return Eigen::Vector3d(dx, dy, std::max(0.0, 1.0 - std::abs(dx) - std::abs(dy))).normalized();
+}
+
+Eigen::MatrixXd bilinear_grid(const std::vector<Eigen::Vector3d>& directions, const LightModel& model,
+                              std::size_t skip) {
+    RFD_CHECK(model.kind == LightModel::Kind::Bilinear && model.sigma > 0.0);
+    const int r = model.resolution;
+    const Eigen::Index nodes = r * r, n = static_cast<Eigen::Index>(directions.size());
+    // A^T (the lights' bilinear weights, four per light) and A^T A, built from the four.
+    Eigen::MatrixXd at = Eigen::MatrixXd::Zero(nodes, n), ata = Eigen::MatrixXd::Zero(nodes, nodes), b(nodes, n);
+    for (Eigen::Index i = 0; i < n; ++i) {
+        if (static_cast<std::size_t>(i) == skip) continue;
+        const GridCell cell = octahedral_cell(directions[static_cast<std::size_t>(i)], r);
+        for (int k = 0; k < 4; ++k) {
+            at(cell.node[k], i) += cell.weight[k];
+            for (int l = 0; l < 4; ++l) ata(cell.node[k], cell.node[l]) += cell.weight[k] * cell.weight[l];
+        }
+    }
+    for (int y = 0; y < r; ++y)
+        for (int x = 0; x < r; ++x)
+            b.row(x + y * r) = rbf_weights(directions, model.sigma, octahedral_node(x, y, r), skip).transpose();
+    // The grid nearest the prior B y that fits the lights, argmin |A g - y|^2 + k |g - B y|^2:
+    // g = (B + (A^T A + k I)^-1 A^T (I - A B)) y, and A^T (I - A B) = A^T - (A^T A) B.
+    const Eigen::MatrixXd normal = ata + model.regularization * Eigen::MatrixXd::Identity(nodes, nodes);
+    return b + normal.ldlt().solve(at - ata * b);
+}
+
 LightWeights::LightWeights(const LightModel& model, const std::vector<Eigen::Vector3d>& directions)
     : model_(model), directions_(directions) {
     for (Eigen::Vector3d& d : directions_) d.normalize();
@@ -96,6 +146,15 @@ LightWeights::LightWeights(const LightModel& model, const std::vector<Eigen::Vec
     case LightModel::Kind::Rbf:
         if (!(model.sigma > 0.0)) throw InputError("rbf needs its width sigma (> 0), chosen on the field");
         if (directions_.size() < 2) throw InputError("rbf needs at least two lights");
+        break;
+    case LightModel::Kind::Bilinear:
+        if (!(model.sigma > 0.0)) throw InputError("bilinear needs the width sigma of its prior (> 0), chosen on the field");
+        if (model.resolution < kMinBilinearResolution || model.resolution > kMaxBilinearResolution)
+            throw InputError("bilinear: the grid's side is " + std::to_string(kMinBilinearResolution) + " to " +
+                             std::to_string(kMaxBilinearResolution) + ", got " + std::to_string(model.resolution));
+        if (!(model.regularization > 0.0)) throw InputError("bilinear: the pull toward the prior is positive");
+        if (directions_.size() < 2) throw InputError("bilinear needs at least two lights");
+        grid_ = bilinear_grid(directions_, model_);
         break;
     }
 }
@@ -114,9 +173,13 @@ Eigen::VectorXd LightWeights::at(const Eigen::Vector3d& d) const {
         return w;
     }
     case LightModel::Kind::Basis: return fit_->solve().transpose() * basis_values(model_.basis, unit);
-    case LightModel::Kind::Rbf: break;
+    case LightModel::Kind::Rbf: return rbf_weights(directions_, model_.sigma, unit);
+    case LightModel::Kind::Bilinear: break;
     }
-    return rbf_weights(directions_, model_.sigma, unit);
+    const GridCell cell = octahedral_cell(unit, model_.resolution);
+    Eigen::VectorXd w = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(size()));
+    for (int k = 0; k < 4; ++k) w += cell.weight[k] * grid_.row(cell.node[k]).transpose();
+    return w;
 }
 
 Eigen::MatrixXd LightWeights::leave_one_out(std::vector<bool>& predictable) const {
@@ -154,6 +217,17 @@ Eigen::MatrixXd LightWeights::leave_one_out(std::vector<bool>& predictable) cons
     case LightModel::Kind::Rbf:
         for (std::size_t j = 0; j < n; ++j)
             w.row(static_cast<Eigen::Index>(j)) = rbf_weights(directions_, model_.sigma, directions_[j], j).transpose();
+        break;
+    case LightModel::Kind::Bilinear:
+        // The grid refitted without light j, read at light j.
+        parallel_for_chunks(n, 1, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t j = begin; j < end; ++j) {
+                const Eigen::MatrixXd grid = bilinear_grid(directions_, model_, j);
+                const GridCell cell = octahedral_cell(directions_[j], model_.resolution);
+                for (int k = 0; k < 4; ++k)
+                    w.row(static_cast<Eigen::Index>(j)) += cell.weight[k] * grid.row(cell.node[k]);
+            }
+        });
         break;
     }
     return w;
@@ -227,7 +301,7 @@ ModelChoice choose_light_model(const FieldGram& gram, const std::vector<Eigen::V
     for (const std::string& name : names) {
         LightModel model = parse_light_model(name);
         try {
-            if (model.kind == LightModel::Kind::Rbf) model.sigma = best_rbf_sigma(gram, directions);
+            if (model.has_sigma()) model.sigma = best_sigma(gram, directions, model);
             std::vector<bool> predictable;
             const Eigen::MatrixXd w = LightWeights(model, directions).leave_one_out(predictable);
             if (std::find(predictable.begin(), predictable.end(), false) != predictable.end()) continue;
@@ -274,9 +348,8 @@ Eigen::VectorXd leave_one_out_errors(const FieldGram& gram, const Eigen::MatrixX
     return ((e * gram.gram).array() * e.array()).rowwise().sum().matrix();
 }
 
-double best_rbf_sigma(const FieldGram& gram, const std::vector<Eigen::Vector3d>& directions) {
-    LightModel model;
-    model.kind = LightModel::Kind::Rbf;
+double best_sigma(const FieldGram& gram, const std::vector<Eigen::Vector3d>& directions, LightModel model) {
+    RFD_CHECK(model.has_sigma());
     std::vector<bool> predictable;
     const auto error_at = [&](double log_sigma) {
         model.sigma = std::exp(log_sigma);

@@ -7,7 +7,14 @@
 //  - a fitted basis (relight/basis.hpp): c = A^+ y, R(d) = b(d)^T c, so w(d) = A^+^T b(d);
 //  - radial basis functions as OpenLIME and CNR relight blend them (rbf): Gaussian weights
 //    exp(-|d - d_i|^2 / sigma^2) over the lights, normalised, those below 0.001 dropped and
-//    the rest normalised again.
+//    the rest normalised again;
+//  - CNR relight's bilinear resampling (bilinear): the field resampled onto an R x R grid of
+//    directions (the octahedral map OpenLIME's 'bln' shader reads: the hemisphere's |x|+|y|+|z|
+//    = 1 diamond rotated 45 degrees onto a square) and blended bilinearly there. The grid's
+//    values are linear in the images, g = M y with M = B + (A^T A + k I)^-1 A^T (I - A B): A
+//    the bilinear weights of the captured lights in the grid, B the rbf weights of the grid's
+//    nodes over the lights (a prior for nodes no light reaches), k the pull toward it; so
+//    w(d) = a(d)^T M.
 // So each relights a field through the same streamed pass (relight/render.hpp), and each has
 // a leave-one-out matrix W (row j: the weights that predict light j from the others), whose
 // error on a field follows from the field's Gram matrix G = sum over pixels and channels of
@@ -33,15 +40,38 @@
 namespace rfd::relight {
 
 struct LightModel {
-    enum class Kind { Interpolation, Basis, Rbf };
+    enum class Kind { Interpolation, Basis, Rbf, Bilinear };
     Kind kind = Kind::Interpolation;
     Interpolation interpolation = Interpolation::Delaunay;
     Basis basis = Basis::Ptm;
-    double sigma = 0.0;  ///< rbf: the Gaussian's width (unit-vector distance); 0 until chosen
+    double sigma = 0.0;  ///< rbf, bilinear (its prior): the Gaussian's width (unit-vector distance); 0 until chosen
+    int resolution = 8;  ///< bilinear: the grid's side (CNR relight's default)
+    double regularization = 0.1;  ///< bilinear: k, the pull toward the rbf prior (CNR relight's default)
 
-    /// "delaunay", "hsh3", "rbf" (and "rbf 0.21" once sigma is known, for reports).
+    /// Whether the model has a width sigma to choose on the field (rbf, bilinear).
+    bool has_sigma() const { return kind == Kind::Rbf || kind == Kind::Bilinear; }
+    /// "delaunay", "hsh3", "rbf", "bilinear": the name --basis takes.
+    std::string base_name() const;
+    /// base_name(), and the width once chosen ("rbf 0.21"), for reports.
     std::string name() const;
 };
+
+/// The bilinear grid's sides allowed (the grid's fit solves a side^2 x side^2 system per light).
+constexpr int kMinBilinearResolution = 2, kMaxBilinearResolution = 16;
+
+/// Where unit d falls in the R x R octahedral grid: the four nodes (x + R y) around it and
+/// their bilinear weights, as OpenLIME's 'bln' shader computes them.
+struct GridCell {
+    int node[4];
+    double weight[4];
+};
+GridCell octahedral_cell(const Eigen::Vector3d& d, int resolution);
+/// The unit direction of grid node (x, y).
+Eigen::Vector3d octahedral_node(int x, int y, int resolution);
+/// M (R^2 x lights): the grid's values from the lights' (see the header); `skip` (an index, or
+/// none) is left out, its column zero.
+Eigen::MatrixXd bilinear_grid(const std::vector<Eigen::Vector3d>& directions, const LightModel& model,
+                              std::size_t skip = static_cast<std::size_t>(-1));
 
 /// The names --basis takes, in the order reports list them.
 std::vector<std::string> light_model_names();
@@ -71,12 +101,15 @@ public:
     /// lights the others cannot predict (a basis' leverage of 1) are zero and
     /// `predictable[j]` false.
     Eigen::MatrixXd leave_one_out(std::vector<bool>& predictable) const;
+    /// bilinear: M, the grid's values from the lights' (R^2 x lights).
+    const Eigen::MatrixXd& grid() const { return grid_; }
 
 private:
     LightModel model_;
     std::vector<Eigen::Vector3d> directions_;
     std::unique_ptr<SphericalInterpolator> interpolator_;
     std::unique_ptr<BasisFit> fit_;
+    Eigen::MatrixXd grid_;  ///< bilinear: M
 };
 
 /// What one pass over a field tells every model: G (lights x lights, summed over pixels and
@@ -97,12 +130,13 @@ FieldGram field_gram(const ReflectanceField& field);
 /// (LightWeights::leave_one_out), summed over the field's samples: diag((I - W) G (I - W)^T).
 Eigen::VectorXd leave_one_out_errors(const FieldGram& gram, const Eigen::MatrixXd& w);
 
-/// The rbf sigma with the least leave-one-out error on the field: a golden-section search of
-/// log sigma over [0.02, 1.5] after a coarse scan (the error is not convex in sigma).
-double best_rbf_sigma(const FieldGram& gram, const std::vector<Eigen::Vector3d>& directions);
+/// The sigma of `model` (rbf, or bilinear's prior) with the least leave-one-out error on the
+/// field: a golden-section search of log sigma over [0.02, 1.5] after a coarse scan (the
+/// error is not convex in sigma).
+double best_sigma(const FieldGram& gram, const std::vector<Eigen::Vector3d>& directions, LightModel model);
 
 /// A model chosen by leave-one-out: the one of least summed error (linear) among `names`
-/// (light_model_names()), rbf's sigma tuned first. Models the lights cannot carry, or that
+/// (light_model_names()), the widths of rbf and bilinear tuned first. Models the lights cannot carry, or that
 /// leave a light unpredictable, are not candidates; InputError when none is.
 struct ModelChoice {
     LightModel model;

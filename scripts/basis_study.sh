@@ -14,8 +14,8 @@ source "$(dirname "$0")/camera_like.sh"
 mkdir -p "$out"
 handheld_lights 40 7 "$out/handheld.lp"
 
-echo "| scene | lights | delaunay | ptm | hsh2 | hsh3 | hsh4 | rbf | auto's choice | auto - best fittable |"
-echo "|---|---|---|---|---|---|---|---|---|---|"
+echo "| scene | lights | delaunay | ptm | hsh2 | hsh3 | hsh4 | rbf | bilinear | auto's choice | auto - best fittable |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|"
 for scene in bottle spheres figure snooker dome; do
   for lights in dome handheld; do
     field="$out/render_${scene}_$lights"
@@ -31,11 +31,11 @@ for scene in bottle spheres figure snooker dome; do
     "$rfd" --quiet relight fit "$capture" --basis auto --out "$capture/fit" > "$capture/fit.txt"
     # "mean NAME [SIGMA] X dB Y dB SSIM": the 8-bit sRGB PSNR per basis.
     row="| $scene | $lights |"
-    for basis in delaunay ptm hsh2 hsh3 hsh4 rbf; do
+    for basis in delaunay ptm hsh2 hsh3 hsh4 rbf bilinear; do
       row="$row $(awk -v b="$basis" '$1 == "mean" && $2 == b { for (i = 3; i <= NF; ++i) if ($(i + 1) == "dB") { print $i; exit } }' "$capture/eval.txt") |"
     done
     chosen=$(awk '/<- chosen/ {print $1}' "$capture/fit.txt")
-    gap=$(awk -v c="$chosen" '$1 ~ /^(ptm|hsh2|hsh3|rbf)$/ && $3 == "dB" { v[$1] = $2; if ($2 > best) best = $2 }
+    gap=$(awk -v c="$chosen" '$1 ~ /^(ptm|hsh2|hsh3|rbf|bilinear)$/ && $3 == "dB" { v[$1] = $2; if ($2 > best) best = $2 }
                               END { printf "%.2f", v[c] - best }' "$capture/fit.txt")
     echo "$row $chosen | $gap |"
   done

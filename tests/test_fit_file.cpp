@@ -69,9 +69,9 @@ TEST(LightModel, GramLeaveOneOutIsTheStreamedOne) {
     FieldReader field(shiny_field(dir, lights));
     const FieldGram gram = field_gram(field);
     std::size_t checked = 0;
-    for (const std::string name : {"delaunay", "nearest", "ptm", "hsh3", "rbf"}) {
+    for (const std::string name : {"delaunay", "nearest", "ptm", "hsh3", "rbf", "bilinear"}) {
         LightModel model = parse_light_model(name);
-        if (model.kind == LightModel::Kind::Rbf) model.sigma = 0.3;
+        if (model.has_sigma()) model.sigma = 0.3;
         const LightWeights weights(model, lights);
         std::vector<bool> predictable;
         const Eigen::VectorXd closed = leave_one_out_errors(gram, weights.leave_one_out(predictable));
@@ -83,7 +83,93 @@ TEST(LightModel, GramLeaveOneOutIsTheStreamedOne) {
             ++checked;
         }
     }
-    EXPECT_EQ(checked, 5u * 30u);
+    EXPECT_EQ(checked, 6u * 30u);
+}
+
+TEST(LightModel, TheBilinearGridIsOpenLimesOctahedralMap) {
+    // OpenLIME's BLN: s = |x|+|y|+|z|, u = ((x+y)/s + 1)/2, v = ((y-x)/s + 1)/2, the
+    // cell's corner floor(u), floor(v) (at most R-2), weights bilinear in the fractions.
+    const int r = 8;
+    std::size_t checked = 0;
+    for (const Eigen::Vector3d& d : scattered_lights(50, 3)) {
+        const double s = std::abs(d.x()) + std::abs(d.y()) + std::abs(d.z());
+        const double u = ((d.x() + d.y()) / s + 1.0) / 2.0 * (r - 1), v = ((d.y() - d.x()) / s + 1.0) / 2.0 * (r - 1);
+        const int x = std::min(r - 2, static_cast<int>(u)), y = std::min(r - 2, static_cast<int>(v));
+        const GridCell cell = octahedral_cell(d, r);
+        EXPECT_EQ(cell.node[0], x + y * r);
+        EXPECT_EQ(cell.node[3], x + 1 + (y + 1) * r);
+        EXPECT_NEAR(cell.weight[0], (1 - (u - x)) * (1 - (v - y)), 1e-12);
+        EXPECT_NEAR(cell.weight[3], (u - x) * (v - y), 1e-12);
+        ++checked;
+    }
+    // Each node's direction falls on the node itself.
+    for (int y = 0; y < r; ++y)
+        for (int x = 0; x < r; ++x) {
+            const GridCell cell = octahedral_cell(octahedral_node(x, y, r), r);
+            double on_node = 0.0;
+            for (int k = 0; k < 4; ++k)
+                if (cell.node[k] == x + y * r) on_node += cell.weight[k];
+            EXPECT_NEAR(on_node, 1.0, 1e-9) << x << "," << y;
+            EXPECT_GE(octahedral_node(x, y, r).z(), 0.0);
+            ++checked;
+        }
+    EXPECT_EQ(checked, 50u + 64u);
+}
+
+TEST(LightModel, TheBilinearGridIsTheLeastSquaresGridNearestItsPrior) {
+    // M y minimises |A g - y|^2 + k |g - B y|^2: its gradient A^T (A g - y) + k (g - B y) is 0,
+    // with A and B built here from the cells and the rbf weights at the nodes.
+    const auto lights = scattered_lights(30, 5);
+    LightModel model = parse_light_model("bilinear");
+    model.sigma = 0.3;
+    model.resolution = 5;
+    const Eigen::MatrixXd m = bilinear_grid(lights, model);
+    const int nodes = 25;
+    Eigen::MatrixXd a = Eigen::MatrixXd::Zero(30, nodes), b(nodes, 30);
+    for (Eigen::Index i = 0; i < 30; ++i) {
+        const GridCell cell = octahedral_cell(lights[static_cast<std::size_t>(i)], 5);
+        for (int k = 0; k < 4; ++k) a(i, cell.node[k]) += cell.weight[k];
+    }
+    for (int g = 0; g < nodes; ++g) b.row(g) = rbf_weights(lights, 0.3, octahedral_node(g % 5, g / 5, 5)).transpose();
+    std::mt19937 random(8);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    Eigen::VectorXd y(30);
+    for (double& v : y) v = unit(random);
+    const Eigen::VectorXd g = m * y;
+    const Eigen::VectorXd gradient = a.transpose() * (a * g - y) + model.regularization * (g - b * y);
+    EXPECT_LT(gradient.cwiseAbs().maxCoeff(), 1e-10);
+    // The weights at a direction are the bilinear blend of the grid there.
+    const Eigen::Vector3d d = direction_from_angles(0.6, 2.2);
+    const GridCell cell = octahedral_cell(d, 5);
+    Eigen::VectorXd blend = Eigen::VectorXd::Zero(30);
+    for (int k = 0; k < 4; ++k) blend += cell.weight[k] * m.row(cell.node[k]).transpose();
+    EXPECT_LT((LightWeights(model, lights).at(d) - blend).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+TEST(LightModel, LeaveOneOutRefitsWithoutTheLight) {
+    // Row j of W: the model built from the other lights alone, at light j.
+    const auto lights = scattered_lights(16, 7);
+    std::size_t checked = 0;
+    for (const std::string name : {"rbf", "bilinear"}) {
+        LightModel model = parse_light_model(name);
+        model.sigma = 0.4;
+        std::vector<bool> predictable;
+        const Eigen::MatrixXd w = LightWeights(model, lights).leave_one_out(predictable);
+        for (std::size_t j = 0; j < lights.size(); ++j) {
+            std::vector<Eigen::Vector3d> others = lights;
+            others.erase(others.begin() + static_cast<std::ptrdiff_t>(j));
+            const Eigen::VectorXd alone = LightWeights(model, others).at(lights[j]);
+            EXPECT_EQ(w(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(j)), 0.0);
+            for (std::size_t i = 0, o = 0; i < lights.size(); ++i) {
+                if (i == j) continue;
+                EXPECT_NEAR(w(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(i)),
+                            alone[static_cast<Eigen::Index>(o++)], 1e-9)
+                    << name << " " << j << " " << i;
+            }
+            ++checked;
+        }
+    }
+    EXPECT_EQ(checked, 2u * 16u);
 }
 
 TEST(LightModel, SeveralModelsInOnePassScoreAsEachAlone) {
@@ -135,7 +221,7 @@ TEST(LightModel, TheChosenSigmaIsALeastLeaveOneOutError) {
     const auto lights = scattered_lights(40, 6);
     FieldReader field(shiny_field(dir, lights));
     const FieldGram gram = field_gram(field);
-    const double sigma = best_rbf_sigma(gram, lights);
+    const double sigma = best_sigma(gram, lights, parse_light_model("rbf"));
     const auto error_at = [&](double s) {
         LightModel model = parse_light_model("rbf");
         model.sigma = s;
@@ -285,6 +371,60 @@ TEST(FitFile, RbfPlanesWrittenByTheRulesRelightAsTheRulesSay) {
     EXPECT_EQ(checked, std::size_t{8 * 8 * 3});
 }
 
+TEST(FitFile, BilinearPlanesWrittenByTheRulesRelightAsTheRulesSay) {
+    TempDir dir;
+    const int width = 8, height = 8, nplanes = 4, r = 4;
+    const auto codes = write_planes(dir / "bln", width, height, nplanes, 7);
+    std::mt19937 random(5);
+    std::uniform_int_distribution<int> byte(0, 255);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    std::vector<int> basis;
+    for (int k = 0; k < (nplanes + 1) * r * r * 3; ++k) basis.push_back(byte(random));
+    std::vector<double> scale, bias, range;
+    for (int p = 0; p < nplanes; ++p) {
+        scale.push_back(0.1 + unit(random));
+        bias.push_back(unit(random));
+        range.push_back(100.0 + 400.0 * unit(random));
+    }
+    // As relight-cli writes it: type "bilinear", the grid's side, no sigma needed.
+    const nlohmann::json info = {{"width", width},      {"height", height},   {"format", "jpg"},
+                                 {"type", "bilinear"},  {"resolution", r},    {"colorspace", "mrgb"},
+                                 {"nplanes", nplanes},  {"basis", basis},
+                                 {"materials", {{{"scale", scale}, {"bias", bias}, {"range", range}}}}};
+    write_text_file(dir / "bln" / "info.json", info.dump());
+    const Eigen::Vector3d d = direction_from_angles(0.7, -1.2);
+    const Image relit = render_fit(dir / "bln", {d}).front();
+    // OpenLIME's BLN.lightWeights, then MRGB's render: base[p][k] = the four nodes' decoded
+    // basis values blended bilinearly; rgb = base[0] + sum_p v_p base[p + 1].
+    const double s = std::abs(d.x()) + std::abs(d.y()) + std::abs(d.z());
+    const double u = ((d.x() + d.y()) / s + 1.0) / 2.0 * (r - 1), v = ((d.y() - d.x()) / s + 1.0) / 2.0 * (r - 1);
+    const int sx = std::min(r - 2, static_cast<int>(u)), sy = std::min(r - 2, static_cast<int>(v));
+    const double dx = u - sx, dy = v - sy;
+    const int node[4] = {sx + sy * r, sx + 1 + sy * r, sx + (sy + 1) * r, sx + 1 + (sy + 1) * r};
+    const double weight[4] = {(1 - dx) * (1 - dy), dx * (1 - dy), (1 - dx) * dy, dx * dy};
+    std::size_t checked = 0;
+    for (int k = 0; k < width * height; ++k)
+        for (int c = 0; c < 3; ++c) {
+            double display = 0.0;
+            for (int p = 0; p <= nplanes; ++p) {
+                double base = 0.0;
+                for (int q = 0; q < 4; ++q) {
+                    const int b = basis[static_cast<std::size_t>((p * r * r + node[q]) * 3 + c)];
+                    base += weight[q] * (p == 0 ? b / 255.0 : (b - 127.0) / range[static_cast<std::size_t>(p - 1)]);
+                }
+                const double value = p == 0 ? 1.0
+                                            : (codes[static_cast<std::size_t>(p - 1)][static_cast<std::size_t>(k)] / 255.0 -
+                                               bias[static_cast<std::size_t>(p - 1)]) *
+                                                  scale[static_cast<std::size_t>(p - 1)];
+                display += base * value;
+            }
+            EXPECT_NEAR(relit.at(k % width, k / width, c),
+                        srgb_to_linear(static_cast<float>(std::clamp(display, 0.0, 1.0))), 1e-5);
+            ++checked;
+        }
+    EXPECT_EQ(checked, std::size_t{8 * 8 * 3});
+}
+
 // A field whose every pixel and channel is a ptm polynomial of the light, as EXR; display
 // values (sRGB-encoded) when `display`, else linear.
 std::filesystem::path polynomial_field(const TempDir& dir, const std::vector<Eigen::Vector3d>& lights,
@@ -381,6 +521,44 @@ TEST(FitFile, AnRbfFitKeepsWhatItsComponentsHold) {
     EXPECT_LT(worst, 1e-5);
 }
 
+TEST(FitFile, ABilinearFitWithEveryComponentIsItsLightModel) {
+    // 3 R^2 components hold the grid's samples whole: the fit relights as the bilinear light
+    // model blends the captured images, at the lights and between them.
+    TempDir dir;
+    const auto lights = scattered_lights(20, 9);
+    FieldReader field(shiny_field(dir, lights));
+    FitSpec spec;
+    spec.type = FitType::Bilinear;
+    spec.resolution = 4;
+    spec.planes = 48;
+    spec.exact = true;
+    spec.sigma = 0.3;
+    const FitReport report = fit_field(field, spec, dir / "fit");
+    EXPECT_GT(report.kept_variance, 1.0 - 1e-9);
+    const FitFile file = read_fit(dir / "fit");
+    EXPECT_EQ(file.type, FitType::Bilinear);
+    EXPECT_EQ(file.resolution, 4);
+    LightModel model = parse_light_model("bilinear");
+    model.sigma = 0.3;
+    model.resolution = 4;
+    const LightWeights weights(model, lights);
+    const ReflectanceField whole = read_field(dir / "field");
+    const std::vector<Eigen::Vector3d> directions{lights[2], direction_from_angles(0.4, 1.0),
+                                                  direction_from_angles(1.0, -2.0)};
+    const std::vector<Image> relit = render_fit(dir / "fit", directions);
+    for (std::size_t l = 0; l < directions.size(); ++l) {
+        const Eigen::VectorXd w = weights.at(directions[l]);
+        double worst = 0.0;
+        for (std::size_t k = 0; k < relit[l].samples().size(); ++k) {
+            double blend = 0.0;
+            for (std::size_t i = 0; i < lights.size(); ++i)
+                blend += w[static_cast<Eigen::Index>(i)] * whole.images[i].samples()[k];
+            worst = std::max(worst, std::abs(relit[l].samples()[k] - blend));
+        }
+        EXPECT_LT(worst, 1e-5) << "direction " << l;
+    }
+}
+
 TEST(FitFile, WhatTheFormatCannotHoldIsRefused) {
     TempDir dir;
     const auto lights = scattered_lights(25, 4);
@@ -403,7 +581,7 @@ TEST(FitFile, WhatTheFormatCannotHoldIsRefused) {
     info["nplanes"] = 18;
     info["type"] = "neural";
     write_text_file(dir / "fit" / "info.json", info.dump());
-    EXPECT_THAT(error_of([&] { read_fit(dir / "fit"); }), HasSubstr("field 'type': expected ptm, hsh or rbf"));
+    EXPECT_THAT(error_of([&] { read_fit(dir / "fit"); }), HasSubstr("field 'type': expected ptm, hsh, rbf or bilinear"));
     write_text_file(dir / "fit" / "info.json", "{\"width\": ");
     EXPECT_THAT(error_of([&] { read_fit(dir / "fit"); }), HasSubstr("not valid JSON"));
 }

@@ -2,7 +2,8 @@
 #  - --basis auto says every candidate's leave-one-out PSNR and chooses the best of them (linear
 #    PSNR for this float field);
 #  - a fit is written the same, byte for byte, twice; it relights under --light-dir and a
-#    light file; an rbf fit keeps --planes components, three to a plane file;
+#    light file; an rbf fit keeps --planes components, three to a plane file; a bilinear fit
+#    records its grid's side and relights;
 #  - what the format cannot hold (hsh4 in JPEG planes) and field options given with a fit are
 #    input errors that say so; relight eval --leave-one-out scores rbf with its sigma.
 file(REMOVE_RECURSE ${OUT})
@@ -24,7 +25,7 @@ foreach(i RANGE ${last})
     set(best_name ${name})
   endif()
 endforeach()
-if(NOT count EQUAL 4 OR NOT chosen STREQUAL best_name)
+if(NOT count EQUAL 5 OR NOT chosen STREQUAL best_name)
   message(FATAL_ERROR "auto chose ${chosen}; the best of ${count} candidates is ${best_name}: ${last_output}")
 endif()
 
@@ -52,6 +53,18 @@ expect("white distant point lights")
 run(0 relight fit ${OUT}/field --basis rbf --planes 6 --out ${OUT}/rbf)
 expect("6 planes in 2 JPEG file.*rbf: sigma [0-9.]+, 6 principal components keep")
 run(0 relight render ${OUT}/rbf --light 20,30 --out ${OUT}/rbf.png)
+run(0 relight fit ${OUT}/field --basis bilinear --resolution 6 --planes 9 --out ${OUT}/bilinear)
+expect("9 planes in 3 JPEG file.*bilinear: a 6 x 6 grid .prior sigma [0-9.]+., 9 principal components keep")
+file(READ ${OUT}/bilinear/info.json info)
+string(JSON type GET "${info}" type)
+string(JSON resolution GET "${info}" resolution)
+string(JSON basis_bytes LENGTH "${info}" basis)
+if(NOT type STREQUAL "bilinear" OR NOT resolution EQUAL 6 OR NOT basis_bytes EQUAL 1080)
+  message(FATAL_ERROR "a bilinear fit of a 6 x 6 grid and 9 planes: type ${type}, resolution ${resolution}, "
+                      "${basis_bytes} basis bytes (expected 10 x 36 x 3 = 1080)")
+endif()
+run(0 relight render ${OUT}/bilinear --light 20,30 --out ${OUT}/bilinear.png)
+expect("relit the bilinear fit")
 
 run(2 relight fit ${OUT}/field --basis hsh4 --out ${OUT}/never)
 expect("hsh4 .16 functions. is beyond what OpenLIME renders")
@@ -60,8 +73,9 @@ if(NOT EXISTS ${OUT}/hsh4/plane_15.exr)
   message(FATAL_ERROR "an exact hsh4 fit has 16 float plane files: ${last_output}")
 endif()
 
-run(0 relight eval ${OUT}/field --leave-one-out --basis rbf --basis ptm --json)
+run(0 relight eval ${OUT}/field --leave-one-out --basis rbf --basis ptm --basis bilinear --json)
 string(JSON sigma GET "${last_output}" bases rbf sigma)
-if(NOT sigma GREATER 0)
-  message(FATAL_ERROR "leave-one-out of rbf without its sigma: ${last_output}")
+string(JSON prior GET "${last_output}" bases bilinear sigma)
+if(NOT sigma GREATER 0 OR NOT prior GREATER 0)
+  message(FATAL_ERROR "leave-one-out of rbf or bilinear without its sigma: ${last_output}")
 endif()
