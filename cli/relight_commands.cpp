@@ -37,6 +37,20 @@
 namespace rfd::cli {
 namespace {
 
+// The width of a model that has one (rbf, bilinear): `given` (--sigma) when positive, else
+// the one of least leave-one-out error on the field; the field's Gram matrix is read once,
+// into `gram`, for every model that needs it.
+void choose_sigma(relight::LightModel& model, double given, relight::FieldReader& field,
+                  std::optional<relight::FieldGram>& gram) {
+    if (!model.has_sigma()) return;
+    if (given > 0.0) {
+        model.sigma = given;
+        return;
+    }
+    if (!gram) gram = relight::field_gram(field);
+    model.sigma = relight::best_sigma(*gram, field.directions(), model);
+}
+
 // The lights of --light and --light-dir in the order they were given, with their texts.
 struct OrderedLights {
     std::vector<relight::Light> lights;
@@ -221,10 +235,8 @@ void add_render(CLI::App& relight) {
         std::string predictor = opt->interpolation + " interpolation";
         if (!opt->basis.empty()) {
             relight::LightModel model = relight::parse_light_model(opt->basis);
-            if (model.has_sigma())
-                model.sigma = opt->sigma > 0.0
-                                  ? opt->sigma
-                                  : relight::best_sigma(relight::field_gram(field), field.directions(), model);
+            std::optional<relight::FieldGram> gram;
+            choose_sigma(model, opt->sigma, field, gram);
             const relight::LightWeights weights(model, field.directions());
             for (const auto& lights : renders) coefficients.push_back(relight::light_coefficients(weights, lights));
             predictor = model.name();
@@ -365,15 +377,7 @@ void evaluate_leave_one_out(const EvalOptions& opt) {
         throw InputError(SourceLocation{field.light_file().string()},
                          "leave-one-out needs at least 4 images (3 left to interpolate from); the field has " + std::to_string(field.size()));
     std::optional<relight::FieldGram> gram;
-    for (relight::LightModel& model : models) {
-        if (!model.has_sigma()) continue;
-        if (opt.sigma > 0.0) {
-            model.sigma = opt.sigma;
-            continue;
-        }
-        if (!gram) gram = relight::field_gram(field);
-        model.sigma = relight::best_sigma(*gram, field.directions(), model);
-    }
+    for (relight::LightModel& model : models) choose_sigma(model, opt.sigma, field, gram);
     std::vector<relight::LightWeights> weights;
     for (const relight::LightModel& model : models) weights.emplace_back(model, field.directions());
     std::vector<const relight::LightWeights*> pointers;
@@ -628,12 +632,7 @@ void add_fit(CLI::App& relight) {
             for (const std::string& name : names) {
                 relight::LightModel model = relight::parse_light_model(name);
                 model.resolution = opt->resolution;
-                if (model.has_sigma() && opt->sigma > 0.0) {
-                    model.sigma = opt->sigma;
-                } else if (model.has_sigma()) {
-                    if (!gram) gram = relight::field_gram(field);
-                    model.sigma = relight::best_sigma(*gram, field.directions(), model);
-                }
+                choose_sigma(model, opt->sigma, field, gram);
                 try {
                     weights.emplace_back(model, field.directions());
                     kept.push_back(name);

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include <gmock/gmock.h>
@@ -274,6 +275,55 @@ std::vector<std::vector<std::uint8_t>> write_planes(const std::filesystem::path&
     return codes;
 }
 
+// An mrgb material of random values by the format's rules: basis bytes for (nplanes + 1)
+// blocks of `nodes` x 3 values, then per plane a scale, bias and range.
+struct MrgbMaterial {
+    std::vector<int> basis;
+    std::vector<double> scale, bias, range;
+};
+MrgbMaterial random_mrgb_material(int nplanes, int nodes, unsigned seed) {
+    std::mt19937 random(seed);
+    std::uniform_int_distribution<int> byte(0, 255);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    MrgbMaterial m;
+    for (int k = 0; k < (nplanes + 1) * nodes * 3; ++k) m.basis.push_back(byte(random));
+    for (int p = 0; p < nplanes; ++p) {
+        m.scale.push_back(0.1 + unit(random));
+        m.bias.push_back(unit(random));
+        m.range.push_back(100.0 + 400.0 * unit(random));
+    }
+    return m;
+}
+
+// Expects `relit` (8 x 8) to be OpenLIME's MRGB render of `codes` under the nodes' weights
+// (node, weight): base[p][c] = sum over the nodes of weight x basis[(p nodes + node) 3 + c],
+// decoded; rgb = base[0] + sum_p v_p base[p + 1]. Returns the samples checked.
+std::size_t expect_mrgb_render(const Image& relit, const std::vector<std::vector<std::uint8_t>>& codes,
+                               const MrgbMaterial& m, int nodes, const std::vector<std::pair<int, double>>& weights) {
+    const int width = relit.width(), nplanes = static_cast<int>(m.scale.size());
+    std::size_t checked = 0;
+    for (int k = 0; k < width * relit.height(); ++k)
+        for (int c = 0; c < 3; ++c) {
+            double display = 0.0;
+            for (int p = 0; p <= nplanes; ++p) {
+                double base = 0.0;
+                for (const auto& [node, weight] : weights) {
+                    const int b = m.basis[static_cast<std::size_t>((p * nodes + node) * 3 + c)];
+                    base += weight * (p == 0 ? b / 255.0 : (b - 127.0) / m.range[static_cast<std::size_t>(p - 1)]);
+                }
+                const double value = p == 0 ? 1.0
+                                            : (codes[static_cast<std::size_t>(p - 1)][static_cast<std::size_t>(k)] / 255.0 -
+                                               m.bias[static_cast<std::size_t>(p - 1)]) *
+                                                  m.scale[static_cast<std::size_t>(p - 1)];
+                display += base * value;
+            }
+            EXPECT_NEAR(relit.at(k % width, k / width, c),
+                        srgb_to_linear(static_cast<float>(std::clamp(display, 0.0, 1.0))), 1e-5);
+            ++checked;
+        }
+    return checked;
+}
+
 TEST(FitFile, PtmPlanesWrittenByTheRulesRelightAsTheRulesSay) {
     TempDir dir;
     const int width = 16, height = 8, nplanes = 18;
@@ -316,29 +366,19 @@ TEST(FitFile, RbfPlanesWrittenByTheRulesRelightAsTheRulesSay) {
     const int width = 8, height = 8, nplanes = 4;
     const auto codes = write_planes(dir / "rbf", width, height, nplanes, 6);
     const auto lights = scattered_lights(7, 1);
-    std::mt19937 random(2);
-    std::uniform_int_distribution<int> byte(0, 255);
-    std::uniform_real_distribution<double> unit(0.0, 1.0);
-    std::vector<int> basis;
-    for (int k = 0; k < (nplanes + 1) * 7 * 3; ++k) basis.push_back(byte(random));
-    std::vector<double> scale, bias, range;
+    const MrgbMaterial m = random_mrgb_material(nplanes, 7, 2);
     std::vector<double> xyz;
     for (const Eigen::Vector3d& l : lights) xyz.insert(xyz.end(), {l.x(), l.y(), l.z()});
-    for (int p = 0; p < nplanes; ++p) {
-        scale.push_back(0.1 + unit(random));
-        bias.push_back(unit(random));
-        range.push_back(100.0 + 400.0 * unit(random));
-    }
     const double sigma = 0.35;
     const nlohmann::json info = {{"width", width},   {"height", height},      {"format", "jpg"},  {"type", "rbf"},
                                  {"colorspace", "mrgb"}, {"nplanes", nplanes}, {"sigma", sigma},   {"lights", xyz},
-                                 {"basis", basis},
-                                 {"materials", {{{"scale", scale}, {"bias", bias}, {"range", range}}}}};
+                                 {"basis", m.basis},
+                                 {"materials", {{{"scale", m.scale}, {"bias", m.bias}, {"range", m.range}}}}};
     write_text_file(dir / "rbf" / "info.json", info.dump());
     const Eigen::Vector3d d = direction_from_angles(0.5, 0.2);
     const Image relit = render_fit(dir / "rbf", {d}).front();
-    // OpenLIME: base[p][k] = sum_l w_l basis[(p n + l) 3 + k], decoded; rgb = base[0] +
-    // sum_p v_p base[p + 1].
+    // OpenLIME's RBF.lightWeights: Gaussian weights normalised, those <= 0.001 dropped, the
+    // rest normalised again.
     std::vector<double> w(7);
     double total = 0.0;
     for (std::size_t l = 0; l < 7; ++l) total += w[l] = std::exp(-(lights[l] - d).squaredNorm() / (sigma * sigma));
@@ -348,81 +388,34 @@ TEST(FitFile, RbfPlanesWrittenByTheRulesRelightAsTheRulesSay) {
         v = v > 0.001 ? v : 0.0;
         kept += v;
     }
-    std::size_t checked = 0;
-    for (int k = 0; k < width * height; ++k)
-        for (int c = 0; c < 3; ++c) {
-            double display = 0.0;
-            for (int p = 0; p <= nplanes; ++p) {
-                double base = 0.0;
-                for (std::size_t l = 0; l < 7; ++l) {
-                    const int b = basis[static_cast<std::size_t>((p * 7 + static_cast<int>(l)) * 3 + c)];
-                    base += w[l] / kept * (p == 0 ? b / 255.0 : (b - 127.0) / range[static_cast<std::size_t>(p - 1)]);
-                }
-                const double v = p == 0 ? 1.0
-                                        : (codes[static_cast<std::size_t>(p - 1)][static_cast<std::size_t>(k)] / 255.0 -
-                                           bias[static_cast<std::size_t>(p - 1)]) *
-                                              scale[static_cast<std::size_t>(p - 1)];
-                display += base * v;
-            }
-            EXPECT_NEAR(relit.at(k % width, k / width, c),
-                        srgb_to_linear(static_cast<float>(std::clamp(display, 0.0, 1.0))), 1e-5);
-            ++checked;
-        }
-    EXPECT_EQ(checked, std::size_t{8 * 8 * 3});
+    std::vector<std::pair<int, double>> weights;
+    for (std::size_t l = 0; l < 7; ++l) weights.emplace_back(static_cast<int>(l), w[l] / kept);
+    EXPECT_EQ(expect_mrgb_render(relit, codes, m, 7, weights), std::size_t{8 * 8 * 3});
 }
 
 TEST(FitFile, BilinearPlanesWrittenByTheRulesRelightAsTheRulesSay) {
     TempDir dir;
     const int width = 8, height = 8, nplanes = 4, r = 4;
     const auto codes = write_planes(dir / "bln", width, height, nplanes, 7);
-    std::mt19937 random(5);
-    std::uniform_int_distribution<int> byte(0, 255);
-    std::uniform_real_distribution<double> unit(0.0, 1.0);
-    std::vector<int> basis;
-    for (int k = 0; k < (nplanes + 1) * r * r * 3; ++k) basis.push_back(byte(random));
-    std::vector<double> scale, bias, range;
-    for (int p = 0; p < nplanes; ++p) {
-        scale.push_back(0.1 + unit(random));
-        bias.push_back(unit(random));
-        range.push_back(100.0 + 400.0 * unit(random));
-    }
+    const MrgbMaterial m = random_mrgb_material(nplanes, r * r, 5);
     // As relight-cli writes it: type "bilinear", the grid's side, no sigma needed.
     const nlohmann::json info = {{"width", width},      {"height", height},   {"format", "jpg"},
                                  {"type", "bilinear"},  {"resolution", r},    {"colorspace", "mrgb"},
-                                 {"nplanes", nplanes},  {"basis", basis},
-                                 {"materials", {{{"scale", scale}, {"bias", bias}, {"range", range}}}}};
+                                 {"nplanes", nplanes},  {"basis", m.basis},
+                                 {"materials", {{{"scale", m.scale}, {"bias", m.bias}, {"range", m.range}}}}};
     write_text_file(dir / "bln" / "info.json", info.dump());
     const Eigen::Vector3d d = direction_from_angles(0.7, -1.2);
     const Image relit = render_fit(dir / "bln", {d}).front();
-    // OpenLIME's BLN.lightWeights, then MRGB's render: base[p][k] = the four nodes' decoded
-    // basis values blended bilinearly; rgb = base[0] + sum_p v_p base[p + 1].
+    // OpenLIME's BLN.lightWeights: the four grid nodes around d, blended bilinearly.
     const double s = std::abs(d.x()) + std::abs(d.y()) + std::abs(d.z());
     const double u = ((d.x() + d.y()) / s + 1.0) / 2.0 * (r - 1), v = ((d.y() - d.x()) / s + 1.0) / 2.0 * (r - 1);
     const int sx = std::min(r - 2, static_cast<int>(u)), sy = std::min(r - 2, static_cast<int>(v));
     const double dx = u - sx, dy = v - sy;
-    const int node[4] = {sx + sy * r, sx + 1 + sy * r, sx + (sy + 1) * r, sx + 1 + (sy + 1) * r};
-    const double weight[4] = {(1 - dx) * (1 - dy), dx * (1 - dy), (1 - dx) * dy, dx * dy};
-    std::size_t checked = 0;
-    for (int k = 0; k < width * height; ++k)
-        for (int c = 0; c < 3; ++c) {
-            double display = 0.0;
-            for (int p = 0; p <= nplanes; ++p) {
-                double base = 0.0;
-                for (int q = 0; q < 4; ++q) {
-                    const int b = basis[static_cast<std::size_t>((p * r * r + node[q]) * 3 + c)];
-                    base += weight[q] * (p == 0 ? b / 255.0 : (b - 127.0) / range[static_cast<std::size_t>(p - 1)]);
-                }
-                const double value = p == 0 ? 1.0
-                                            : (codes[static_cast<std::size_t>(p - 1)][static_cast<std::size_t>(k)] / 255.0 -
-                                               bias[static_cast<std::size_t>(p - 1)]) *
-                                                  scale[static_cast<std::size_t>(p - 1)];
-                display += base * value;
-            }
-            EXPECT_NEAR(relit.at(k % width, k / width, c),
-                        srgb_to_linear(static_cast<float>(std::clamp(display, 0.0, 1.0))), 1e-5);
-            ++checked;
-        }
-    EXPECT_EQ(checked, std::size_t{8 * 8 * 3});
+    const std::vector<std::pair<int, double>> weights{{sx + sy * r, (1 - dx) * (1 - dy)},
+                                                      {sx + 1 + sy * r, dx * (1 - dy)},
+                                                      {sx + (sy + 1) * r, (1 - dx) * dy},
+                                                      {sx + 1 + (sy + 1) * r, dx * dy}};
+    EXPECT_EQ(expect_mrgb_render(relit, codes, m, r * r, weights), std::size_t{8 * 8 * 3});
 }
 
 // A field whose every pixel and channel is a ptm polynomial of the light, as EXR; display
