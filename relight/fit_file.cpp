@@ -460,7 +460,7 @@ FitReport fit_field(FieldReader& field, const FitSpec& spec, const std::filesyst
         const std::size_t nodes = bilinear ? static_cast<std::size_t>(spec.resolution * spec.resolution) : n;
         const int most = static_cast<int>(std::min<std::size_t>(3 * nodes, report.sampled_pixels));
         if (spec.planes < 1 || spec.planes > most)
-            throw InputError("--planes: " + std::string(fit_type_name(spec.type)) + " fit of " + std::to_string(nodes) +
+            throw InputError(std::string("--planes: ") + (bilinear ? "a bilinear" : "an rbf") + " fit of " + std::to_string(nodes) +
                              (bilinear ? " grid nodes" : " lights") + " keeps 1 to " + std::to_string(most) +
                              " components, got " + std::to_string(spec.planes));
         file.nplanes = spec.planes;
