@@ -25,7 +25,8 @@ namespace {
 nlohmann::json conjugates_json(const optics::DesignSummary& s) {
     nlohmann::json out = nlohmann::json::array();
     for (const auto& c : s.conjugates)
-        out.push_back({{"description", c.description},
+        out.push_back({{"key", c.key},
+                       {"description", c.description},
                        {"plane_z_mm", c.plane_z},
                        {"target_z_mm", std::isfinite(c.target_z) ? nlohmann::json(c.target_z) : nlohmann::json()},
                        {"magnification", std::isfinite(c.magnification) ? nlohmann::json(c.magnification) : nlohmann::json()}});
@@ -130,8 +131,8 @@ std::string summary_text(const optics::DesignSummary& s, bool observer_variant) 
                        s.spot_rms_on_axis_um, s.spot_rms_at_half_fov_um);
     out += format_text("  encoding plane vs focus   %+.4f mm\n", s.focus_error_mm);
     for (const auto& check : s.conjugates) {
-        out += format_text("  %s\n      plane at z = %.4f mm, optics want z = %.4f mm (%+.4f mm)",
-                           check.description.c_str(), check.plane_z, check.target_z, check.plane_z - check.target_z);
+        out += format_text("  %s [%s]\n      plane at z = %.4f mm, optics want z = %.4f mm (%+.4f mm)",
+                           check.description.c_str(), check.key.c_str(), check.plane_z, check.target_z, check.plane_z - check.target_z);
         if (std::isfinite(check.magnification)) out += format_text(", magnification %.4f", check.magnification);
         out += "\n";
     }
@@ -164,6 +165,7 @@ void add_design_commands(CLI::App& app) {
             std::fputs(summary_text(summary, optics::is_observer_variant(design.kind)).c_str(), stdout);
         }
     });
+    add_design_tune_command(*design_cmd);
 }
 
 void add_chart_command(CLI::App& optics_cmd) {

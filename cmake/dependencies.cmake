@@ -13,6 +13,15 @@ find_package(PkgConfig REQUIRED)
 pkg_check_modules(Cairo REQUIRED IMPORTED_TARGET cairo)
 # XXH3 content hashes for rfd make's manifest (project/manifest.cpp).
 pkg_check_modules(xxhash REQUIRED IMPORTED_TARGET libxxhash)
+# NLopt (C++ interface): COBYLA, the derivative-free constrained optimiser of `rfd design
+# tune` (tune/tune.hpp).
+# Debian installs the C and the C++ library's configs side by side under the same package
+# name; the C++ one is asked for by its folder.
+find_package(NLopt 2.7 REQUIRED CONFIG NO_DEFAULT_PATH
+             PATHS /usr/lib/${CMAKE_LIBRARY_ARCHITECTURE}/cmake/nlopt_cxx ${CMAKE_PREFIX_PATH})
+if(NOT TARGET NLopt::nlopt_cxx)
+  message(FATAL_ERROR "NLopt's C++ library (libnlopt-cxx-dev) not found: run scripts/install-deps.sh")
+endif()
 # CGAL is header-only here (5.x); relight/ uses its Delaunay triangulations.
 find_package(CGAL 5 REQUIRED CONFIG)
 # Embree 3: the CPU ray tracing kernels of the virtual light stage (relight/ray_scene).

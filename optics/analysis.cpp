@@ -90,9 +90,10 @@ std::vector<ConjugateCheck> conjugate_checks(const DesignOptics& optics) {
     auto focal_tolerance = [&](std::size_t first, std::size_t last) {
         return 0.02 * std::abs(cardinal_points(system, first, last).efl);
     };
-    auto add_image = [&](const std::string& text, std::size_t plane_surface, std::size_t first,
+    auto add_image = [&](const char* key, const std::string& text, std::size_t plane_surface, std::size_t first,
                          std::size_t last, double object_z) {
         ConjugateCheck check;
+        check.key = key;
         check.description = text;
         check.plane_z = system.surfaces[plane_surface].z;
         double m = std::nan("");
@@ -101,9 +102,10 @@ std::vector<ConjugateCheck> conjugate_checks(const DesignOptics& optics) {
         check.tolerance = focal_tolerance(first, last);
         checks.push_back(check);
     };
-    auto add_focus = [&](const std::string& text, std::size_t plane_surface, std::size_t first,
+    auto add_focus = [&](const char* key, const std::string& text, std::size_t plane_surface, std::size_t first,
                          std::size_t last, bool rear) {
         ConjugateCheck check;
+        check.key = key;
         check.description = text;
         check.plane_z = system.surfaces[plane_surface].z;
         const CardinalPoints points = cardinal_points(system, first, last);
@@ -114,10 +116,10 @@ std::vector<ConjugateCheck> conjugate_checks(const DesignOptics& optics) {
     const std::string a = design.planes.front().name;
     if (design.kind == DesignKind::I || design.kind == DesignKind::II) {
         const std::string b = design.pattern_plane().name;
-        add_focus("pattern " + b + " in the back focal plane of " + a, enc, 0, enc - 1, true);
+        add_focus("pattern-focus", "pattern " + b + " in the back focal plane of " + a, enc, 0, enc - 1, true);
         if (design.kind == DesignKind::II) {
             const Plane* c = design.diffuser_plane();
-            add_image("diffuser " + c->name + " = image of " + a + " through " + b,
+            add_image("diffuser-image", "diffuser " + c->name + " = image of " + a + " through " + b,
                       system.find(c->name + " diffuser"), enc - 1, enc + 1, system.surfaces.front().z);
         }
         return checks;
@@ -125,16 +127,16 @@ std::vector<ConjugateCheck> conjugate_checks(const DesignOptics& optics) {
     // Designs III/IV: A main lens, B field lens, C meso-pixel lenslets, D pattern pair,
     // E projection lenslets.
     const std::size_t d_pattern = system.find(design.pattern_plane().name + " pattern");
-    add_focus("meso-pixel lenslets at the focus of the main lens (through the field lens)",
+    add_focus("meso-focus", "meso-pixel lenslets at the focus of the main lens (through the field lens)",
               enc, 0, enc - 1, true);
-    add_image("pattern = image of the main lens through field lens and meso lenslets", d_pattern,
+    add_image("pattern-image", "pattern = image of the main lens through field lens and meso lenslets", d_pattern,
               2, enc + 1, system.surfaces.front().z);
     if (d_pattern + 2 < system.surfaces.size()) {
         const std::size_t e_front = d_pattern + 2;
-        add_image("projection lenslets = image of the meso lenslets through the pattern pair",
+        add_image("projection-image", "projection lenslets = image of the meso lenslets through the pattern pair",
                   e_front, d_pattern - 1, d_pattern + 1, system.surfaces[enc].z);
         if (e_front + 1 < system.surfaces.size())
-            add_focus("pattern in the front focal plane of the projection lenslets", d_pattern,
+            add_focus("pattern-focal", "pattern in the front focal plane of the projection lenslets", d_pattern,
                       e_front, e_front + 1, false);
     }
     return checks;

@@ -49,6 +49,7 @@ std::optional<double> first_loss_angle(const DesignOptics& optics, double phi_ra
 /// A pair of planes the design needs to be conjugate (or a plane that must lie in a
 /// focal plane), and how far the prescription puts it from there.
 struct ConjugateCheck {
+    std::string key;          ///< short name for options, e.g. "diffuser-image"
     std::string description;  ///< e.g. "diffuser C = image of A through B"
     double plane_z = 0.0;     ///< where the plane is, mm
     double target_z = 0.0;    ///< where the paraxial optics want it, mm (NaN: at infinity)

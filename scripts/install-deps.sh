@@ -28,6 +28,8 @@ packages=(
   libnanoflann-dev
   # Embree 3: ray intersection for the virtual light stage (relight/ray_scene.cpp).
   libembree-dev
+  # NLopt: COBYLA, the derivative-free constrained optimiser of `rfd design tune`.
+  libnlopt-cxx-dev
   libtomlplusplus-dev libcli11-dev nlohmann-json3-dev
   # xxHash: content hashes of rfd make's manifest, fast enough to re-hash a pattern each run.
   libxxhash-dev
