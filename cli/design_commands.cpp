@@ -18,6 +18,7 @@
 #include "optics/accuracy_chart.hpp"
 #include "optics/analysis.hpp"
 #include "optics/design.hpp"
+#include "optics/diffraction.hpp"
 
 namespace rfd::cli {
 namespace {
@@ -40,6 +41,38 @@ nlohmann::json losses_json(const optics::DesignSummary& s) {
                        {"surface", loss.surface},
                        {"status", optics::to_string(loss.status)},
                        {"fraction", loss.fraction}});
+    return out;
+}
+
+nlohmann::json diffraction_json(const optics::DiffractionEstimate& e) {
+    nlohmann::json lobe = nlohmann::json::object();
+    for (std::size_t k = 0; k < optics::kDiffractionWavelengthsMm.size(); ++k)
+        lobe[format_text("%.0f", optics::kDiffractionWavelengthsMm[k] * 1e6)] = 1000.0 * e.lobe_radius_mm[k];
+    return {{"element", e.element},
+            {"focal_length_mm", e.focal_length},
+            {"aperture_mm", {e.aperture_x, e.aperture_y}},
+            {"lobe_radius_um", lobe},
+            {"lobe_dots_650nm", {e.lobe_dots().x(), e.lobe_dots().y()}},
+            {"critical_dot_um", 1000.0 * e.critical_dot_mm()},
+            {"critical_dpi", 25.4 / e.critical_dot_mm()},
+            {"one_dot_feature_spread_mm", e.feature_spread_mm(e.dot_mm.x())}};
+}
+
+std::string diffraction_text(const optics::DiffractionEstimate& e, double spot_rms_um, bool observer_variant) {
+    std::string out;
+    out += format_text("  diffraction               central lobe %.2f / %.2f / %.2f um on the pattern at 450 / 550 / 650 nm\n",
+                       1000 * e.lobe_radius_mm[0], 1000 * e.lobe_radius_mm[1], 1000 * e.lobe_radius_mm[2]);
+    out += format_text("                            (%s: f %.3f mm, cell %.3f x %.3f mm): %.3f x %.3f print dots at 650 nm\n",
+                       e.element.c_str(), e.focal_length, e.aperture_x, e.aperture_y, e.lobe_dots().x(),
+                       e.lobe_dots().y());
+    out += format_text("                            exceeds a print dot for dots under %.2f um (above %.0f dpi)", 1000 * e.critical_dot_mm(),
+                       25.4 / e.critical_dot_mm());
+    if (observer_variant)
+        out += format_text(";\n                            a one-dot feature spreads its light +-%.3f mm on the projection "
+                           "lenslets (cell %.3f mm wide)\n",
+                           e.feature_spread_mm(e.dot_mm.x()), e.aperture_x);
+    else
+        out += format_text("; geometric RMS spot %.1f um\n", spot_rms_um);
     return out;
 }
 
@@ -159,10 +192,22 @@ void add_design_commands(CLI::App& app) {
         const auto design = optics::load_design(opt->file);
         const optics::DesignOptics optics(design);
         const auto summary = optics::summarise(optics);
+        // Not in summarise(): `design tune` calls that a thousand times, this costs three FFTs.
+        const auto diffraction = optics::estimate_diffraction(optics);
         if (opt->json) {
-            std::printf("%s\n", to_json(summary).dump(2).c_str());
+            nlohmann::json out = to_json(summary);
+            out["diffraction"] = diffraction_json(diffraction);
+            std::printf("%s\n", out.dump(2).c_str());
         } else {
-            std::fputs(summary_text(summary, optics::is_observer_variant(design.kind)).c_str(), stdout);
+            std::string text = summary_text(summary, optics::is_observer_variant(design.kind));
+            // Before the design rules, which close the summary.
+            const std::size_t rules = text.find("  design rules");
+            const std::size_t warning = text.find("  warning:");
+            const std::size_t at = std::min(rules, warning);
+            text.insert(at == std::string::npos ? text.size() : at,
+                        diffraction_text(diffraction, summary.spot_rms_on_axis_um,
+                                         optics::is_observer_variant(design.kind)));
+            std::fputs(text.c_str(), stdout);
         }
     });
     add_design_tune_command(*design_cmd);

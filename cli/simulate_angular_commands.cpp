@@ -23,6 +23,7 @@
 #include "core/image_io.hpp"
 #include "core/sphere.hpp"
 #include "core/units.hpp"
+#include "optics/diffraction.hpp"
 #include "optics/display_angular.hpp"
 #include "patterns/angular.hpp"
 #include "predict/display_lights.hpp"
@@ -235,7 +236,9 @@ void simulate_observer_variant(const CLI::App& simulate, const SimulateOptions& 
     const std::vector<std::string> view_names = add_viewpoints(opt, options);
     const std::vector<std::string> distribution_texts = add_distributions(opt, options);
 
-    const optics::AngularDisplayOutput result = simulator.simulate(pattern, lights, options);
+    const std::unique_ptr<optics::Transparency> through =
+        choice.diffraction ? optics::diffracted(pattern, design_optics) : nullptr;
+    const optics::AngularDisplayOutput result = simulator.simulate(through ? *through : static_cast<const optics::Transparency&>(pattern), lights, options);
     const bool several = result.views.size() > 1;
     std::vector<std::string> written;
     for (std::size_t w = 0; w < result.views.size(); ++w) {

@@ -18,6 +18,7 @@
 #include "core/image_io.hpp"
 #include "core/text.hpp"
 #include "core/units.hpp"
+#include "optics/diffraction.hpp"
 #include "optics/display.hpp"
 #include "optics/analysis.hpp"
 #include "predict/display_lights.hpp"
@@ -124,7 +125,9 @@ CLI::App* add_simulate(CLI::App& app) {
             optics::resolve(opt->model, simulator.optics(), {pattern.geometry().dot_x, pattern.geometry().dot_y},
                             opt->tolerance_dots);
         options.model = choice.model;
-        const optics::DiffuserImage result = simulator.simulate(pattern, lights, options);
+        const std::unique_ptr<optics::Transparency> through =
+            choice.diffraction ? optics::diffracted(pattern, simulator.optics()) : nullptr;
+        const optics::DiffuserImage result = simulator.simulate(through ? *through : static_cast<const optics::Transparency&>(pattern), lights, options);
         write_image(opt->out, result.image.exposed(opt->exposure));
         const Image picture = simulator.per_lenslet(result);
         if (!opt->lenslets.empty()) write_image(opt->lenslets, picture.exposed(opt->exposure));
@@ -178,18 +181,22 @@ void add_rti_command(CLI::App& simulate) {
         if (!opt->max_angle_deg) max_angle_deg = field_of_view_half_angle_deg(simulator.optics(), opt->design);
         optics::SimulationOptions options;
         options.rays_per_side = opt->rays;
-        options.model = optics::resolve(opt->model, simulator.optics(),
-                                        {pattern.geometry().dot_x, pattern.geometry().dot_y})
-                            .model;
+        const optics::ResolvedModel choice =
+            optics::resolve(opt->model, simulator.optics(), {pattern.geometry().dot_x, pattern.geometry().dot_y});
+        options.model = choice.model;
+        const std::unique_ptr<optics::Transparency> through =
+            choice.diffraction ? optics::diffracted(pattern, simulator.optics()) : nullptr;
         const std::vector<Eigen::Vector3d> directions =
             predict::cone_directions(opt->count, degrees_to_radians(max_angle_deg), 1);
-        relight::ReflectanceField shown = predict::predicted_field(simulator, pattern, directions, options, !opt->full);
+        relight::ReflectanceField shown =
+            predict::predicted_field(simulator, through ? *through : static_cast<const optics::Transparency&>(pattern), directions, options, !opt->full);
         for (Image& image : shown.images) image = image.exposed(opt->exposure);
         relight::write_field(opt->out, shown, "display", ".jpg");
         std::printf("wrote %s/display.lp: %zu pictures of %d x %d, lights up to %.1f deg from the display's axis "
-                    "(display frame), %s model\n",
+                    "(display frame), %s model%s\n",
                     opt->out.c_str(), shown.size(), shown.width(), shown.height(), max_angle_deg,
-                    std::string(optics::to_string(options.model)).c_str());
+                    std::string(optics::to_string(options.model)).c_str(),
+                    choice.diffraction ? " and the lenslets' diffraction" : "");
     });
 }
 

@@ -6,6 +6,7 @@
 
 #include "core/error.hpp"
 #include "optics/analysis.hpp"
+#include "optics/diffraction.hpp"
 
 namespace rfd::optics {
 
@@ -31,10 +32,20 @@ ResolvedModel resolve(ModelChoice choice, const DesignOptics& optics, const Eige
         }
         out.paraxial_error_dots = error;
     }
-    char text[160];
+    if (choice == ModelChoice::Auto || choice == ModelChoice::Diffraction) {
+        const Psf psf = pattern_psf(optics, kDiffractionWavelengthsMm[2]);
+        out.diffraction_lobe_dots = std::max(psf.lobe_radius_x / dot_mm.x(), psf.lobe_radius_y / dot_mm.y());
+        out.diffraction = *out.diffraction_lobe_dots > tolerance_dots;
+    }
+    char text[200];
     switch (choice) {
         case ModelChoice::Paraxial: out.model = Model::Paraxial; out.reason = "as asked"; break;
         case ModelChoice::Exact: out.model = Model::Exact; out.reason = "as asked"; break;
+        case ModelChoice::Diffraction:
+            out.model = Model::Exact;
+            out.diffraction = true;
+            out.reason = "as asked: exact rays, the pattern seen through the lenslets' diffraction";
+            break;
         case ModelChoice::Auto:
             if (!out.paraxial_error_dots) {
                 out.model = Model::Exact;
@@ -45,6 +56,11 @@ ResolvedModel resolve(ModelChoice choice, const DesignOptics& optics, const Eige
                               *out.paraxial_error_dots, out.model == Model::Paraxial ? "within" : "beyond",
                               tolerance_dots);
                 out.reason = text;
+            }
+            if (out.diffraction) {
+                std::snprintf(text, sizeof text, "; diffraction: central lobe %.2f dots, beyond the tolerance: the "
+                              "pattern is seen through it", *out.diffraction_lobe_dots);
+                out.reason += text;
             }
             break;
     }

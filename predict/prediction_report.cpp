@@ -62,6 +62,8 @@ nlohmann::json to_json(const DiffuserPredictionReport& report) {
         {"model", std::string(optics::to_string(report.choice.model))},
         {"model_choice", report.model_choice},
         {"paraxial_error_dots", json_or_null(report.choice.paraxial_error_dots)},
+        {"diffraction", report.choice.diffraction},
+        {"diffraction_lobe_dots", json_or_null(report.choice.diffraction_lobe_dots)},
         {"lights", report.lights.size()},
         {"frame", std::string(name_of(kLightFrameNames, report.frame))},
         {"light_checks", light_checks_json(report.checks)},
@@ -96,10 +98,13 @@ std::string report_text(const DiffuserPredictionReport& report) {
     std::string text;
     text += format_text("%s: %d x %d pixels of %.4f mm, what '%s' shows\n", report.out.c_str(), result.image.width(),
          result.image.height(), result.pixel_mm, report.design.c_str());
-    text += format_text("  model        %s (%s; paraxial error up to %.2f dots, tolerance %.2f)\n",
+    text += format_text("  model        %s%s (%s; paraxial error up to %.2f dots, diffraction's central lobe %.2f dots, "
+                        "tolerance %.2f)\n",
          std::string(optics::to_string(report.choice.model)).c_str(),
+         report.choice.diffraction ? " and diffraction" : "",
          report.model_choice == "auto" ? "chosen automatically" : "as asked",
-         report.choice.paraxial_error_dots.value_or(0.0), report.tolerance_dots);
+         report.choice.paraxial_error_dots.value_or(0.0), report.choice.diffraction_lobe_dots.value_or(0.0),
+         report.tolerance_dots);
     text += format_text("  light        %zu light(s)%s, %zu direction(s) sampled, %zu ray(s) per direction and lenslet, %zu rays\n",
          report.lights.size(), report.envmap.empty() ? "" : " and an environment map", result.directions,
          result.rays_per_direction, result.rays);
@@ -135,6 +140,7 @@ nlohmann::json to_json(const ObserverPredictionReport& report) {
         {"design_kind", report.design_kind},
         {"model", std::string(optics::to_string(report.choice.model))},
         {"model_choice", report.model_choice},
+        {"diffraction", report.choice.diffraction},
         {"lights", report.lights},
         {"views", report.views},
         {"directions", result.directions},

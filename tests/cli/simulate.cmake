@@ -22,6 +22,21 @@ if(NOT EXISTS ${OUT}/a_lenslets.exr)
   message(FATAL_ERROR "no per-lenslet picture")
 endif()
 
+# The diffraction model: the exact rays and the pattern seen through the lenslets' PSF, whose
+# central lobe is a sixth of a dot at 2880 x 1440 dpi: the picture barely changes.
+run(0 simulate ${DESIGN} ${OUT}/bars.exr --light 10,180 --light 10,0,0:0:1 --model exact --out ${OUT}/exact.exr)
+run(0 simulate ${DESIGN} ${OUT}/bars.exr --light 10,180 --light 10,0,0:0:1 --model diffraction --out ${OUT}/wave.exr
+    --json)
+if(NOT last_output MATCHES "\"diffraction\": true" OR NOT last_output MATCHES "\"diffraction_lobe_dots\": 0[.]1")
+  message(FATAL_ERROR "--model diffraction: unexpected summary: ${last_output}")
+endif()
+find_program(OIIOTOOL oiiotool REQUIRED)
+execute_process(COMMAND ${OIIOTOOL} ${OUT}/exact.exr ${OUT}/wave.exr --fail 0.005 --diff
+                RESULT_VARIABLE code OUTPUT_VARIABLE diff)
+if(NOT code EQUAL 0 OR NOT diff MATCHES "[1-9][0-9]* pixels [(][0-9]+%[)] over 1e-06")
+  message(FATAL_ERROR "--model diffraction: not a slight blur of the exact picture: ${diff}")
+endif()
+
 # The predicted display as an RTI set, read back by rfd's own light file reader.
 run(0 simulate rti ${DESIGN} ${OUT}/bars.exr --count 6 --out ${OUT}/rti)
 expect("wrote .*display.lp: 6 pictures of 6 x 5")
@@ -30,7 +45,6 @@ expect("relit .*rti \\(6 images\\)")
 
 # --exposure -1: the same picture at half the value.
 run(0 simulate ${DESIGN} ${OUT}/bars.exr --light 10,180 --light 10,0,0:0:1 --exposure -1 --out ${OUT}/half.exr)
-find_program(OIIOTOOL oiiotool REQUIRED)
 execute_process(COMMAND ${OIIOTOOL} ${OUT}/a.exr --mulc 0.5 ${OUT}/half.exr --diff --fail 1e-6
                 RESULT_VARIABLE code OUTPUT_VARIABLE diff)
 if(NOT code EQUAL 0)
