@@ -10,6 +10,7 @@
 #include "cli/commands.hpp"
 #include "core/error.hpp"
 #include "core/units.hpp"
+#include "optics/diffraction.hpp"
 #include "optics/analysis.hpp"
 #include "optics/design.hpp"
 #include "optics/display.hpp"
@@ -55,15 +56,19 @@ void add_simulate_preview_command(CLI::App& simulate) {
         const optics::DisplaySimulator simulator(design);
         const print::PrintedTransparency pattern = printed_pattern(design, opt->pattern, opt->print);
         const predict::EncodedField reference(design, opt->pattern, pattern.geometry(), pattern.tone().white, opt->field);
-        const predict::DisplayComparison comparison(simulator, pattern, reference.encoder(), pattern.tone());
+        const optics::ResolvedModel choice =
+            optics::resolve(opt->model, simulator.optics(), {pattern.geometry().dot_x, pattern.geometry().dot_y});
+        const std::unique_ptr<optics::Transparency> through =
+            choice.diffraction ? optics::diffracted(pattern, simulator.optics()) : nullptr;
+        const predict::DisplayComparison comparison(
+            simulator, through ? *through : static_cast<const optics::Transparency&>(pattern), reference.encoder(),
+            pattern.tone());
         double max_angle_deg = opt->max_angle_deg.value_or(0.0);
         if (!opt->max_angle_deg) max_angle_deg = field_of_view_half_angle_deg(simulator.optics(), opt->design);
         optics::SimulationOptions options;
         options.rays_per_side = opt->rays;
         options.pixels_per_pitch = opt->pixels_per_lenslet;
-        options.model = optics::resolve(opt->model, simulator.optics(),
-                                        {pattern.geometry().dot_x, pattern.geometry().dot_y})
-                            .model;
+        options.model = choice.model;
         // The direct encoding an optimised pattern started from, for the page's switch.
         std::optional<print::PrintedTransparency> direct;
         std::optional<predict::DisplayComparison> direct_comparison;

@@ -12,6 +12,7 @@
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "core/error.hpp"
+#include "optics/diffraction.hpp"
 #include "optics/display.hpp"
 #include "predict/compare.hpp"
 #include "predict/compare_report.hpp"
@@ -156,7 +157,11 @@ void add_simulate_compare_command(CLI::App& simulate) {
             design, opt->pattern,
             patterns::pattern_geometry(design, Dpi{printed.dpi_x}, Dpi{printed.dpi_y}, printed.margin_mm),
             pattern.tone().white, opt->field);
-        const predict::DisplayComparison comparison(simulator, pattern, reference.encoder(), pattern.tone());
+        const std::unique_ptr<optics::Transparency> through =
+            choice.diffraction ? optics::diffracted(pattern, simulator.optics()) : nullptr;
+        const predict::DisplayComparison comparison(
+            simulator, through ? *through : static_cast<const optics::Transparency&>(pattern), reference.encoder(),
+            pattern.tone());
         settings.sweep = opt->sweep;
         settings.lights = white_light_directions(opt->lights, opt->frame, reference.encoder().options().mapping);
         // A core's mean needs many rays (8 per side alias against the pixels: +-10 dB);

@@ -15,6 +15,7 @@
 #include "cli/commands.hpp"
 #include "core/error.hpp"
 #include "core/number.hpp"
+#include "optics/diffraction.hpp"
 #include "optics/display.hpp"
 #include "optics/tolerance.hpp"
 #include "predict/summaries.hpp"
@@ -107,14 +108,17 @@ void add_simulate_tolerance_command(CLI::App& simulate) {
         options.refinements = opt->refinements;
         options.threshold_db = opt->threshold;
         options.simulation.rays_per_side = opt->rays;
-        options.simulation.model = optics::resolve(opt->model, simulator.optics(),
-                                                   {pattern.geometry().dot_x, pattern.geometry().dot_y}, opt->tolerance_dots)
-                                       .model;
+        const optics::ResolvedModel choice = optics::resolve(
+            opt->model, simulator.optics(), {pattern.geometry().dot_x, pattern.geometry().dot_y}, opt->tolerance_dots);
+        options.simulation.model = choice.model;
+        const std::unique_ptr<optics::Transparency> through =
+            choice.diffraction ? optics::diffracted(pattern, simulator.optics()) : nullptr;
         const std::vector<optics::DisplayLight> lights =
             opt->lights.empty() ? optics::default_tolerance_lights(simulator.optics(), options.simulation.model)
                                 : to_display_lights(opt->lights, read_pattern_mapping(opt->pattern), opt->frame);
 
-        const optics::ToleranceReport report = optics::sweep_tolerances(design, pattern, lights, options);
+        const optics::ToleranceReport report = optics::sweep_tolerances(
+            design, through ? *through : static_cast<const optics::Transparency&>(pattern), lights, options);
         const predict::ToleranceReportText written = predict::write_tolerance_report(
             opt->out, report,
             {design.name, opt->pattern, opt->threshold, std::string(optics::to_string(options.simulation.model)),

@@ -64,6 +64,11 @@ PatternOptimization optimize_pattern(const optics::DisplaySimulator& simulator, 
 
     optics::SimulationOptions options;
     options.rays_per_side = settings.rays_per_side;
+    // The operator follows rays; the diffraction blur is the judge's (simulate compare), not
+    // the optimiser's: where auto would add it, the optimiser still fits the geometric model.
+    if (settings.model == optics::ModelChoice::Diffraction)
+        throw InputError("--model diffraction: the optimiser's forward model follows rays only; judge its pattern "
+                         "with `rfd simulate compare --model diffraction`");
     options.model =
         optics::resolve(settings.model, simulator.optics(), {direct.geometry().dot_x, direct.geometry().dot_y}).model;
     run.model = options.model;
