@@ -13,6 +13,8 @@ void add_chart_command(CLI::App& optics);
 void add_design_commands(CLI::App& app);
 /// rfd design tune, under `design` (cli/design_tune_commands.cpp).
 void add_design_tune_command(CLI::App& design_cmd);
+/// rfd design advise, under `design` (cli/design_advise_commands.cpp).
+void add_design_advise_command(CLI::App& design_cmd);
 void add_capture_commands(CLI::App& capture);
 void add_adaptive_command(CLI::App& capture);
 void add_study_command(CLI::App& capture);

@@ -211,6 +211,7 @@ void add_design_commands(CLI::App& app) {
         }
     });
     add_design_tune_command(*design_cmd);
+    add_design_advise_command(*design_cmd);
 }
 
 void add_chart_command(CLI::App& optics_cmd) {

@@ -14,6 +14,7 @@
 #include "core/command.hpp"
 #include "core/error.hpp"
 #include "predict/summaries.hpp"
+#include "project/index.hpp"
 #include "project/make.hpp"
 #include "project/manifest.hpp"
 #include "project/project.hpp"
@@ -73,11 +74,15 @@ void add_make_command(CLI::App& app) {
         std::printf("%s -> %s\n", opt->project.c_str(), opt->out.c_str());
         std::fflush(stdout);
         project::MakeListener listener;
-        listener.finished = [](const project::StepOutcome& step, int done, int count) {
+        const fs::path out = opt->out;
+        listener.finished = [out](const project::StepOutcome& step, int done, int count) {
             const int digits = count >= 10 ? 2 : 1;
             std::printf("  [%*d/%d] %-16s ", digits, done, count, step.name.c_str());
             if (step.ran) std::printf("made in %.1f s\n", step.seconds);
             else std::printf("up to date\n");
+            // The advice comes before the long steps: say it as soon as it is made.
+            if (step.name == "advice")
+                for (const std::string& line : project::advice_lines(out)) std::printf("           %s\n", line.c_str());
             std::fflush(stdout);
         };
         const std::vector<project::StepOutcome> outcomes = project::make(project, opt->out, runner, options, listener);

@@ -13,11 +13,13 @@
 
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
+#include "core/progress.hpp"
 #include "core/error.hpp"
 #include "core/files.hpp"
 #include "core/sphere.hpp"
 #include "core/text.hpp"
 #include "optics/design.hpp"
+#include "patterns/advice.hpp"
 #include "patterns/encode.hpp"
 #include "patterns/procedural.hpp"
 #include "patterns/raster.hpp"
@@ -98,6 +100,7 @@ void add_encode_command(CLI::App& pattern) {
         relight::Interpolation interpolation = relight::Interpolation::Delaunay;
         patterns::ImageFit fit = patterns::ImageFit::Cover;
         double tilt = 0, turn = 0, angle_scale = 0, margin = 0;  // add_option sets the defaults
+        std::string tilt_text = "0";
         bool allow_partial = false, json = false, single_float = false;
         WindowOptions window;
     };
@@ -112,7 +115,7 @@ void add_encode_command(CLI::App& pattern) {
                     "How the field is predicted between its lights, if not by --interpolation: ptm, hsh2, hsh3, hsh4, "
                     "rbf, bilinear (relight/light_model.hpp; the field sampled by it at 4 times its directions, blended between "
                     "them), an interpolation's name, or auto: the one of least leave-one-out error on the field");
-    add_option(*cmd, patterns::kTiltOption, opt->tilt);
+    cmd->add_option("--tilt", opt->tilt_text, std::string(patterns::kTiltAutoHelp) + " (degrees; default 0)");
     add_option(*cmd, patterns::kTurnOption, opt->turn);
     add_option(*cmd, patterns::kAngleScaleOption, opt->angle_scale);
     add_choice(*cmd, "--fit", opt->fit, patterns::kImageFitNames,
@@ -139,6 +142,19 @@ void add_encode_command(CLI::App& pattern) {
         options.model = choice.model;
         options.interpolation = opt->interpolation;
         options.fit = opt->fit;
+        const std::optional<double> tilt = patterns::parse_tilt(opt->tilt_text, "--tilt");
+        if (tilt) {
+            opt->tilt = *tilt;
+        } else {
+            const std::vector<Eigen::Vector3d> directions =
+                relight::FieldReader(opt->field, opt->window.window()).directions();
+            const patterns::TiltChoice best =
+                patterns::best_tilt(optics::DesignOptics(design), directions, {0.0, opt->turn, opt->angle_scale});
+            opt->tilt = best.tilt_deg;
+            Progress::note(format_text("--tilt auto: %g deg, %d of the field's %d lights inside the display's range%s",
+                                       best.tilt_deg, best.lights.inside, best.lights.total,
+                                       best.lights.covered ? "" : " (they do not surround it)"));
+        }
         options.mapping = {opt->tilt, opt->turn, opt->angle_scale};
         options.allow_partial_coverage = opt->allow_partial;
         options.field_name = opt->field;

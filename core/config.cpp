@@ -186,6 +186,11 @@ ConfigTable ConfigTable::parse_string(std::string_view text, const std::string& 
 
 bool ConfigTable::has(const std::string& key) const { return find(key) != nullptr; }
 
+bool ConfigTable::is_string(const std::string& key) const {
+    const toml::node* node = find(key);
+    return node != nullptr && node->is_string();
+}
+
 std::vector<std::string> ConfigTable::keys() const {
     std::vector<std::pair<int, std::string>> ordered;
     for (const auto& [key, node] : *table_)

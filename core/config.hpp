@@ -47,6 +47,8 @@ public:
     ~ConfigTable();
 
     bool has(const std::string& key) const;
+    /// The key is there and holds a string (for values that are a number or a word).
+    bool is_string(const std::string& key) const;
     /// Keys of this table in file order (by line); reading them is the caller's business.
     std::vector<std::string> keys() const;
 

@@ -7,6 +7,8 @@
 #include <system_error>
 
 
+#include <nlohmann/json.hpp>
+
 #include "core/error.hpp"
 #include "core/files.hpp"
 #include "core/text.hpp"
@@ -284,13 +286,29 @@ VerdictText read_verdict(const fs::path& out) {
 
 }  // namespace
 
+std::vector<std::string> advice_lines(const fs::path& out) {
+    std::error_code ec;
+    if (!fs::exists(out / "advice.json", ec)) return {};
+    try {
+        const nlohmann::json advice = nlohmann::json::parse(read_text_file(out / "advice.json"));
+        return advice.at("lines").get<std::vector<std::string>>();
+    } catch (const std::exception&) {
+        return {};  // not what the advice step wrote: the step re-makes it next time
+    }
+}
+
 void write_index(const Project& project, const fs::path& out, const std::vector<Step>& steps) {
     const std::vector<Section> sections = instructions(project, out);
     const std::string title = project.name + ": a passive reflectance-field display";
 
     const VerdictText verdict = read_verdict(out);
+    const std::vector<std::string> advice = advice_lines(out);
     std::string text = title + "\nMade by rfd make from " + fs::absolute(project.file).lexically_normal().string() +
                        ". Paths are relative to this folder; run the commands below from it.\n";
+    if (!advice.empty()) {
+        text += "\nAdvice on this field (advice.json)\n";
+        for (const std::string& line : advice) text += "  " + line + "\n";
+    }
     if (!verdict.line.empty()) {
         text += "\nVerdict: " + verdict.line + "\n";
         for (const std::string& figure : verdict.figures) text += "  " + figure + "\n";
@@ -311,12 +329,17 @@ void write_index(const Project& project, const fs::path& out, const std::vector<
     std::string html = "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>" +
                        html_escaped(title) +
                        "</title>\n<style>\nbody{font-family:sans-serif;max-width:60em;margin:2em auto;padding:0 1em;"
-                       "line-height:1.4}\nimg{max-width:100%;border:1px solid #ccc}\ncode{font-size:90%}\n.verdict{padding:0.5em 1em;border-left:6px solid #c90}\n.verdict.go{border-color:#393}\n.verdict.no-go{border-color:#c33}\n.viewer{display:flex;flex-wrap:wrap;gap:1em;align-items:flex-start}\n"
+                       "line-height:1.4}\nimg{max-width:100%;border:1px solid #ccc}\ncode{font-size:90%}\n.verdict{padding:0.5em 1em;border-left:6px solid #c90}\n.verdict.go{border-color:#393}\n.verdict.no-go{border-color:#c33}\n.advice{padding:0.5em 1em;border-left:6px solid #36c;margin-bottom:1em}\n.viewer{display:flex;flex-wrap:wrap;gap:1em;align-items:flex-start}\n"
                        "figure{margin:0}\ncanvas.picture{width:220px;image-rendering:pixelated;background:#000}\n"
                        "#light-disc{cursor:crosshair;touch-action:none}\n#light-readout{width:220px;font-size:90%}\n#holder-view{min-height:2em}\n</style>\n"
                        "</head>\n<body>\n<h1>" +
                        html_escaped(title) + "</h1>\n<p>Made by <code>rfd make</code> from <code>" +
                        html_escaped(fs::absolute(project.file).lexically_normal().string()) + "</code>.</p>\n";
+    if (!advice.empty()) {
+        html += "<div class=\"advice\"><strong>Advice on this field</strong><ul>\n";
+        for (const std::string& line : advice) html += "<li>" + html_escaped(line) + "</li>\n";
+        html += "</ul></div>\n";
+    }
     if (!verdict.line.empty()) {
         html += "<div class=\"verdict " + html_escaped(verdict.call) + "\"><strong>" + html_escaped(verdict.line) +
                 "</strong><ul>\n";

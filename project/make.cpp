@@ -157,9 +157,26 @@ std::vector<Step> plan(const Project& p) {
     }
 
     const Encoding& e = p.encoding;
+    const std::string tilt = e.tilt_deg ? format_number(*e.tilt_deg, 17) : std::string("auto");
+    // Before the long steps: what the design makes of this field, and what would suit it better.
+    Step advice{"advice",
+                "advice on this field before the long steps: the display's picture elements against the field's "
+                "pixels, its lights inside the display's range, the bundled design that shows it best (advice.json)",
+                {"design", "advise", design, field.string(), "--tilt", tilt, "--turn", format_number(e.turn_deg, 17),
+                 "--angle-scale", format_number(e.angle_scale, 17), "--out", "advice.json"},
+                field_inputs,
+                {"advice.json"}};
+    advice.inputs.insert(advice.inputs.begin(), design_file);
+    if (const auto& r = p.source.region)
+        advice.arguments.insert(advice.arguments.end(), {"--region", std::to_string((*r)[0]) + "," +
+                                                                         std::to_string((*r)[1]) + "," +
+                                                                         std::to_string((*r)[2]) + "," +
+                                                                         std::to_string((*r)[3])});
+    if (p.source.scale) advice.arguments.insert(advice.arguments.end(), {"--scale", format_number(*p.source.scale, 17)});
+    steps.push_back(std::move(advice));
     Step encode{"pattern", "the pattern at the printer's resolution (pattern.exr; pattern.png to look at)",
                 {"pattern", "encode", design, field.string(), "--printer", film_printer_name, "--tilt",
-                 format_number(e.tilt_deg, 17), "--turn", format_number(e.turn_deg, 17), "--angle-scale",
+                 tilt, "--turn", format_number(e.turn_deg, 17), "--angle-scale",
                  format_number(e.angle_scale, 17), "--model", e.model, "--interpolation", e.interpolation, "--fit",
                  e.fit, "--margin", format_number(e.margin_mm, 17), "--out", "pattern.exr", "--preview",
                  "pattern.png"},

@@ -100,7 +100,14 @@ Source read_source(ConfigTable& table, const fs::path& folder) {
 
 Encoding read_encoding(ConfigTable& table) {
     Encoding e;
-    e.tilt_deg = table.value(patterns::kTiltOption);
+    if (table.is_string("tilt_deg")) {
+        if (table.string("tilt_deg") != "auto")
+            table.fail("tilt_deg", "expected degrees from " + format_number(patterns::kTiltOption.min) + " to " +
+                                       format_number(patterns::kTiltOption.max) + ", or \"auto\"");
+        e.tilt_deg = std::nullopt;
+    } else {
+        e.tilt_deg = table.value(patterns::kTiltOption);
+    }
     e.turn_deg = table.value(patterns::kTurnOption);
     e.angle_scale = table.value(patterns::kAngleScaleOption);
     e.margin_mm = table.value(patterns::kMarginOption);

@@ -54,7 +54,9 @@ struct Source {
 
 /// The encoder's options, as `rfd pattern encode` names them.
 struct Encoding {
-    double tilt_deg = patterns::kTiltOption.fallback, turn_deg = patterns::kTurnOption.fallback;
+    /// nullopt: "auto", the tilt with the most of the field's lights inside the range.
+    std::optional<double> tilt_deg = patterns::kTiltOption.fallback;
+    double turn_deg = patterns::kTurnOption.fallback;
     double angle_scale = patterns::kAngleScaleOption.fallback, margin_mm = patterns::kMarginOption.fallback;
     std::string model = "auto", interpolation = "delaunay", fit = "cover";
     /// How the field is predicted between its lights (rfd pattern encode --basis): unset, "auto"

@@ -190,6 +190,17 @@ field = "field"
 
 // Every key declared as an option (project::declared_keys) is read through that
 // declaration: its ends are accepted, a value past either end is refused naming the key.
+TEST(ProjectFile, TiltIsDegreesOrAuto) {
+    TempDir dir;
+    write_small_field(dir / "field", 0.5f);
+    write(dir / "p.toml", kProject + "\n[encode]\ntilt_deg = \"auto\"\n");
+    EXPECT_FALSE(load_project(dir / "p.toml").encoding.tilt_deg);
+    write(dir / "p.toml", kProject + "\n[encode]\ntilt_deg = 30\n");
+    EXPECT_EQ(load_project(dir / "p.toml").encoding.tilt_deg, 30.0);
+    write(dir / "p.toml", kProject + "\n[encode]\ntilt_deg = \"up\"\n");
+    EXPECT_THAT(error_of([&] { load_project(dir / "p.toml"); }), ::testing::HasSubstr("encode.tilt_deg: expected degrees"));
+}
+
 TEST(ProjectFile, DeclaredKeysTakeTheirOptionsRange) {
     TempDir dir;
     write_small_field(dir / "field", 0.5f);
@@ -302,8 +313,8 @@ TEST(ProjectPlan, EveryStepReadsOnlyWhatEarlierStepsOrTheUserMade) {
     // compare, tolerance and preview; compare's and tolerance's by the verdict.
     EXPECT_EQ(made_inputs, 8);
     // inkjet_720 prints one sheet: no back sheet.
-    EXPECT_THAT(names, ::testing::ElementsAre("pattern", "optimize", "sheet_front_pdf", "moire", "wedge", "holder",
-                                              "compare", "tolerance", "preview", "verdict"));
+    EXPECT_THAT(names, ::testing::ElementsAre("advice", "pattern", "optimize", "sheet_front_pdf", "moire", "wedge",
+                                              "holder", "compare", "tolerance", "preview", "verdict"));
 }
 
 // With [optimize], the optimised pattern is printed and predicted, and the preview page

@@ -72,7 +72,11 @@ for file in pattern.exr pattern.png print/front.pdf print/front.tif print/moire.
             predict/tolerance/summary.txt README.txt index.html manifest.json logs/pattern.txt; do
   [ -s "$work/out/$file" ] || fail "run 1 did not write $file"
 done
-grep -q "10 step(s) made, 0 up to date" "$work/run1.txt" || fail "run 1: $(cat "$work/run1.txt")"
+grep -q "11 step(s) made, 0 up to date" "$work/run1.txt" || fail "run 1: $(cat "$work/run1.txt")"
+# The advice, said as soon as it is made (before the pattern), and on the page.
+grep -A1 "advice  *made" "$work/run1.txt" | grep -q "shows 6 x 5 picture elements" || fail "no advice: $(cat "$work/run1.txt")"
+grep -q "^Advice on this field" "$work/out/README.txt" || fail "README.txt lacks the advice"
+grep -q 'class="advice"' "$work/out/index.html" || fail "index.html lacks the advice"
 grep -q "coarse A5 test printer" "$work/out/logs/pattern.txt" || fail "the pattern does not record the project's printer"
 grep -Eq "^verdict: (go|check|no-go): " "$work/run1.txt" || fail "no verdict: $(cat "$work/run1.txt")"
 grep -Eq "^Verdict: (go|check|no-go): " "$work/out/README.txt" || fail "README.txt lacks the verdict"
@@ -80,7 +84,7 @@ grep -q 'class="verdict' "$work/out/index.html" || fail "index.html lacks the ve
 grep -q "rfd print sheet .*pattern_optimized.exr --copies 0 --out print/front.tif" "$work/out/README.txt" || fail "README.txt lacks the commands"
 
 "$rfd" make "$work/letters.toml" --out "$work/out" > "$work/run2.txt"
-grep -q "0 step(s) made, 10 up to date" "$work/run2.txt" || fail "run 2 made something: $(cat "$work/run2.txt")"
+grep -q "0 step(s) made, 11 up to date" "$work/run2.txt" || fail "run 2 made something: $(cat "$work/run2.txt")"
 
 "$rfd" --quiet pattern field letters --text GRAPH --resolution 24x20 --out "$work/field" > /dev/null
 "$rfd" make "$work/letters.toml" --out "$work/out" > "$work/run3.txt"
@@ -123,6 +127,9 @@ holder = false
 compare_sweep = 3
 tolerance = false
 
+[encode]
+tilt_deg = "auto"
+
 [optimize]
 enabled = false
 TOML
@@ -130,6 +137,8 @@ TOML
   || fail "the RTIBuilder capture did not go through: $(cat "$work/capture.txt")"
 grep -q "region" "$work/out/README.txt" && fail "the letters project should have no region"
 grep -q -- "--region 16,12,48,36" "$work/capture_out/README.txt" || fail "the capture's region is not passed on"
+grep -q -- "pattern encode .*--tilt auto" "$work/capture_out/README.txt" || fail "tilt_deg = \"auto\" is not passed on"
+grep -Eq "tilt -?[0-9]+ deg" "$work/capture_out/logs/pattern.txt" || fail "the pattern does not say the tilt auto chose"
 
 # 3. A mistake in the project file.
 printf '[project]\ndesign = "design2"\ncolour = "red"\n[source]\nfield = "field"\n' > "$work/bad.toml"
@@ -142,7 +151,7 @@ grep -q "bad.toml:3:.*project.colour: unknown key" "$work/bad.txt" || fail "mess
 [ ! -e "$work/bad_out" ] || fail "a bad project file made something"
 # 4. Two folders, one and two steps at a time: the same files, byte for byte.
 "$rfd" make "$work/letters.toml" --out "$work/deeper/folder/out" -j 1 > "$work/run_j1.txt"
-grep -q "10 step(s) made" "$work/run_j1.txt" || fail "-j 1: $(cat "$work/run_j1.txt")"
+grep -q "11 step(s) made" "$work/run_j1.txt" || fail "-j 1: $(cat "$work/run_j1.txt")"
 diff -r --exclude=logs "$work/out" "$work/deeper/folder/out" > "$work/diff.txt" \
   || fail "-j 1 into another folder differs from -j 2: $(head -5 "$work/diff.txt")"
 grep -rq -- "$work/out" "$work/out" --exclude-dir=logs && fail "an output records the output folder's path"
