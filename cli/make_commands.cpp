@@ -86,9 +86,11 @@ void add_make_command(CLI::App& app) {
             std::fflush(stdout);
         };
         const std::vector<project::StepOutcome> outcomes = project::make(project, opt->out, runner, options, listener);
-        if (opt->only.empty() && fs::exists(fs::path(opt->out) / "verdict.json"))
-            std::printf("verdict: %s\n",
-                        predict::read_summary<predict::VerdictReport>(fs::path(opt->out) / "verdict.json").line.c_str());
+        if (opt->only.empty() && fs::exists(fs::path(opt->out) / "verdict.json")) {
+            const auto verdict = predict::read_summary<predict::VerdictReport>(fs::path(opt->out) / "verdict.json");
+            std::printf("verdict: %s\n  on this field: %s\n  on the design: %s\n", verdict.line.c_str(),
+                        verdict.field_line.c_str(), verdict.design_line.c_str());
+        }
         int ran = 0;
         for (const auto& step : outcomes) ran += step.ran ? 1 : 0;
         std::printf("%d step(s) made, %zu up to date. What to print and how to assemble: %s/README.txt (and "

@@ -78,6 +78,8 @@ void add_simulate_verdict_command(CLI::App& simulate) {
             return number(value, unit) + (at_least.count(kind) ? " or more" : "");
         };
         std::printf("%s\n", v.line().c_str());
+        std::printf("  on this field           %s\n", v.on_field.line().c_str());
+        std::printf("  on the design           %s\n", v.on_design.line().c_str());
         std::printf("  design                  %s\n", design.name.c_str());
         std::printf("  PSNR over the FOV       mean %s, min %s (%d direction(s); against the field's brightest)\n",
                     number(v.psnr_mean_in_fov_db, " dB").c_str(), number(v.psnr_min_in_fov_db, " dB").c_str(),

@@ -126,6 +126,10 @@ VerdictReport verdict_report(const Verdict& v, const std::vector<std::string>& a
     report.call = std::string(to_string(v.call));
     report.reason = v.reason;
     report.line = v.line();
+    report.field_call = std::string(to_string(v.on_field.call));
+    report.field_line = v.on_field.line();
+    report.design_call = std::string(to_string(v.on_design.call));
+    report.design_line = v.on_design.line();
     report.psnr_mean_in_fov_db = v.psnr_mean_in_fov_db;
     report.psnr_min_in_fov_db = v.psnr_min_in_fov_db;
     report.psnr_mean_crosstalk_free_db = v.psnr_mean_crosstalk_free_db;
@@ -326,6 +330,8 @@ void to_json(json& j, const VerdictReport& v) {
          {"call", v.call},
          {"reason", v.reason},
          {"line", v.line},
+         {"on_field", {{"call", v.field_call}, {"line", v.field_line}}},
+         {"on_design", {{"call", v.design_call}, {"line", v.design_line}}},
          {"psnr_mean_in_fov_db", number_or_null(v.psnr_mean_in_fov_db)},
          {"psnr_min_in_fov_db", number_or_null(v.psnr_min_in_fov_db)},
          {"psnr_mean_crosstalk_free_db", number_or_null(v.psnr_mean_crosstalk_free_db)},
@@ -342,6 +348,10 @@ void from_json(const json& j, VerdictReport& v) {
     read(j, "call", v.call);
     read(j, "reason", v.reason);
     read(j, "line", v.line);
+    read(j.at("on_field"), "call", v.field_call);
+    read(j.at("on_field"), "line", v.field_line);
+    read(j.at("on_design"), "call", v.design_call);
+    read(j.at("on_design"), "line", v.design_line);
     v.psnr_mean_in_fov_db = optional_number(j, "psnr_mean_in_fov_db");
     v.psnr_min_in_fov_db = optional_number(j, "psnr_min_in_fov_db");
     v.psnr_mean_crosstalk_free_db = optional_number(j, "psnr_mean_crosstalk_free_db");

@@ -131,6 +131,8 @@ struct VerdictReport {
         std::vector<std::string> at_least;  ///< kinds the sweep only bounded from below
     };
     std::string design, call, reason, line;
+    /// The two parts: on this field (whatever the design's warnings), on the design itself.
+    std::string field_call, field_line, design_call, design_line;
     std::optional<double> psnr_mean_in_fov_db, psnr_min_in_fov_db, psnr_mean_crosstalk_free_db;
     int directions_in_fov = 0, directions_crosstalk_free = 0;
     std::optional<double> field_of_view_deg, crosstalk_free_cone_deg;

@@ -40,10 +40,37 @@ std::string_view to_string(Call call) {
 }
 
 std::string Verdict::line() const { return std::string(to_string(call)) + ": " + reason; }
+std::string VerdictPart::line() const { return std::string(to_string(call)) + ": " + reason; }
+
+namespace {
+
+// The verdict on this field, the design's warnings aside.
+VerdictPart judge_field(const VerdictInputs& inputs, const VerdictRules& rules, Verdict& v);
+
+VerdictPart judge_design(const VerdictInputs& inputs) {
+    if (inputs.warnings.empty()) return {Call::Go, "no design warnings"};
+    return {Call::Check, "design warning: " + inputs.warnings.front() +
+                             (inputs.warnings.size() > 1 ? " (and " + std::to_string(inputs.warnings.size() - 1) + " more)"
+                                                         : "")};
+}
+
+}  // namespace
 
 Verdict judge(const VerdictInputs& inputs, const VerdictRules& rules) {
     Verdict v;
     v.inputs = inputs;
+    v.on_field = judge_field(inputs, rules, v);
+    v.on_design = judge_design(inputs);
+    const VerdictPart& whole = v.on_field.call == Call::Go ? v.on_design : v.on_field;
+    v.call = whole.call;
+    v.reason = whole.reason;
+    if (v.call == Call::Go) v.reason = v.on_field.reason + ", no design warnings";
+    return v;
+}
+
+namespace {
+
+VerdictPart judge_field(const VerdictInputs& inputs, const VerdictRules& rules, Verdict& v) {
     double field_peak = 0.0;
     for (const ComparedDirection& d : inputs.directions) field_peak = std::max(field_peak, d.peak);
     // The one PSNR of a display against its field (summaries.hpp); a black field is caught below.
@@ -64,52 +91,31 @@ Verdict judge(const VerdictInputs& inputs, const VerdictRules& rules) {
             sum_free += p;
         }
     }
-    if (field_peak <= 0.0 || v.directions_in_fov == 0) {
-        v.call = Call::Check;
-        v.reason = field_peak <= 0.0 ? "the field is black in every compared direction: nothing to judge"
-                                     : "no compared light lies inside the field of view: nothing to judge";
-        return v;
-    }
+    if (field_peak <= 0.0 || v.directions_in_fov == 0)
+        return {Call::Check, field_peak <= 0.0 ? "the field is black in every compared direction: nothing to judge"
+                                               : "no compared light lies inside the field of view: nothing to judge"};
     v.psnr_mean_in_fov_db = sum_fov / v.directions_in_fov;
     v.psnr_min_in_fov_db = min_fov;
     if (v.directions_crosstalk_free > 0) v.psnr_mean_crosstalk_free_db = sum_free / v.directions_crosstalk_free;
 
-    if (*v.psnr_mean_in_fov_db < rules.poor_db) {
-        v.call = Call::NoGo;
-        v.reason = "the predicted display matches the field by only " + db(*v.psnr_mean_in_fov_db) +
-                   " over the field of view (below " + db(rules.poor_db) + "): the picture would be hard to recognise";
-        return v;
-    }
-    v.call = Call::Check;
+    if (*v.psnr_mean_in_fov_db < rules.poor_db)
+        return {Call::NoGo, "the predicted display matches the field by only " + db(*v.psnr_mean_in_fov_db) +
+                                " over the field of view (below " + db(rules.poor_db) +
+                                "): the picture would be hard to recognise"};
     if (inputs.tolerances)
-        if (auto tight = tight_tolerance(*inputs.tolerances, rules)) {
-            v.reason = *tight;
-            return v;
-        }
-    if (!v.psnr_mean_crosstalk_free_db) {
-        v.reason = "no compared light lies inside the crosstalk-free cone";
-        return v;
-    }
-    if (*v.psnr_mean_crosstalk_free_db < rules.good_db) {
-        v.reason = "the crosstalk-free cone shows the field at " + db(*v.psnr_mean_crosstalk_free_db) + " (below " +
-                   db(rules.good_db) + "): look at the predicted pictures before printing";
-        return v;
-    }
-    if (min_fov < rules.poor_db) {
-        v.reason = "at " + format_fixed(worst->display_angle_deg, 1) + " deg from the axis the prediction falls to " +
-                   db(min_fov) + ": that part of the field of view will look wrong";
-        return v;
-    }
-    if (!inputs.warnings.empty()) {
-        v.reason = "design warning: " + inputs.warnings.front() +
-                   (inputs.warnings.size() > 1 ? " (and " + std::to_string(inputs.warnings.size() - 1) + " more)" : "");
-        return v;
-    }
-    v.call = Call::Go;
-    v.reason = "predicted " + db(*v.psnr_mean_crosstalk_free_db) + " in the crosstalk-free cone and at least " +
-               db(min_fov) + " over the field of view" +
-               (inputs.tolerances ? ", with tolerances assembly by hand meets" : "") + ", no design warnings";
-    return v;
+        if (auto tight = tight_tolerance(*inputs.tolerances, rules)) return {Call::Check, *tight};
+    if (!v.psnr_mean_crosstalk_free_db) return {Call::Check, "no compared light lies inside the crosstalk-free cone"};
+    if (*v.psnr_mean_crosstalk_free_db < rules.good_db)
+        return {Call::Check, "the crosstalk-free cone shows the field at " + db(*v.psnr_mean_crosstalk_free_db) +
+                                 " (below " + db(rules.good_db) + "): look at the predicted pictures before printing"};
+    if (min_fov < rules.poor_db)
+        return {Call::Check, "at " + format_fixed(worst->display_angle_deg, 1) + " deg from the axis the prediction falls to " +
+                                 db(min_fov) + ": that part of the field of view will look wrong"};
+    return {Call::Go, "predicted " + db(*v.psnr_mean_crosstalk_free_db) + " in the crosstalk-free cone and at least " +
+                          db(min_fov) + " over the field of view" +
+                          (inputs.tolerances ? ", with tolerances assembly by hand meets" : "")};
 }
+
+}  // namespace
 
 }  // namespace rfd::predict

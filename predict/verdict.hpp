@@ -54,9 +54,22 @@ struct VerdictRules {
     double calibrated_pitch_ppm = 500.0;  ///< half a step of the default moire sheet (0.1 %)
 };
 
-struct Verdict {
+/// One part of the verdict: a call and its reason.
+struct VerdictPart {
     Call call = Call::Check;
     std::string reason;
+    std::string line() const;  ///< "go: ..."
+};
+
+struct Verdict {
+    /// The whole: the field part where it is not go, the design part otherwise.
+    Call call = Call::Check;
+    std::string reason;
+    /// On this field with this design as printed: the predicted PSNR, the crosstalk-free
+    /// cone, the assembly tolerances; whatever the design's own warnings.
+    VerdictPart on_field;
+    /// On the design itself: its rules (`design show`'s warnings), whatever the field.
+    VerdictPart on_design;
     std::optional<double> psnr_mean_in_fov_db, psnr_min_in_fov_db, psnr_mean_crosstalk_free_db;
     int directions_in_fov = 0, directions_crosstalk_free = 0;
     VerdictInputs inputs;

@@ -262,6 +262,8 @@ VerdictText read_verdict(const fs::path& out) {
         return {};  // not what the verdict step wrote: the step re-makes it next time
     }
     VerdictText text{v.call, v.line, {}};
+    text.figures.push_back("on this field: " + v.field_line);
+    text.figures.push_back("on the design: " + v.design_line);
     const auto number = [](const std::optional<double>& value, const std::string& unit) {
         return value ? format_fixed(*value, 2) + unit : std::string("-");
     };

@@ -69,6 +69,32 @@ TEST(Verdict, EachRuleDecidesWithItsReason) {
     EXPECT_THAT(judge(warned).line(), HasSubstr("check: design warning: macro-pixels overlap (and 1 more)"));
 }
 
+// Design II always warns (its corrective pair magnifies each macro-pixel): the verdict on the
+// field must still say whether the field shows well, apart from the design's own warning.
+TEST(Verdict, TheFieldAndTheDesignAreJudgedApart) {
+    VerdictInputs warned = good_display();
+    warned.warnings = {"macro-pixels overlap"};
+    const Verdict both = judge(warned);
+    EXPECT_EQ(both.call, Call::Check);
+    EXPECT_EQ(both.on_field.call, Call::Go);
+    EXPECT_THAT(both.on_field.line(), HasSubstr("go: predicted 38.0 dB"));
+    EXPECT_EQ(both.on_design.call, Call::Check);
+    EXPECT_EQ(both.on_design.line(), "check: design warning: macro-pixels overlap");
+
+    VerdictInputs poor = good_display();
+    poor.directions = {direction(0, 18), direction(5, 15)};
+    const Verdict bad_field = judge(poor);
+    EXPECT_EQ(bad_field.on_field.call, Call::NoGo);
+    EXPECT_EQ(bad_field.on_design.call, Call::Go);
+    EXPECT_EQ(bad_field.on_design.line(), "go: no design warnings");
+    EXPECT_EQ(bad_field.line(), bad_field.on_field.line());
+
+    // Both good: the whole is go, its reason the field's and the design's.
+    const Verdict good = judge(good_display());
+    EXPECT_EQ(good.on_field.call, Call::Go);
+    EXPECT_EQ(good.line(), good.on_field.line() + ", no design warnings");
+}
+
 // The field dark in one direction (a letter field lights one letter per direction): a small
 // error there is small against the field's brightest value, not against its own faint peak.
 TEST(Verdict, ADarkDirectionIsJudgedAgainstTheFieldsBrightest) {

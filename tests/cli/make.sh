@@ -79,6 +79,8 @@ grep -q "^Advice on this field" "$work/out/README.txt" || fail "README.txt lacks
 grep -q 'class="advice"' "$work/out/index.html" || fail "index.html lacks the advice"
 grep -q "coarse A5 test printer" "$work/out/logs/pattern.txt" || fail "the pattern does not record the project's printer"
 grep -Eq "^verdict: (go|check|no-go): " "$work/run1.txt" || fail "no verdict: $(cat "$work/run1.txt")"
+grep -Eq "^  on this field: (go|check|no-go): " "$work/run1.txt" || fail "no verdict on the field: $(cat "$work/run1.txt")"
+grep -Eq "^  on the design: check: design warning: " "$work/run1.txt" || fail "Design II's warning is not the design's part"
 grep -Eq "^Verdict: (go|check|no-go): " "$work/out/README.txt" || fail "README.txt lacks the verdict"
 grep -q 'class="verdict' "$work/out/index.html" || fail "index.html lacks the verdict"
 grep -q "rfd print sheet .*pattern_optimized.exr --copies 0 --out print/front.tif" "$work/out/README.txt" || fail "README.txt lacks the commands"
