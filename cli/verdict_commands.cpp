@@ -74,9 +74,6 @@ void add_simulate_verdict_command(CLI::App& simulate) {
         const auto number = [](const std::optional<double>& value, const char* unit) {
             return value ? format_fixed(*value, 2) + unit : std::string("-");
         };
-        const auto bound = [&](const std::optional<double>& value, const char* unit, const std::string& kind) {
-            return number(value, unit) + (at_least.count(kind) ? " or more" : "");
-        };
         std::printf("%s\n", v.line().c_str());
         std::printf("  on this field           %s\n", v.on_field.line().c_str());
         std::printf("  on the design           %s\n", v.on_design.line().c_str());
@@ -89,11 +86,11 @@ void add_simulate_verdict_command(CLI::App& simulate) {
                     number(v.psnr_mean_crosstalk_free_db, " dB").c_str(), v.directions_crosstalk_free);
         std::printf("  field of view           %s full cone\n", number(inputs.field_of_view_deg, " deg").c_str());
         if (inputs.tolerances)
-            std::printf("  tolerances              shift %s, rotation %s, pitch %s, spacer %s\n",
-                        bound(inputs.tolerances->shift_mm, " mm", "shift").c_str(),
-                        bound(inputs.tolerances->rotation_deg, " deg", "rotation").c_str(),
-                        bound(inputs.tolerances->pitch_ppm, " ppm", "pitch_error").c_str(),
-                        bound(inputs.tolerances->spacer_mm, " mm", "spacer").c_str());
+            std::printf("  tolerances              %s\n",
+                        predict::maker_tolerance_text(*inputs.tolerances,
+                                                      std::vector<std::string>(at_least.begin(), at_least.end()),
+                                                      predict::printed_extent_mm(design))
+                            .c_str());
         for (const std::string& warning : inputs.warnings) std::printf("  warning                 %s\n", warning.c_str());
     });
 }

@@ -118,4 +118,39 @@ VerdictPart judge_field(const VerdictInputs& inputs, const VerdictRules& rules, 
 
 }  // namespace
 
+Eigen::Vector2d printed_extent_mm(const optics::Design& design) {
+    if (design.macro) return {design.macro->count_x * design.macro->pitch_x, design.macro->count_y * design.macro->pitch_y};
+    for (const optics::Plane& plane : design.planes)
+        if (plane.part)
+            if (const auto* array = std::get_if<optics::LensletArrayPart>(&*plane.part))
+                return 2.0 * array->lattice.half_extent();
+    return Eigen::Vector2d::Zero();
+}
+
+std::string maker_tolerance_text(const AssemblyTolerances& t, const std::vector<std::string>& at_least,
+                                 const Eigen::Vector2d& extent_mm) {
+    const auto more = [&](const char* kind) {
+        return std::find(at_least.begin(), at_least.end(), kind) != at_least.end() ? " or more" : "";
+    };
+    const auto mm = [](double value) { return format_fixed(value, value < 1.0 ? 2 : 1) + " mm"; };
+    std::string out = "shift " + (t.shift_mm ? mm(*t.shift_mm) + more("shift") : std::string("-"));
+    out += ", rotation ";
+    if (t.rotation_deg) {
+        const double corner = 0.5 * extent_mm.norm() * std::sin(*t.rotation_deg * std::acos(-1.0) / 180.0);
+        out += format_fixed(*t.rotation_deg, 2) + " deg" + more("rotation") + " (" + mm(corner) + " at the print's corner)";
+    } else {
+        out += "-";
+    }
+    out += ", pitch ";
+    if (t.pitch_ppm) {
+        out += format_fixed(*t.pitch_ppm, 0) + " ppm" + more("pitch_error") + " (the print's size within " +
+               mm(*t.pitch_ppm * 1e-6 * extent_mm.x()) + " over its " + format_fixed(extent_mm.x(), 0) +
+               " mm: print at 100 %, no fit to page)";
+    } else {
+        out += "-";
+    }
+    out += ", spacer " + (t.spacer_mm ? mm(*t.spacer_mm) + more("spacer") : std::string("-"));
+    return out;
+}
+
 }  // namespace rfd::predict

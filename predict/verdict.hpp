@@ -16,6 +16,10 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
+
+#include "optics/design.hpp"
+
 namespace rfd::predict {
 
 /// One light direction of `rfd simulate compare`.
@@ -81,5 +85,17 @@ struct Verdict {
 Verdict judge(const VerdictInputs& inputs, const VerdictRules& rules = {});
 
 std::string_view to_string(Call call);
+
+/// The printed pattern's width and height, mm: the lenslet array's extent (Design IV: its
+/// grid of macro-pixels), what a pitch error stretches.
+Eigen::Vector2d printed_extent_mm(const optics::Design& design);
+
+/// The tolerances as a maker acts on them: the shift and spacer in mm, the rotation in
+/// degrees and as mm at the print's corner, the pitch error as ppm and as mm over the
+/// print's width with "print at 100 %" (a driver's fit-to-page scales by percents).
+/// `at_least`: the kinds ("shift", "rotation", "pitch_error", "spacer") the sweep only
+/// bounded from below.
+std::string maker_tolerance_text(const AssemblyTolerances& t, const std::vector<std::string>& at_least,
+                                 const Eigen::Vector2d& extent_mm);
 
 }  // namespace rfd::predict

@@ -14,6 +14,7 @@
 #include "core/text.hpp"
 #include "optics/design.hpp"
 #include "predict/summaries.hpp"
+#include "predict/verdict.hpp"
 #include "print/moire.hpp"
 #include "print/printer.hpp"
 #include "holders/profile.hpp"
@@ -252,7 +253,7 @@ struct VerdictText {
     std::string call, line;
     std::vector<std::string> figures;
 };
-VerdictText read_verdict(const fs::path& out) {
+VerdictText read_verdict(const fs::path& out, const Eigen::Vector2d& extent_mm) {
     std::error_code ec;
     if (!fs::exists(out / "verdict.json", ec)) return {};
     predict::VerdictReport v;
@@ -272,16 +273,11 @@ VerdictText read_verdict(const fs::path& out) {
     text.figures.push_back("crosstalk-free cone " + number(v.crosstalk_free_cone_deg, " deg") + " (PSNR " +
                            number(v.psnr_mean_crosstalk_free_db, " dB") + "), field of view " +
                            number(v.field_of_view_deg, " deg"));
-    if (const auto& t = v.tolerances) {
-        const auto bound = [&](const std::optional<double>& value, const char* kind, const std::string& unit) {
-            const bool more = std::find(t->at_least.begin(), t->at_least.end(), kind) != t->at_least.end();
-            return number(value, unit) + (more ? " or more" : "");
-        };
-        text.figures.push_back("assemble within: shift " + bound(t->shift_mm, "shift", " mm") + ", rotation " +
-                               bound(t->rotation_deg, "rotation", " deg") + ", pitch " +
-                               bound(t->pitch_error_ppm, "pitch_error", " ppm") + ", spacer " +
-                               bound(t->spacer_mm, "spacer", " mm"));
-    }
+    if (const auto& t = v.tolerances)
+        text.figures.push_back(
+            "assemble within: " +
+            predict::maker_tolerance_text({t->shift_mm, t->rotation_deg, t->pitch_error_ppm, t->spacer_mm}, t->at_least,
+                                          extent_mm));
     for (const std::string& warning : v.warnings) text.figures.push_back("design warning: " + warning);
     return text;
 }
@@ -303,7 +299,7 @@ void write_index(const Project& project, const fs::path& out, const std::vector<
     const std::vector<Section> sections = instructions(project, out);
     const std::string title = project.name + ": a passive reflectance-field display";
 
-    const VerdictText verdict = read_verdict(out);
+    const VerdictText verdict = read_verdict(out, predict::printed_extent_mm(optics::load_design(project.design)));
     const std::vector<std::string> advice = advice_lines(out);
     std::string text = title + "\nMade by rfd make from " + fs::absolute(project.file).lexically_normal().string() +
                        ". Paths are relative to this folder; run the commands below from it.\n";

@@ -95,6 +95,20 @@ TEST(Verdict, TheFieldAndTheDesignAreJudgedApart) {
     EXPECT_EQ(good.line(), good.on_field.line() + ", no design warnings");
 }
 
+// Tolerances in what a maker measures: 6000 ppm over a 150 mm print is 0.90 mm; 0.6 deg turns
+// the corner of a 150 mm square (106.07 mm from its centre) by 1.1 mm.
+TEST(Verdict, TolerancesAreSaidInMillimetresOverThePrint) {
+    const AssemblyTolerances t{0.2, 0.6, 6000.0, 1.2};
+    const std::string text = maker_tolerance_text(t, {"spacer"}, {150.0, 150.0});
+    EXPECT_THAT(text, HasSubstr("shift 0.20 mm"));
+    EXPECT_THAT(text, HasSubstr("rotation 0.60 deg (1.1 mm at the print's corner)"));
+    EXPECT_THAT(text, HasSubstr("pitch 6000 ppm (the print's size within 0.90 mm over its 150 mm: print at 100 %"));
+    EXPECT_THAT(text, HasSubstr("spacer 1.2 mm or more"));
+    // Design IV's print spans its 7 x 7 macro-pixels, 34 mm apart.
+    const Eigen::Vector2d extent = printed_extent_mm(optics::load_design(std::string(RFD_SOURCE_DIR) + "/designs/design4.toml"));
+    EXPECT_DOUBLE_EQ(extent.x(), 7 * 34.0);
+}
+
 // The field dark in one direction (a letter field lights one letter per direction): a small
 // error there is small against the field's brightest value, not against its own faint peak.
 TEST(Verdict, ADarkDirectionIsJudgedAgainstTheFieldsBrightest) {
