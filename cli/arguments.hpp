@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cmath>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -17,8 +18,10 @@
 #include "core/options.hpp"
 #include "optics/design.hpp"
 #include "optics/display.hpp"
+#include "optics/meso_pixel.hpp"
 #include "optics/model.hpp"
 #include "predict/display_lights.hpp"
+#include "patterns/angular_fields.hpp"
 #include "patterns/encode.hpp"
 #include "print/printed.hpp"
 #include "relight/field.hpp"
@@ -133,6 +136,19 @@ struct WindowOptions {
     relight::ImageWindow window() const;
 };
 void add_window_options(CLI::App& command, WindowOptions& options);
+
+/// The 6D field of a Design III/IV pattern, as `pattern encode-angular` and `simulate compare`
+/// take it: SOURCE (a view set, or one field folder) or --procedural letters|diamonds.
+struct AngularSource {
+    std::string path, procedural, text = "0123456789ABCDEFGHIJKLMNOPQRST";
+    double coverage = 1.0;
+    WindowOptions window;
+};
+/// --procedural, --text, --coverage and the window options (SOURCE is the command's own).
+void add_angular_source_options(CLI::App& command, AngularSource& source);
+/// The field SOURCE names (InputError for a bad one); letters and diamonds fitted to `meso`.
+std::unique_ptr<patterns::AngularField> angular_field(const AngularSource& source, const optics::MesoPixelOptics& meso,
+                                                      optics::Model model);
 
 /// Half the design's field of view (exact, the smallest wrap-over angle), degrees: the
 /// default --max-angle of simulate rti and preview. InputError naming `design_file` when the

@@ -64,7 +64,7 @@ void add_design_advise_command(CLI::App& design_cmd) {
     auto opt = std::make_shared<Options>();
     cmd->add_option("DESIGN", opt->design, "Design file")->required();
     cmd->add_option("FIELD", opt->field, "Reflectance field folder or .lp file")->required();
-    cmd->add_option("--tilt", opt->tilt_text, std::string(patterns::kTiltAutoHelp) + " (degrees; default 0)");
+    cmd->add_option("--tilt", opt->tilt_text, std::string(patterns::kTiltAutoHelp) + " (degrees)")->capture_default_str();
     add_option(*cmd, patterns::kTurnOption, opt->turn);
     add_option(*cmd, patterns::kAngleScaleOption, opt->angle_scale);
     add_window_options(*cmd, opt->window);

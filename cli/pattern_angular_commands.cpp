@@ -19,10 +19,9 @@
 #include "relight/view_set.hpp"
 
 namespace rfd::cli {
-namespace {
 
 // A single field folder (or .lp) is a view set of one head-on view.
-relight::ViewSet read_source(const std::filesystem::path& source, const relight::ImageWindow& window) {
+relight::ViewSet read_angular_source(const std::filesystem::path& source, const relight::ImageWindow& window) {
     const bool field_folder = std::filesystem::is_directory(source) && !std::filesystem::exists(source / "views.txt");
     if (!field_folder && source.extension() != ".lp") return relight::read_view_set(source, window);
     relight::ViewSet set;
@@ -32,39 +31,56 @@ relight::ViewSet read_source(const std::filesystem::path& source, const relight:
     return set;
 }
 
-}  // namespace
+void add_angular_source_options(CLI::App& command, AngularSource& source) {
+    command.add_option("--procedural", source.procedural,
+                       "Instead of SOURCE: letters (Design III, figure 8.13) or diamonds (Design IV, figure 8.15)")
+        ->check(CLI::IsMember({"letters", "diamonds"}));
+    command.add_option("--text", source.text, "Characters of the letters field, one per incident bin");
+    command.add_option("--coverage", source.coverage,
+                       "Fraction of each view image (about its centre, after --region and --scale) the macro grid covers")
+        ->check(CLI::Range(1e-3, 1.0));
+    add_window_options(command, source.window);
+}
+
+std::unique_ptr<patterns::AngularField> angular_field(const AngularSource& source, const optics::MesoPixelOptics& meso,
+                                                      optics::Model model) {
+    if (source.procedural == "letters")
+        return std::make_unique<patterns::LetterField>(patterns::letter_field_for(meso, model, source.text));
+    if (source.procedural == "diamonds")
+        return std::make_unique<patterns::DiamondField>(patterns::diamond_field_for(meso, model));
+    // --region was the coverage fraction once: say where it went.
+    if (!source.window.region.empty() && source.window.region.find(',') == std::string::npos)
+        throw InputError("--region takes X,Y,W,H in pixels, as every command that reads images does; the "
+                         "fraction of each view the macro grid covers is --coverage");
+    return std::make_unique<patterns::ViewSetField>(read_angular_source(source.path, source.window.window()),
+                                                    source.coverage);
+}
 
 void add_pattern_angular_command(CLI::App& group) {
     auto* cmd = group.add_subcommand(
         "encode-angular", "Encode a Design III/IV pattern: R(incident bin; macro-pixel; output direction)");
     struct Options {
-        std::string design, source, out, procedural, text = "0123456789ABCDEFGHIJKLMNOPQRST";
+        std::string design, out;
+        AngularSource source;
         optics::ModelChoice model = optics::ModelChoice::Auto;
-        double dpi = 0.0, coverage = 1.0;
-        WindowOptions window;
+        double dpi = 0.0;
         int bin_samples = 3, table = 129;
         bool json = false, single = false;
     };
     auto opt = std::make_shared<Options>();
     cmd->add_option("DESIGN", opt->design, "Design III or IV file (designs/design3.toml, design4.toml)")->required();
-    cmd->add_option("SOURCE", opt->source, "View set (folder with views.txt, or the file) or one field folder");
+    cmd->add_option("SOURCE", opt->source.path, "View set (folder with views.txt, or the file) or one field folder");
+    add_angular_source_options(*cmd, opt->source);
     cmd->add_option("--out", opt->out, "Pattern file (.exr linear; .tif/.png sRGB)")->required();
     add_model_option(*cmd, opt->model);
-    cmd->add_option("--procedural", opt->procedural, "Instead of SOURCE: letters (Design III, figure 8.13) or diamonds (Design IV, figure 8.15)")
-        ->check(CLI::IsMember({"letters", "diamonds"}));
-    cmd->add_option("--text", opt->text, "Characters of the letters field, one per incident bin");
     cmd->add_option("--dpi", opt->dpi, "Print resolution on both axes (default: the design's printer)")->check(positive_number());
     cmd->add_option("--bin-samples", opt->bin_samples, "Incident directions per side of each bin")->check(CLI::Range(1, 16));
     cmd->add_option("--table", opt->table, "Optics table nodes per side of a meso cell")->check(CLI::Range(3, 4097));
-    cmd->add_option("--coverage", opt->coverage,
-                    "Fraction of each view image (about its centre, after --region and --scale) the macro grid covers")
-        ->check(CLI::Range(1e-3, 1.0));
-    add_window_options(*cmd, opt->window);
     cmd->add_flag("--single-float", opt->single, "EXR: 32-bit floats instead of half floats");
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout");
     cmd->callback([opt] {
         const auto start = std::chrono::steady_clock::now();
-        if (opt->source.empty() == opt->procedural.empty())
+        if (opt->source.path.empty() == opt->source.procedural.empty())
             throw InputError("give either SOURCE (a view set or a field) or --procedural letters|diamonds");
         const optics::DesignOptics optics(optics::load_design(opt->design));
         const optics::MesoPixelOptics meso(optics);
@@ -73,23 +89,12 @@ void add_pattern_angular_command(CLI::App& group) {
         options.bin_samples = opt->bin_samples;
         options.table_size = opt->table;
         options.dpi_x = options.dpi_y = opt->dpi;
-        std::unique_ptr<patterns::AngularField> field;
-        if (opt->procedural == "letters") {
-            field = std::make_unique<patterns::LetterField>(patterns::letter_field_for(meso, options.model, opt->text));
-        } else if (opt->procedural == "diamonds") {
-            field = std::make_unique<patterns::DiamondField>(patterns::diamond_field_for(meso, options.model));
-        } else {
-            // --region was the coverage fraction once: say where it went.
-            if (!opt->window.region.empty() && opt->window.region.find(',') == std::string::npos)
-                throw InputError("--region takes X,Y,W,H in pixels, as every command that reads images does; the "
-                                 "fraction of each view the macro grid covers is --coverage");
-            field = std::make_unique<patterns::ViewSetField>(read_source(opt->source, opt->window.window()), opt->coverage);
-        }
+        const std::unique_ptr<patterns::AngularField> field = angular_field(opt->source, meso, options.model);
         const patterns::AngularPattern pattern(optics, *field, options);
         const double white = patterns::estimate_white(pattern, 99.5);
         patterns::PatternAttributes attributes = pattern.attributes();
         attributes["white"] = format_number(white, 9);
-        attributes["source"] = opt->procedural.empty() ? opt->source : "procedural " + opt->procedural;
+        attributes["source"] = opt->source.procedural.empty() ? opt->source.path : "procedural " + opt->source.procedural;
         patterns::WriteOptions write;
         write.half_float = !opt->single;
         patterns::write_pattern(opt->out, pattern, attributes, write);

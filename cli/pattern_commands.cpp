@@ -115,7 +115,7 @@ void add_encode_command(CLI::App& pattern) {
                     "How the field is predicted between its lights, if not by --interpolation: ptm, hsh2, hsh3, hsh4, "
                     "rbf, bilinear (relight/light_model.hpp; the field sampled by it at 4 times its directions, blended between "
                     "them), an interpolation's name, or auto: the one of least leave-one-out error on the field");
-    cmd->add_option("--tilt", opt->tilt_text, std::string(patterns::kTiltAutoHelp) + " (degrees; default 0)");
+    cmd->add_option("--tilt", opt->tilt_text, std::string(patterns::kTiltAutoHelp) + " (degrees)")->capture_default_str();
     add_option(*cmd, patterns::kTurnOption, opt->turn);
     add_option(*cmd, patterns::kAngleScaleOption, opt->angle_scale);
     add_choice(*cmd, "--fit", opt->fit, patterns::kImageFitNames,

@@ -2,16 +2,27 @@
 // same field at the display's resolution (predict/compare.hpp), for a sweep of light
 // directions; and the simulator's speed-versus-accuracy chart.
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "cli/arguments.hpp"
 #include "cli/commands.hpp"
 #include "core/error.hpp"
+#include "predict/compare_angular.hpp"
+#include "optics/display_angular.hpp"
+#include "core/units.hpp"
+#include "core/text.hpp"
+#include "core/progress.hpp"
+#include "core/files.hpp"
+#include "core/csv.hpp"
 #include "optics/diffraction.hpp"
 #include "optics/display.hpp"
 #include "predict/compare.hpp"
@@ -78,6 +89,108 @@ std::vector<Eigen::Vector3d> white_light_directions(const std::vector<std::strin
     return directions;
 }
 
+
+// Designs III and IV: the display from a grid of viewpoints under a grid of lights against
+// the 6D field relit and viewed the same way (predict/compare_angular.hpp).
+struct AngularCompareOptions {
+    std::string design, pattern, field, out;
+    AngularSource source;
+    PrintOptions print;
+    optics::ModelChoice model = optics::ModelChoice::Auto;
+    double tolerance_dots = 0.0;
+    int light_grid = 5, view_grid = 3, lens_rays = 0;
+    bool held_out = false, json = false;
+};
+
+void run_angular_compare(const optics::Design& design, AngularCompareOptions o) {
+    const auto start = std::chrono::steady_clock::now();
+    const optics::AngularDisplaySimulator simulator(design);
+    const print::PrintedTransparency pattern = printed_pattern(design, o.pattern, o.print);
+    const optics::ResolvedModel choice =
+        optics::resolve(o.model, simulator.optics(), simulator.optics().dot_mm(), o.tolerance_dots);
+    const std::unique_ptr<optics::Transparency> through =
+        choice.diffraction ? optics::diffracted(pattern, simulator.optics()) : nullptr;
+    o.source.path = o.field;
+    if (o.source.path.empty() == o.source.procedural.empty())
+        throw InputError("Designs III and IV: give FIELD (the view set or field the pattern was encoded from) or "
+                         "--procedural letters|diamonds, as `pattern encode-angular` was given");
+    const std::unique_ptr<patterns::AngularField> field = angular_field(o.source, simulator.meso(), choice.model);
+    const std::vector<Eigen::Vector3d> lights = predict::angular_light_grid(simulator, o.light_grid, o.held_out);
+    const std::vector<Eigen::Vector3d> views = predict::angular_view_grid(simulator, o.view_grid, o.held_out);
+    optics::AngularSimulationOptions options;
+    options.model = choice.model;
+    if (o.lens_rays > 0) options.rays_per_side = o.lens_rays;
+    const predict::AngularComparison comparison(
+        simulator, through ? *through : static_cast<const optics::Transparency&>(pattern), *field, lights,
+        pattern.tone(), options);
+    std::vector<predict::PairComparison> pairs;
+    Progress progress("comparing", lights.size());
+    for (std::size_t light = 0; light < lights.size(); ++light) {
+        for (predict::PairComparison& pair : comparison.compare(light, views)) pairs.push_back(std::move(pair));
+        progress.advance();
+    }
+    progress.finish();
+    double peak = 0.0;
+    for (const auto& pair : pairs) peak = std::max(peak, pair.comparison.peak);
+    const auto angles = [](const Eigen::Vector3d& d) {
+        return std::pair{radians_to_degrees(std::acos(std::clamp(d.z(), -1.0, 1.0))),
+                         radians_to_degrees(std::atan2(d.y(), d.x()))};
+    };
+    CsvTable table({"light_theta_deg", "light_phi_deg", "view_theta_deg", "view_phi_deg", "psnr_db",
+                    "psnr_own_peak_db", "mse", "peak", "bins_bound_psnr_db", "crossed_fraction"});
+    // The headline pools the squared errors of every pair (a pair the field leaves dark, and
+    // the display too, would read as a perfect 100 dB and flatter a mean of PSNRs).
+    double mse_sum = 0.0, ceiling_sum = 0.0, lowest = 1e300;
+    for (const auto& pair : pairs) {
+        const double psnr = predict::psnr_against_field_db(pair.comparison.mse, peak).value_or(0.0);
+        mse_sum += pair.comparison.mse;
+        ceiling_sum += pair.ceiling_comparison.mse;
+        lowest = std::min(lowest, psnr);
+        const auto [lt, lp] = angles(pair.light);
+        const auto [vt, vp] = angles(pair.view);
+        table.add_row({format_fixed(lt, 4), format_fixed(lp, 4), format_fixed(vt, 4), format_fixed(vp, 4),
+                       format_fixed(psnr, 4), format_fixed(pair.comparison.psnr_db, 4),
+                       format_number(pair.comparison.mse, 9), format_number(pair.comparison.peak, 9),
+                       format_fixed(predict::psnr_against_field_db(pair.ceiling_comparison.mse, peak).value_or(0.0), 4),
+                       format_fixed(pair.crossed_fraction, 6)});
+    }
+    const double count = pairs.empty() ? 1.0 : static_cast<double>(pairs.size());
+    const double mean = predict::psnr_against_field_db(mse_sum / count, peak).value_or(0.0);
+    const double ceiling = predict::psnr_against_field_db(ceiling_sum / count, peak).value_or(0.0);
+    ensure_directory(o.out);
+    table.write(std::filesystem::path(o.out) / "pairs.csv");
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const nlohmann::json summary{{"design", design.name},
+                                 {"pattern", o.pattern},
+                                 {"field", o.field.empty() ? "procedural " + o.source.procedural : o.field},
+                                 {"model", std::string(optics::to_string(choice.model))},
+                                 {"diffraction", choice.diffraction},
+                                 {"lights", lights.size()},
+                                 {"views", views.size()},
+                                 {"held_out", o.held_out},
+                                 {"pairs", pairs.size()},
+                                 {"field_peak", peak},
+                                 {"psnr_db", mean},
+                                 {"bins_bound_psnr_db", ceiling},
+                                 {"psnr_min_db", pairs.empty() ? 0.0 : lowest}};
+    write_text_file(std::filesystem::path(o.out) / "summary.json", summary.dump(2) + "\n");
+    if (o.json) {
+        std::printf("%s\n", summary.dump(2).c_str());
+        return;
+    }
+    std::printf("%s: %s seen from %zu viewpoints under %zu lights%s (%s optics%s)\n", o.out.c_str(),
+                design.name.c_str(), views.size(), lights.size(), o.held_out ? ", the held-out grids" : "",
+                std::string(optics::to_string(choice.model)).c_str(), choice.diffraction ? " and diffraction" : "");
+    std::printf("  PSNR         %.2f dB over %zu pairs' macro-pixels, the worst pair %.2f dB (against the brightest "
+                "reference)\n",
+                mean, pairs.size(), pairs.empty() ? 0.0 : lowest);
+    std::printf("  bins' bound  %.2f dB: one value per incident bin, the bin's mean of the field (crosstalk aside: an "
+                "upper bound on any pattern)\n",
+                ceiling);
+    std::printf("  pairs        %s/pairs.csv\n", o.out.c_str());
+    std::printf("  time         %.2f s\n", seconds);
+}
+
 }  // namespace
 
 void add_simulate_compare_command(CLI::App& simulate) {
@@ -95,11 +208,14 @@ void add_simulate_compare_command(CLI::App& simulate) {
         int sweep = 0, rays = 0, reference_rays = 32, view_pixels = 0;  // add_option sets sweep's default
         double tolerance_dots = 0, error_gain = 4.0;
         bool json = false, chart_accuracy = false;
+        AngularCompareOptions angular;
     };
     auto opt = std::make_shared<Options>();
-    cmd->add_option("DESIGN", opt->design, "Design TOML file (Design I or II)")->required();
-    cmd->add_option("PATTERN", opt->pattern, "Pattern file from `rfd pattern encode`")->required();
-    cmd->add_option("FIELD", opt->field, "The reflectance field the pattern was encoded from (folder or .lp)")->required();
+    cmd->add_option("DESIGN", opt->design, "Design TOML file")->required();
+    cmd->add_option("PATTERN", opt->pattern, "Pattern file from `rfd pattern encode` (or encode-angular)")->required();
+    cmd->add_option("FIELD", opt->field,
+                    "The reflectance field the pattern was encoded from (folder or .lp; Designs III/IV: the view set, "
+                    "or --procedural)");
     cmd->add_option("--out", opt->out, "Output folder")->required();
     cmd->add_option("--encoded-for", opt->encoded_for,
                     "The design the pattern was encoded and printed for, when DESIGN is another (the array's measured "
@@ -133,9 +249,37 @@ void add_simulate_compare_command(CLI::App& simulate) {
     cmd->add_option("--reference-rays", opt->reference_rays, "Rays per side of the converged prediction")
         ->check(CLI::Range(1, 512));
     cmd->add_flag("--json", opt->json, "Machine-readable summary on stdout (also written to OUT/summary.json)");
+    add_angular_source_options(*cmd, opt->angular.source);
+    cmd->add_option("--light-grid", opt->angular.light_grid,
+                    "Designs III/IV: lights per side of the grid over the meso array")
+        ->check(CLI::Range(2, 64));
+    cmd->add_option("--view-grid", opt->angular.view_grid,
+                    "Designs III/IV: viewpoints per side of the grid over the output cone")
+        ->check(CLI::Range(2, 64));
+    cmd->add_flag("--held-out", opt->angular.held_out,
+                  "Designs III/IV: the grids' midpoints instead (lights and viewpoints between the grid's)");
+    add_option(*cmd, optics::kLensRaysOption, opt->angular.lens_rays);
     cmd->callback([opt] {
         const auto start = std::chrono::steady_clock::now();
         const optics::Design design = optics::load_design(opt->design);
+        if (optics::is_observer_variant(design.kind)) {
+            AngularCompareOptions angular = opt->angular;
+            angular.design = opt->design;
+            angular.pattern = opt->pattern;
+            angular.field = opt->field;
+            angular.out = opt->out;
+            angular.print = opt->print;
+            angular.model = opt->model;
+            angular.tolerance_dots = opt->tolerance_dots;
+            angular.json = opt->json;
+            run_angular_compare(design, angular);
+            return;
+        }
+        if (opt->field.empty()) throw InputError("FIELD: the reflectance field the pattern was encoded from");
+        const AngularSource& a = opt->angular.source;
+        if (!a.procedural.empty() || !a.window.region.empty() || a.window.scale != 1.0 || a.coverage != 1.0)
+            throw InputError("--procedural, --region, --scale and --coverage are for Designs III and IV; Designs I and II "
+                             "read the field as the pattern records it");
         const optics::DisplaySimulator simulator(design);
         const optics::Design printed_for = opt->encoded_for.empty() ? design : optics::load_design(opt->encoded_for);
         if (printed_for.kind != design.kind)

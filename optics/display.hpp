@@ -74,6 +74,17 @@ private:
     std::vector<float> values_;
 };
 
+/// A print that transmits everything: the display's own response to a light (its flat
+/// field), the reference every comparison scales by. Points at 1e20 mm or beyond (the
+/// simulators' mark for a ray that never reached the pattern) read 0.
+class ClearTransparency final : public Transparency {
+public:
+    int channels() const override { return 1; }
+    void sample(std::span<const Eigen::Vector2d> points, std::span<float> out) const override {
+        for (std::size_t k = 0; k < points.size(); ++k) out[k] = points[k].norm() < 1e20 ? 1.0f : 0.0f;
+    }
+};
+
 /// A distant light: a direction of travel, a colour (its irradiance per channel on a plane
 /// facing it) and, for an area source, an angular radius (a uniform disc of directions).
 struct DisplayLight {

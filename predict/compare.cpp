@@ -29,15 +29,6 @@ double psnr_of(double peak, double mse) {
     return 10.0 * std::log10(peak * peak / mse);
 }
 
-// A print that transmits everything: the display's own response to a light.
-class ClearTransparency final : public optics::Transparency {
-public:
-    int channels() const override { return 1; }
-    void sample(std::span<const Eigen::Vector2d> points, std::span<float> out) const override {
-        for (std::size_t k = 0; k < points.size(); ++k) out[k] = points[k].norm() < 1e20 ? 1.0f : 0.0f;
-    }
-};
-
 }  // namespace
 
 MacroPixelCore macro_pixel_core(const optics::DesignOptics& optics) {
@@ -168,7 +159,7 @@ DirectionComparison DisplayComparison::compare(const Eigen::Vector3d& field_dire
     out.efficiency = diffuser.optical_efficiency;
     out.rays = diffuser.rays;
     // The display's response to a clear print under the same light: the scale of Q.
-    const ClearTransparency clear;
+    const optics::ClearTransparency clear;
     const optics::DiffuserImage flat = simulator_.simulate(clear, {light}, options);
     const Image transmitted = transmittance(out.field_direction);
     auto times = [&](Image response) {

@@ -45,15 +45,6 @@ Design small_design4(const TempDir& dir) {
     return load_design(path.string());
 }
 
-// Transmittance 1 everywhere.
-class Clear final : public Transparency {
-public:
-    int channels() const override { return 1; }
-    void sample(std::span<const Eigen::Vector2d>, std::span<float> out) const override {
-        std::fill(out.begin(), out.end(), 1.0f);
-    }
-};
-
 // An encoded pattern as an ideal printer prints it: transmittance = value / white.
 RasterTransparency printed(const patterns::PatternSource& source, double white) {
     const auto& g = source.geometry();
@@ -102,7 +93,7 @@ TEST(AngularDisplay, ClearPatternGivesTheClosedFormRadiance) {
     options.rays_per_side = 96;
     for (const auto& [tx, ty] : {std::pair{0.0, 0.0}, {0.05, -0.03}, {-0.08, 0.06}})
         options.views.push_back({from_slopes(tx, ty), std::nullopt});
-    const AngularDisplayOutput out = sim.simulate(Clear(), {{light, {1, 1, 1}, 0.0}}, options);
+    const AngularDisplayOutput out = sim.simulate(ClearTransparency(), {{light, {1, 1, 1}, 0.0}}, options);
     ASSERT_EQ(out.views.size(), 3u);
     for (std::size_t w = 0; w < options.views.size(); ++w) {
         const double expected = light.z() * inverse_cos4(options.views[w].direction);
@@ -143,7 +134,7 @@ TEST(AngularDisplay, LitOutputDirectionsMatchTheMesoPixelOptics) {
             offsets.push_back(Eigen::Vector2d((ix / (steps - 1.0) - 0.5) * 1.3 * lattice.pitch_x(),
                                               (iy / (steps - 1.0) - 0.5) * 1.3 * lattice.pitch_y()));
     for (const auto& p : offsets) options.views.push_back({from_slopes(gain * p.x(), gain * p.y()), std::nullopt});
-    const AngularDisplayOutput out = sim.simulate(Clear(), {{light, {1, 1, 1}, 0.0}}, options);
+    const AngularDisplayOutput out = sim.simulate(ClearTransparency(), {{light, {1, 1, 1}, 0.0}}, options);
     // Away from a change of status by more than the kernel (in mm on D) plus a ray spacing.
     const double margin = 1.5 * out.kernel_half_tan / std::abs(gain);
     auto lit = [&](const Eigen::Vector2d& p) {
@@ -271,7 +262,7 @@ TEST(AngularDisplay, ReproducesAnEncodedFieldWithTheExactOptics) {
     for (const CellIndex cell : {CellIndex{2, 2}, CellIndex{4, 1}}) {
         const Eigen::Vector3d light = sim.meso().bin(cell, Model::Exact, 1).centre;
         const AngularDisplayOutput out = sim.simulate(transparency, {{light, {1, 1, 1}, 0.0}}, options);
-        const AngularDisplayOutput clear = sim.simulate(Clear(), {{light, {1, 1, 1}, 0.0}}, options);
+        const AngularDisplayOutput clear = sim.simulate(ClearTransparency(), {{light, {1, 1, 1}, 0.0}}, options);
         EXPECT_LT(out.optical_efficiency, 0.95);  // Fresnel reflections at 14 surfaces
         for (std::size_t w = 0; w < options.views.size(); ++w) {
             const double reference = pixel(clear.views[w], lattice, 1, 0, 0, cell);
@@ -352,7 +343,7 @@ TEST(AngularDisplay, ALightOutsideTheAcceptanceLeavesTheDisplayDark) {
     for (const Model model : {Model::Paraxial, Model::Exact}) {
         options.model = model;
         // 30 degrees: the main lens focuses it 29 mm off axis, beyond the field lens.
-        const auto out = sim.simulate(Clear(), {{incident_direction(degrees_to_radians(30), 0.4), {1, 1, 1}, 0.0}}, options);
+        const auto out = sim.simulate(ClearTransparency(), {{incident_direction(degrees_to_radians(30), 0.4), {1, 1, 1}, 0.0}}, options);
         EXPECT_EQ(out.optical_efficiency, 0.0);
         EXPECT_EQ(out.lost, out.rays);
         for (const Image& image : out.views) EXPECT_EQ(largest(image), 0.0f);
@@ -395,13 +386,13 @@ TEST(AngularDisplay, DistributionImagesAgreeWithTheViews) {
     options.rays_per_side = 64;
     options.distribution_pixels = 200;
     options.distributions = {{0, 0}};
-    const auto probe = sim.simulate(Clear(), {{light, {1, 1, 1}, 0.0}}, options);
+    const auto probe = sim.simulate(ClearTransparency(), {{light, {1, 1, 1}, 0.0}}, options);
     const double T = probe.distribution_half_tan, step = 2.0 * T / options.distribution_pixels;
     ASSERT_LT(step, probe.kernel_half_tan);
     const std::vector<std::pair<int, int>> nodes{{100, 100}, {80, 110}, {120, 95}, {30, 40}};
     for (const auto& [x, y] : nodes)
         options.views.push_back({from_slopes(-T + (x + 0.5) * step, T - (y + 0.5) * step), std::nullopt});
-    const auto out = sim.simulate(Clear(), {{light, {1, 1, 1}, 0.0}}, options);
+    const auto out = sim.simulate(ClearTransparency(), {{light, {1, 1, 1}, 0.0}}, options);
     double lit = 0.0;
     for (std::size_t w = 0; w < nodes.size(); ++w) {
         const float macro = sim.per_macro_pixel(out.views[w]).at(0, 0, 0);
@@ -435,7 +426,7 @@ TEST(AngularDisplay, BadInputIsRefusedWithTheReason) {
     EXPECT_THAT([] { AngularDisplaySimulator sim(bundled_design(2)); },
                 ::testing::ThrowsMessage<InputError>(HasSubstr("Design III or IV")));
     const AngularDisplaySimulator sim(bundled_design(3));
-    const Clear clear;
+    const ClearTransparency clear;
     AngularSimulationOptions options;
     options.rays_per_side = 8;
     const std::vector<DisplayLight> good{{Eigen::Vector3d::UnitZ(), {1, 1, 1}, 0.0}};

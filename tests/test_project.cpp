@@ -469,7 +469,7 @@ TEST(Make, ASecondRunSkipsEveryStepAndAChangedFieldRemakesOnlyWhatDependsOnIt) {
     write(dir / "p.toml", kProject);
     const Project project = load_project(dir / "p.toml");
     FakeRfd rfd;
-    EXPECT_EQ(run_make(project, dir / "out", rfd).ran.size(), 10u);
+    EXPECT_EQ(run_make(project, dir / "out", rfd).ran.size(), 11u);
     EXPECT_TRUE(fs::exists(dir / "out/README.txt"));
     EXPECT_TRUE(fs::exists(dir / "out/index.html"));
     EXPECT_TRUE(run_make(project, dir / "out", rfd).ran.empty());
@@ -477,15 +477,15 @@ TEST(Make, ASecondRunSkipsEveryStepAndAChangedFieldRemakesOnlyWhatDependsOnIt) {
     fs::remove_all(dir / "field");
     write_small_field(dir / "field", 0.75f);
     EXPECT_THAT(run_make(project, dir / "out", rfd).ran,
-                UnorderedElementsAre("pattern", "optimize", "sheet_front_pdf", "compare", "tolerance", "preview",
-                                     "verdict"));
+                UnorderedElementsAre("advice", "pattern", "optimize", "sheet_front_pdf", "compare", "tolerance",
+                                     "preview", "verdict"));
 
     // An output removed by hand is made again; what reads it is not, as it comes out the same.
     fs::remove(dir / "out/print/moire.pdf");
     EXPECT_THAT(run_make(project, dir / "out", rfd).ran, UnorderedElementsAre("moire"));
     fs::remove(dir / "out/pattern.png");
     EXPECT_THAT(run_make(project, dir / "out", rfd).ran, UnorderedElementsAre("pattern"));
-    EXPECT_EQ(run_make(project, dir / "out", rfd, true).ran.size(), 10u);
+    EXPECT_EQ(run_make(project, dir / "out", rfd, true).ran.size(), 11u);
 }
 
 TEST(Make, AFailingStepSaysWhichAndKeepsTheStepsBeforeIt) {
@@ -515,7 +515,7 @@ TEST(Make, ADamagedManifestRemakesEverythingAfterANote) {
     FakeRfd rfd;
     run_make(project, dir / "out", rfd);
     write(dir / "out/manifest.json", "{\"steps\": 3");
-    EXPECT_EQ(run_make(project, dir / "out", rfd).ran.size(), 10u);
+    EXPECT_EQ(run_make(project, dir / "out", rfd).ran.size(), 11u);
     EXPECT_TRUE(run_make(project, dir / "out", rfd).ran.empty());
 }
 
@@ -550,7 +550,7 @@ TEST(Make, StepsSideBySideWaitForWhatTheyReadAndMakeTheSameFiles) {
     };
     Recording parallel;
     parallel.last_first = true;
-    EXPECT_EQ(run_make(project, dir / "parallel", parallel, false, 3).ran.size(), 10u);
+    EXPECT_EQ(run_make(project, dir / "parallel", parallel, false, 3).ran.size(), 11u);
     const auto at = [&](const std::string& event) {
         return std::find(parallel.events.begin(), parallel.events.end(), event) - parallel.events.begin();
     };
@@ -626,7 +626,7 @@ TEST(Make, ASecondMakeIntoTheSameFolderIsRefusedWhileTheFirstRuns) {
                     AllOf(HasSubstr("another rfd make is making into"), HasSubstr("out")));
         EXPECT_TRUE(rfd.calls.empty());
     }
-    EXPECT_EQ(run_make(load_project(dir / "p.toml"), dir / "out", rfd).ran.size(), 10u);
+    EXPECT_EQ(run_make(load_project(dir / "p.toml"), dir / "out", rfd).ran.size(), 11u);
 }
 
 // A signal while steps run: the running steps' outputs and logs are removed, what ended
@@ -642,7 +642,7 @@ TEST(Make, AStopSignalRemovesWhatTheRunningStepsWroteAndKeepsTheRest) {
             ++started;
             return FakeRfd::start(step, out, log);
         }
-        int stop_signal() const override { return started >= 3 ? 15 : 0; }  // during the third step
+        int stop_signal() const override { return started >= 4 ? 15 : 0; }  // during the fourth step
     };
     Stopped rfd;
     MakeOptions options;
@@ -653,13 +653,14 @@ TEST(Make, AStopSignalRemovesWhatTheRunningStepsWroteAndKeepsTheRest) {
     } catch (const Interrupted& stop) {
         EXPECT_EQ(stop.exit_code(), 128 + 15);
     }
-    EXPECT_EQ(rfd.started, 3);
+    EXPECT_EQ(rfd.started, 4);
+    EXPECT_TRUE(fs::exists(dir / "out/advice.json"));
     EXPECT_TRUE(fs::exists(dir / "out/pattern.exr"));
     EXPECT_TRUE(fs::exists(dir / "out/pattern_optimized.exr"));
-    EXPECT_FALSE(fs::exists(dir / "out/print/front.pdf"));  // the third step, stopped
+    EXPECT_FALSE(fs::exists(dir / "out/print/front.pdf"));  // the fourth step, stopped
     for (const auto& entry : fs::recursive_directory_iterator(dir / "out"))
         EXPECT_FALSE(entry.path().filename().string().starts_with(".running")) << entry.path();
-    EXPECT_EQ(Manifest::read(dir / "out").steps().size(), 2u);
+    EXPECT_EQ(Manifest::read(dir / "out").steps().size(), 3u);
     FakeRfd again;
     EXPECT_EQ(run_make(project, dir / "out", again).ran.size(), 8u);
 }

@@ -16,6 +16,21 @@ string(REPLACE "count = [7, 7]" "count = [2, 2]" text "${text}")
 file(WRITE ${OUT}/design4.toml "${text}")
 
 run(0 pattern encode-angular ${OUT}/design3.toml --procedural letters --table 33 --out ${OUT}/letters.exr)
+# The judge: the display seen from a grid of viewpoints under a grid of lights against the
+# letters relit and viewed the same way; the held-out grids; FIELD or --procedural needed.
+run(0 simulate compare ${OUT}/design3.toml ${OUT}/letters.exr --procedural letters --light-grid 3 --view-grid 2
+    --lens-rays 32 --out ${OUT}/judge --json)
+expect("\"pairs\": 36")
+expect("\"psnr_db\": [1-9][0-9]")
+if(NOT EXISTS ${OUT}/judge/pairs.csv OR NOT EXISTS ${OUT}/judge/summary.json)
+  message(FATAL_ERROR "simulate compare (Design III) wrote no pairs.csv or summary.json")
+endif()
+run(0 simulate compare ${OUT}/design3.toml ${OUT}/letters.exr --procedural letters --light-grid 3 --view-grid 2
+    --lens-rays 32 --held-out --out ${OUT}/judge_held --json)
+expect("\"pairs\": 4,")
+run(2 simulate compare ${OUT}/design3.toml ${OUT}/letters.exr --out ${OUT}/judge_bad)
+expect("give FIELD")
+
 # Under an environment map (a 16 x 8 latitude-longitude image: a bars field's first image).
 run(0 pattern field bars --resolution 16x8 --spread 8 --out ${OUT}/sky)
 run(0 simulate ${OUT}/design3.toml ${OUT}/letters.exr --envmap ${OUT}/sky/bars_0000.exr --out ${OUT}/env.exr
