@@ -40,7 +40,7 @@ TEST(Tune, MovesThePatternIntoTheLensletsBackFocalPlane) {
     spec.free = {free_spacing(design, "B", 5.0, 0.0)};
     spec.planes = {"pattern-focus"};
     spec.tolerance_scale = 0.01;  // 0.6 um: the tuner must find the plane, not its tolerance
-    spec.starts = 2;
+    spec.starts = 1;
     const TuneResult result = tune_design(design, spec);
 
     ASSERT_TRUE(result.feasible);
@@ -60,6 +60,7 @@ TEST(Tune, DesignIIIGainsLightWithItsThreeWorkingPlanesInPlace) {
     TuneSpec spec = default_spec(design, 10.0, 0.0);
     spec.planes = {"meso-focus", "pattern-image", "pattern-focal"};
     spec.starts = 1;
+    spec.evaluations_per_start = 100;
     const TuneResult result = tune_design(design, spec);
     ASSERT_TRUE(result.feasible);
     const auto summary = optics::summarise(optics::DesignOptics(result.design));
@@ -79,7 +80,7 @@ TEST(Tune, TheSameSeedGivesTheSameDesign) {
     TuneSpec spec = default_spec(design, 10.0, 0.0);
     spec.planes = {"meso-focus", "pattern-focal"};
     spec.starts = 2;
-    spec.evaluations_per_start = 40;
+    spec.evaluations_per_start = 20;
     const TuneResult a = tune_design(design, spec);
     const TuneResult b = tune_design(design, spec);
     ASSERT_EQ(a.design.planes.size(), b.design.planes.size());
@@ -92,7 +93,7 @@ TEST(Tune, SaysWhenNoSpacingMeetsATarget) {
     TuneSpec spec = default_spec(design, 2.0, 0.0);
     spec.targets = {parse_target("efficiency_on_axis>=1.5")};
     spec.starts = 1;
-    spec.evaluations_per_start = 30;
+    spec.evaluations_per_start = 10;
     const TuneResult result = tune_design(design, spec);
     EXPECT_FALSE(result.feasible);
     int violated = 0;
@@ -111,6 +112,7 @@ TEST(Tune, TheTunedFileIsTheGivenOneWithNewSpacings) {
     TuneSpec spec = default_spec(design, 10.0, 0.0);
     spec.planes = {"meso-focus", "pattern-image", "pattern-focal"};
     spec.starts = 1;
+    spec.evaluations_per_start = 50;
     const TuneResult result = tune_design(design, spec);
     const std::string tuned = tuned_design_text(text, design, result, "line one\n\nline three");
     EXPECT_EQ(tuned.rfind("# line one\n#\n# line three\n\n", 0), 0u);
