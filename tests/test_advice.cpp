@@ -106,6 +106,27 @@ TEST(Advice, APaintingUnderADomeOnDesignIIHearsOfDesignI) {
         }
 }
 
+TEST(Advice, OnADomeAutoTakesInTheMostLightsOfAnyTilt) {
+    // The dome's 48 lights on Design II: the tilt auto chooses holds at least as many of
+    // them inside a range they surround as any other whole-degree tilt, and more than none.
+    const optics::DesignOptics optics(bundled_design(2));
+    const std::vector<Eigen::Vector3d> lights = dome_lights();
+    const TiltChoice best = best_tilt(optics, lights, {});
+    ASSERT_TRUE(best.lights.covered);
+    int covered = 0;
+    for (int tilt = -90; tilt <= 90; ++tilt) {
+        AngularMapping mapping;
+        mapping.tilt_deg = tilt;
+        const LightsInRange at = lights_in_range(optics, lights, mapping);
+        if (!at.covered) continue;
+        EXPECT_LE(at.inside, best.lights.inside) << tilt;
+        ++covered;
+    }
+    EXPECT_GT(covered, 10);
+    EXPECT_GE(best.lights.inside, 3);
+    EXPECT_GT(best.lights.inside, lights_in_range(optics, lights, {}).inside);
+}
+
 TEST(Advice, TiltIsDegreesOrAuto) {
     EXPECT_FALSE(parse_tilt("auto", "--tilt"));
     EXPECT_EQ(*parse_tilt("45", "--tilt"), 45.0);
