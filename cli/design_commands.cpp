@@ -112,7 +112,8 @@ nlohmann::json to_json(const optics::DesignSummary& s) {
             {"warnings", s.warnings}};
 }
 
-std::string summary_text(const optics::DesignSummary& s, bool observer_variant) {
+std::string summary_text(const optics::DesignSummary& s, const optics::DiffractionEstimate& diffraction,
+                         bool observer_variant) {
     std::string out;
     out += format_text("%s  (Design %s)\n", s.name.c_str(), s.kind.c_str());
     out += format_text("  lattice                   %s, %d x %d lenslets\n", s.lattice.c_str(), s.count_x, s.count_y);
@@ -169,6 +170,7 @@ std::string summary_text(const optics::DesignSummary& s, bool observer_variant) 
         if (std::isfinite(check.magnification)) out += format_text(", magnification %.4f", check.magnification);
         out += "\n";
     }
+    out += diffraction_text(diffraction, s.spot_rms_on_axis_um, observer_variant);
     if (s.warnings.empty()) out += "  design rules              no warnings\n";
     for (const auto& warning : s.warnings) out += format_text("  warning: %s\n", warning.c_str());
     return out;
@@ -199,15 +201,7 @@ void add_design_commands(CLI::App& app) {
             out["diffraction"] = diffraction_json(diffraction);
             std::printf("%s\n", out.dump(2).c_str());
         } else {
-            std::string text = summary_text(summary, optics::is_observer_variant(design.kind));
-            // Before the design rules, which close the summary.
-            const std::size_t rules = text.find("  design rules");
-            const std::size_t warning = text.find("  warning:");
-            const std::size_t at = std::min(rules, warning);
-            text.insert(at == std::string::npos ? text.size() : at,
-                        diffraction_text(diffraction, summary.spot_rms_on_axis_um,
-                                         optics::is_observer_variant(design.kind)));
-            std::fputs(text.c_str(), stdout);
+            std::fputs(summary_text(summary, diffraction, optics::is_observer_variant(design.kind)).c_str(), stdout);
         }
     });
     add_design_tune_command(*design_cmd);

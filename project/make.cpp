@@ -158,6 +158,14 @@ std::vector<Step> plan(const Project& p) {
 
     const Encoding& e = p.encoding;
     const std::string tilt = e.tilt_deg ? format_number(*e.tilt_deg, 17) : std::string("auto");
+    // The part of the photographs the steps that read the field use.
+    const auto add_window = [&](Step& step) {
+        if (const auto& r = p.source.region)
+            step.arguments.insert(step.arguments.end(),
+                                  {"--region", std::to_string((*r)[0]) + "," + std::to_string((*r)[1]) + "," +
+                                                   std::to_string((*r)[2]) + "," + std::to_string((*r)[3])});
+        if (p.source.scale) step.arguments.insert(step.arguments.end(), {"--scale", format_number(*p.source.scale, 17)});
+    };
     // Before the long steps: what the design makes of this field, and what would suit it better.
     Step advice{"advice",
                 "advice on this field before the long steps: the display's picture elements against the field's "
@@ -167,12 +175,7 @@ std::vector<Step> plan(const Project& p) {
                 field_inputs,
                 {"advice.json"}};
     advice.inputs.insert(advice.inputs.begin(), design_file);
-    if (const auto& r = p.source.region)
-        advice.arguments.insert(advice.arguments.end(), {"--region", std::to_string((*r)[0]) + "," +
-                                                                         std::to_string((*r)[1]) + "," +
-                                                                         std::to_string((*r)[2]) + "," +
-                                                                         std::to_string((*r)[3])});
-    if (p.source.scale) advice.arguments.insert(advice.arguments.end(), {"--scale", format_number(*p.source.scale, 17)});
+    add_window(advice);
     steps.push_back(std::move(advice));
     Step encode{"pattern", "the pattern at the printer's resolution (pattern.exr; pattern.png to look at)",
                 {"pattern", "encode", design, field.string(), "--printer", film_printer_name, "--tilt",
@@ -183,12 +186,7 @@ std::vector<Step> plan(const Project& p) {
                 field_inputs,
                 {"pattern.exr", "pattern.png"}};
     encode.inputs.insert(encode.inputs.begin(), {design_file, film_printer});
-    if (const auto& r = p.source.region)
-        encode.arguments.insert(encode.arguments.end(), {"--region", std::to_string((*r)[0]) + "," +
-                                                                         std::to_string((*r)[1]) + "," +
-                                                                         std::to_string((*r)[2]) + "," +
-                                                                         std::to_string((*r)[3])});
-    if (p.source.scale) encode.arguments.insert(encode.arguments.end(), {"--scale", format_number(*p.source.scale, 17)});
+    add_window(encode);
     // A captured field is predicted between its lights by what leave-one-out finds best on it.
     const std::optional<std::string> basis = e.basis ? e.basis : p.source.field ? std::optional<std::string>("auto")
                                                                                 : std::nullopt;

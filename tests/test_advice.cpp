@@ -48,6 +48,22 @@ int exactly_inside(const optics::DesignOptics& optics, const std::vector<Eigen::
     return inside;
 }
 
+// Every whole-degree tilt whose range the lights surround holds at most `best` of them
+// inside; returns how many such tilts there are.
+int surrounded_tilts_holding_at_most(const optics::DesignOptics& optics, const std::vector<Eigen::Vector3d>& lights,
+                                     int best) {
+    int surrounded = 0;
+    for (int tilt = -90; tilt <= 90; ++tilt) {
+        AngularMapping mapping;
+        mapping.tilt_deg = tilt;
+        const LightsInRange at = lights_in_range(optics, lights, mapping);
+        if (!at.covered) continue;
+        EXPECT_LE(at.inside, best) << tilt;
+        ++surrounded;
+    }
+    return surrounded;
+}
+
 TEST(Advice, TheBestTiltTakesInTheMostLights) {
     // A cluster of 25 lights within 25 degrees of a direction 40 degrees toward the field's
     // up, and a ring far from it: tilted 40 degrees up the display sees the cluster.
@@ -73,15 +89,7 @@ TEST(Advice, TheBestTiltTakesInTheMostLights) {
     tilted.tilt_deg = best.tilt_deg;
     EXPECT_NEAR(best.lights.inside, exactly_inside(optics, lights, tilted), 2);
     // No other whole-degree tilt that surrounds the range holds more lights.
-    int checked = 0;
-    for (int tilt = -90; tilt <= 90; ++tilt) {
-        tilted.tilt_deg = tilt;
-        const LightsInRange at = lights_in_range(optics, lights, tilted);
-        if (!at.covered) continue;
-        EXPECT_LE(at.inside, best.lights.inside) << tilt;
-        ++checked;
-    }
-    EXPECT_GT(checked, 5);
+    EXPECT_GT(surrounded_tilts_holding_at_most(optics, lights, best.lights.inside), 5);
 }
 
 TEST(Advice, APaintingUnderADomeOnDesignIIHearsOfDesignI) {
@@ -113,16 +121,7 @@ TEST(Advice, OnADomeAutoTakesInTheMostLightsOfAnyTilt) {
     const std::vector<Eigen::Vector3d> lights = dome_lights();
     const TiltChoice best = best_tilt(optics, lights, {});
     ASSERT_TRUE(best.lights.covered);
-    int covered = 0;
-    for (int tilt = -90; tilt <= 90; ++tilt) {
-        AngularMapping mapping;
-        mapping.tilt_deg = tilt;
-        const LightsInRange at = lights_in_range(optics, lights, mapping);
-        if (!at.covered) continue;
-        EXPECT_LE(at.inside, best.lights.inside) << tilt;
-        ++covered;
-    }
-    EXPECT_GT(covered, 10);
+    EXPECT_GT(surrounded_tilts_holding_at_most(optics, lights, best.lights.inside), 10);
     EXPECT_GE(best.lights.inside, 3);
     EXPECT_GT(best.lights.inside, lights_in_range(optics, lights, {}).inside);
 }
